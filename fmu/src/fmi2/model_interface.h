@@ -1,0 +1,98 @@
+/* The contract between the model-independent FMI 2.0 layer (fmi2_layer.c)
+ * and one model (observer, plant, controller).  No FMI types appear here:
+ * a model is a plain-C variable table plus a few hooks over a plain struct
+ * ("model data") that holds every parameter, input, output and state.
+ *
+ * The model data block must contain no pointers: the layer copies it
+ * byte-for-byte to save, restore and serialize the FMU state. */
+#ifndef MODEL_INTERFACE_H
+#define MODEL_INTERFACE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+/* Same numbering as fmi2Status so the layer can pass it through. */
+typedef enum { MODEL_OK = 0, MODEL_WARNING = 1, MODEL_ERROR = 3 } ModelStatus;
+
+typedef enum { TYPE_REAL, TYPE_INTEGER, TYPE_BOOLEAN } VariableType;
+
+typedef enum {
+    CAUSALITY_PARAMETER,            /* set by the user before initialization */
+    CAUSALITY_CALCULATED_PARAMETER, /* derived from parameters at initialization */
+    CAUSALITY_INPUT,
+    CAUSALITY_OUTPUT
+} VariableCausality;
+
+typedef enum {
+    VARIABILITY_FIXED,
+    VARIABILITY_DISCRETE,
+    VARIABILITY_CONTINUOUS
+} VariableVariability;
+
+/* One scalar, vector (rows) or matrix (rows x cols, row-major) variable.
+ * Element (i, j) has value reference vr + i * cols + j and is exposed with
+ * the FMI 2 structured name name[i+1] or name[i+1,j+1]. */
+typedef struct {
+    const char *name;
+    uint32_t vr;
+    uint16_t rows;  /* 0 for a scalar */
+    uint16_t cols;  /* 0 for a scalar or vector */
+    VariableType type;
+    VariableCausality causality;
+    VariableVariability variability;
+    size_t offset;  /* offsetof(model data, first element): double for reals, int otherwise */
+    double start;   /* start (or initial) value of every element ... */
+    const double *starts; /* ... unless this per-element array is given */
+    double min, max;      /* valid range (NAN: unbounded); reals and integers */
+    bool min_exclusive;   /* min itself is invalid (e.g. a step size > 0) */
+    bool max_exclusive;
+    const char *unit;        /* NULL: dimensionless */
+    const char *description;
+} ModelVariable;
+
+/* Messages go through this; the model never sees the FMI logger. */
+typedef struct {
+    void (*log)(void *context, ModelStatus status, const char *format, ...)
+#if defined(__GNUC__)
+        __attribute__((format(printf, 3, 4)))
+#endif
+        ;
+    void *context;
+} ModelLogger;
+
+typedef struct {
+    const char *model_name;
+    const char *model_identifier;
+    const char *guid;
+    const char *description;
+    const ModelVariable *variables;
+    size_t n_variables;
+    size_t data_size;
+    double default_stop_time;
+    double default_tolerance;
+
+    /* Cross-parameter checks and derived quantities, at fmi2ExitInitializationMode.
+     * May log warnings; returns MODEL_ERROR (after logging why) to refuse. */
+    ModelStatus (*initialize)(void *data, double start_time, const ModelLogger *log);
+    /* The fixed internal step h of this instance (valid after initialize). */
+    double (*internal_step)(const void *data);
+    /* One internal step from time t to t + h.  Runs millions of times:
+     * no allocation, no logging, no I/O. */
+    void (*step)(void *data, double t);
+    /* Once per communication step, after the internal steps: derive the
+     * outputs that are not read straight from the state, and check them (a
+     * diverged state).  May log; MODEL_ERROR if the outputs cannot be trusted. */
+    ModelStatus (*communication_point)(void *data, double t, const ModelLogger *log);
+} ModelDescriptor;
+
+/* Each model file defines exactly one of these (read-only, not state). */
+extern const ModelDescriptor MODEL_DESCRIPTOR;
+
+/* Expanded element count of a variable (1 for a scalar). */
+static inline size_t model_variable_count(const ModelVariable *v)
+{
+    return (size_t)(v->rows ? v->rows : 1) * (size_t)(v->cols ? v->cols : 1);
+}
+
+#endif

@@ -1,0 +1,314 @@
+/* SuperTwistingObserver: the observer FMU's variables and step.
+ *
+ * Wires the plain-C algorithms (core/) to the FMI layer: the nominal model
+ * (built-in joint or external F and phi inputs), the super-twisting observer
+ * with its equivalent output injection, and the LSM/MFF identifier.
+ * Value references are stable and documented in docs/observer.md. */
+#include <math.h>
+#include <stddef.h>
+#include <string.h>
+
+#include "../core/gains.h"
+#include "../core/identifier.h"
+#include "../core/joint_model.h"
+#include "../core/super_twisting.h"
+#include "../fmi2/model_interface.h"
+
+#define MAX_N STO_MAX_DOF
+#define MAX_L ID_MAX_REGRESSORS
+
+enum { NOMINAL_JOINT = 1, NOMINAL_EXTERNAL = 2 };
+
+typedef struct {
+    /* parameters */
+    double h;
+    int n, nominal_model, scheme, identifier, l;
+    double alpha1[MAX_N], alpha2[MAX_N], f_plus[MAX_N], p[MAX_N];
+    double tau;
+    double b, c_nominal[JOINT_BASIS_SIZE];
+    double theta_nominal[MAX_N][MAX_L];
+    double t_id, rho, R;
+    int identify[MAX_L];
+    int start_from_measurement;
+    double x1_hat_start[MAX_N], x2_hat_start[MAX_N];
+    /* calculated parameters */
+    double alpha1_used[MAX_N], alpha2_used[MAX_N];
+    /* inputs */
+    double y[MAX_N], u, F[MAX_N], phi[MAX_L];
+    /* outputs not read straight from the algorithm state */
+    double theta_hat[MAX_N][MAX_L];
+    double gamma_trace;
+    int identifier_active;
+    /* derived at initialization */
+    int m;                  /* number of identified regressors */
+    int selected[MAX_L];    /* their indices in the full regressor */
+    /* algorithm state */
+    SuperTwistingObserver obs;
+    Identifier id;
+} ObserverData;
+
+#define OFF(field) offsetof(ObserverData, field)
+#define UNBOUNDED .min = NAN, .max = NAN
+
+#define PARAM(...) .causality = CAUSALITY_PARAMETER, .variability = VARIABILITY_FIXED, __VA_ARGS__
+#define CALC(...) .causality = CAUSALITY_CALCULATED_PARAMETER, .variability = VARIABILITY_FIXED, \
+                  UNBOUNDED, __VA_ARGS__
+#define INPUT(...) .causality = CAUSALITY_INPUT, .variability = VARIABILITY_CONTINUOUS, \
+                   UNBOUNDED, __VA_ARGS__
+#define OUTPUT(...) .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_CONTINUOUS, \
+                    UNBOUNDED, __VA_ARGS__
+
+/* The paper's pendulum (section 6): J = M L^2, c = [MgL/(2J), Vs/J, Ps/J, 0, 0]. */
+#define PAPER_J (1.1 * 0.9 * 0.9)
+static const double C_NOMINAL_START[JOINT_BASIS_SIZE] = {
+    1.1 * 9.815 * 0.9 / (2.0 * PAPER_J), 0.18 / PAPER_J, 0.45 / PAPER_J, 0.0, 0.0};
+static const double IDENTIFY_START[MAX_L] = {1, 1, 1, 0, 0, 0, 0, 0};
+static const double P_START[MAX_N] = {0.5, 0.5, 0.5, 0.5};
+static const double F_PLUS_START[MAX_N] = {10.0, 10.0, 10.0, 10.0};
+
+static const ModelVariable VARIABLES[] = {
+    {.name = "h", .vr = 1, .type = TYPE_REAL, PARAM(.offset = OFF(h), .start = 1e-4, .min = 0.0,
+     .max = 1.0, .min_exclusive = true, .unit = "s",
+     .description = "Fixed internal step of the observer and identifier")},
+    {.name = "n", .vr = 2, .type = TYPE_INTEGER, PARAM(.offset = OFF(n), .start = 1, .min = 1,
+     .max = MAX_N, .description = "Degrees of freedom observed (active rows of the vectors)")},
+    {.name = "nominal_model", .vr = 3, .type = TYPE_INTEGER, PARAM(.offset = OFF(nominal_model),
+     .start = NOMINAL_JOINT, .min = 1, .max = 2,
+     .description = "1: built-in joint x'' = b u - sum c_k psi_k (n = 1); 2: external, "
+                    "nominal acceleration F and regressor phi come as inputs")},
+    {.name = "scheme", .vr = 4, .type = TYPE_INTEGER, PARAM(.offset = OFF(scheme),
+     .start = STO_SCHEME_PAPER, .min = 1, .max = 1,
+     .description = "Discretization: 1 = explicit Euler as in the paper")},
+    {.name = "identifier", .vr = 5, .type = TYPE_INTEGER, PARAM(.offset = OFF(identifier),
+     .start = IDENTIFIER_OFF, .min = 0, .max = 2,
+     .description = "Parameter identifier: 0 off, 1 least squares (18)-(19), 2 matrix "
+                    "forgetting factor (36)-(37)")},
+    {.name = "l", .vr = 6, .type = TYPE_INTEGER, PARAM(.offset = OFF(l), .start = 3, .min = 1,
+     .max = MAX_L, .description = "Number of regressors phi of the external model")},
+    {.name = "alpha1", .vr = 10, .rows = MAX_N, .type = TYPE_REAL, PARAM(.offset = OFF(alpha1),
+     .start = 0.0, .min = 0.0, .max = NAN, .unit = "rad/s2",
+     .description = "Gain of alpha1 sign(e); 0: computed from f_plus by Theorem 3.1")},
+    {.name = "alpha2", .vr = 14, .rows = MAX_N, .type = TYPE_REAL, PARAM(.offset = OFF(alpha2),
+     .start = 0.0, .min = 0.0, .max = NAN,
+     .description = "Gain of alpha2 |e|^(1/2) sign(e) [rad^(1/2)/s]; 0: computed by Theorem 3.1")},
+    {.name = "f_plus", .vr = 18, .rows = MAX_N, .type = TYPE_REAL, PARAM(.offset = OFF(f_plus),
+     .starts = F_PLUS_START, .min = 0.0, .max = NAN, .unit = "rad/s2",
+     .description = "Bound f+ of condition (5) on the unknown acceleration")},
+    {.name = "p", .vr = 22, .rows = MAX_N, .type = TYPE_REAL, PARAM(.offset = OFF(p),
+     .starts = P_START, .min = 0.0, .max = 1.0, .min_exclusive = true, .max_exclusive = true,
+     .description = "Constant p of condition (6), 0 < p < 1")},
+    {.name = "tau", .vr = 26, .type = TYPE_REAL, PARAM(.offset = OFF(tau), .start = 0.02,
+     .min = 0.0, .max = NAN, .unit = "s",
+     .description = "Time constant of the equivalent output injection filter; 0: no filter")},
+    {.name = "b", .vr = 27, .type = TYPE_REAL, PARAM(.offset = OFF(b), .start = 1.0 / PAPER_J,
+     UNBOUNDED, .description = "Built-in joint: input gain b (1/J) [1/(kg.m2)]")},
+    {.name = "c_nominal", .vr = 28, .rows = JOINT_BASIS_SIZE, .type = TYPE_REAL,
+     PARAM(.offset = OFF(c_nominal), .starts = C_NOMINAL_START, UNBOUNDED,
+     .description = "Built-in joint: nominal coefficients of [sin x1, x2, sign(x2), x1, 1]")},
+    {.name = "theta_nominal", .vr = 40, .rows = MAX_N, .cols = MAX_L, .type = TYPE_REAL,
+     PARAM(.offset = OFF(theta_nominal), .start = 0.0, UNBOUNDED,
+     .description = "External model: nominal parameters thetabar of (12), acceleration "
+                    "F + thetabar phi")},
+    {.name = "t_id", .vr = 80, .type = TYPE_REAL, PARAM(.offset = OFF(t_id), .start = 1.0,
+     UNBOUNDED, .unit = "s", .description = "Time at which the identifier starts integrating")},
+    {.name = "rho", .vr = 81, .type = TYPE_REAL, PARAM(.offset = OFF(rho), .start = 1e-3,
+     .min = 0.0, .max = NAN, .min_exclusive = true,
+     .description = "Regularization: Gamma(0) = I/rho")},
+    {.name = "R", .vr = 82, .type = TYPE_REAL, PARAM(.offset = OFF(R), .start = 0.1, .min = 0.0,
+     .max = 1.0, .min_exclusive = true, .max_exclusive = true,
+     .description = "MFF forgetting factor per second (R I, weight R^(t - s))")},
+    {.name = "identify", .vr = 83, .rows = MAX_L, .type = TYPE_BOOLEAN,
+     PARAM(.offset = OFF(identify), .starts = IDENTIFY_START, UNBOUNDED,
+     .description = "Which regressors are identified; the others keep their nominal value")},
+    {.name = "start_from_measurement", .vr = 91, .type = TYPE_BOOLEAN,
+     PARAM(.offset = OFF(start_from_measurement), .start = 1, UNBOUNDED,
+     .description = "Initial x1_hat = y at initialization (else x1_hat_start)")},
+    {.name = "x1_hat_start", .vr = 92, .rows = MAX_N, .type = TYPE_REAL,
+     PARAM(.offset = OFF(x1_hat_start), .start = 0.0, UNBOUNDED, .unit = "rad",
+     .description = "Initial position estimate (if start_from_measurement is false)")},
+    {.name = "x2_hat_start", .vr = 96, .rows = MAX_N, .type = TYPE_REAL,
+     PARAM(.offset = OFF(x2_hat_start), .start = 0.0, UNBOUNDED, .unit = "rad/s",
+     .description = "Initial velocity estimate")},
+    {.name = "alpha1_used", .vr = 100, .rows = MAX_N, .type = TYPE_REAL,
+     CALC(.offset = OFF(alpha1_used), .unit = "rad/s2",
+     .description = "alpha1 in use (given, or from Theorem 3.1)")},
+    {.name = "alpha2_used", .vr = 104, .rows = MAX_N, .type = TYPE_REAL,
+     CALC(.offset = OFF(alpha2_used), .description = "alpha2 in use (given, or from Theorem 3.1)")},
+    {.name = "y", .vr = 200, .rows = MAX_N, .type = TYPE_REAL,
+     INPUT(.offset = OFF(y), .unit = "rad", .description = "Measured position x1")},
+    {.name = "u", .vr = 204, .type = TYPE_REAL,
+     INPUT(.offset = OFF(u), .unit = "N.m", .description = "Built-in joint: actuator torque")},
+    {.name = "F", .vr = 208, .rows = MAX_N, .type = TYPE_REAL,
+     INPUT(.offset = OFF(F), .unit = "rad/s2",
+     .description = "External model: nominal acceleration F(t, y, x2_hat, u)")},
+    {.name = "phi", .vr = 212, .rows = MAX_L, .type = TYPE_REAL,
+     INPUT(.offset = OFF(phi), .description = "External model: regressor phi(t, y, x2_hat, u)")},
+    {.name = "x1_hat", .vr = 300, .rows = MAX_N, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(obs.x1_hat), .unit = "rad", .description = "Position estimate")},
+    {.name = "x2_hat", .vr = 304, .rows = MAX_N, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(obs.x2_hat), .unit = "rad/s", .description = "Velocity estimate")},
+    {.name = "z_eq", .vr = 308, .rows = MAX_N, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(obs.z_eq), .unit = "rad/s2",
+     .description = "Equivalent output injection alpha1 sign(e), eq. (7), unfiltered")},
+    {.name = "z_eq_filtered", .vr = 312, .rows = MAX_N, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(obs.z_filtered), .unit = "rad/s2",
+     .description = "Filtered injection: the identified perturbation, eq. (10)")},
+    {.name = "theta_hat", .vr = 320, .rows = MAX_N, .cols = MAX_L, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(theta_hat),
+     .description = "Parameter estimates: built-in joint: theta_hat[1,k] estimates c_k; "
+                    "external: theta in xi = theta phi")},
+    {.name = "gamma_trace", .vr = 360, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(gamma_trace), .description = "Trace of the identifier's Gamma")},
+    {.name = "identifier_active", .vr = 361, .type = TYPE_BOOLEAN,
+     .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
+     .offset = OFF(identifier_active), .description = "The identifier is integrating (t >= t_id)"},
+};
+
+/* theta_hat from the identified corrections.  Built-in joint: the injection
+ * is z = xi = -(c - cbar) psi, so Delta = cbar - c and c_hat = cbar - Delta_hat
+ * (the paper's 6.2 Delta = [-a1 + a1bar, ...]).  External: theta_hat = thetabar + Delta_hat. */
+static void publish_estimates(ObserverData *d)
+{
+    if (d->nominal_model == NOMINAL_JOINT) {
+        for (int k = 0; k < JOINT_BASIS_SIZE; ++k) d->theta_hat[0][k] = d->c_nominal[k];
+        for (int j = 0; j < d->m; ++j)
+            d->theta_hat[0][d->selected[j]] = d->c_nominal[d->selected[j]] - d->id.delta[0][j];
+    } else {
+        for (int i = 0; i < d->n; ++i) {
+            for (int k = 0; k < d->l; ++k) d->theta_hat[i][k] = d->theta_nominal[i][k];
+            for (int j = 0; j < d->m; ++j)
+                d->theta_hat[i][d->selected[j]] += d->id.delta[i][j];
+        }
+    }
+    d->gamma_trace = identifier_gamma_trace(&d->id);
+}
+
+static ModelStatus complete_gains(ObserverData *d, const ModelLogger *log)
+{
+    ModelStatus status = MODEL_OK;
+    for (int i = 0; i < d->n; ++i) {
+        double a1 = d->alpha1[i], a2 = d->alpha2[i];
+        const double f = d->f_plus[i], p = d->p[i];
+        if (gains_complete(f, p, &a1, &a2) != 0) {
+            log->log(log->context, MODEL_ERROR,
+                     "alpha1[%d] = %g, alpha2[%d] = %g: a gain left at 0 needs f_plus[%d] > 0 "
+                     "(and alpha1 > f_plus) to be computed by Theorem 3.1", i + 1, a1, i + 1, a2,
+                     i + 1);
+            return MODEL_ERROR;
+        }
+        if (f > 0.0 && !(a1 > f)) {
+            log->log(log->context, MODEL_WARNING,
+                     "alpha1[%d] = %g violates (6): it must exceed f_plus[%d] = %g (short by %g)",
+                     i + 1, a1, i + 1, f, f - a1);
+            status = MODEL_WARNING;
+        } else if (f > 0.0) {
+            const double bound = gains_alpha2_bound(a1, f, p);
+            if (!(a2 > bound)) {
+                log->log(log->context, MODEL_WARNING,
+                         "alpha2[%d] = %g violates (6): the bound for alpha1 = %g, f_plus = %g, "
+                         "p = %g is %g (short by %g, %.1f percent)", i + 1, a2, a1, f, p, bound,
+                         bound - a2, 100.0 * (bound - a2) / bound);
+                status = MODEL_WARNING;
+            }
+        }
+        d->alpha1_used[i] = a1;
+        d->alpha2_used[i] = a2;
+    }
+    return status;
+}
+
+static ModelStatus initialize(void *data, double start_time, const ModelLogger *log)
+{
+    (void)start_time;
+    ObserverData *d = data;
+    if (d->nominal_model == NOMINAL_JOINT && d->n != 1) {
+        log->log(log->context, MODEL_ERROR,
+                 "n = %d: the built-in joint model (nominal_model = 1) has one degree of freedom; "
+                 "use nominal_model = 2 for n > 1", d->n);
+        return MODEL_ERROR;
+    }
+    const int regressors = d->nominal_model == NOMINAL_JOINT ? JOINT_BASIS_SIZE : d->l;
+    d->m = 0;
+    for (int k = 0; k < regressors; ++k)
+        if (d->identify[k]) d->selected[d->m++] = k;
+    if (d->identifier != IDENTIFIER_OFF && d->m == 0) {
+        log->log(log->context, MODEL_ERROR,
+                 "identifier = %d but no regressor is selected (identify[1..%d] are all false)",
+                 d->identifier, regressors);
+        return MODEL_ERROR;
+    }
+    ModelStatus status = complete_gains(d, log);
+    if (status == MODEL_ERROR) return status;
+
+    double x1_hat0[MAX_N];
+    for (int i = 0; i < MAX_N; ++i)
+        x1_hat0[i] = d->start_from_measurement ? d->y[i] : d->x1_hat_start[i];
+    sto_init(&d->obs, d->n, d->h, d->alpha1_used, d->alpha2_used, d->tau, x1_hat0, d->x2_hat_start);
+    identifier_init(&d->id, (IdentifierKind)d->identifier, d->n, d->m, d->h, d->rho, d->R);
+    d->identifier_active = 0;
+    publish_estimates(d);
+    return status;
+}
+
+static double internal_step(const void *data) { return ((const ObserverData *)data)->h; }
+
+static void step(void *data, double t)
+{
+    ObserverData *d = data;
+    double acceleration[MAX_N], regressor[MAX_L], phi[MAX_L];
+    if (d->nominal_model == NOMINAL_JOINT) {
+        joint_basis(d->y[0], d->obs.x2_hat[0], regressor);
+        acceleration[0] = joint_acceleration(d->b, d->c_nominal, d->u, regressor);
+    } else {
+        memcpy(regressor, d->phi, sizeof regressor);
+        for (int i = 0; i < d->n; ++i) {
+            double a = d->F[i];
+            for (int k = 0; k < d->l; ++k) a += d->theta_nominal[i][k] * regressor[k];
+            acceleration[i] = a;
+        }
+    }
+    sto_step(&d->obs, d->y, acceleration);
+    if (d->identifier != IDENTIFIER_OFF && t >= d->t_id) {
+        for (int j = 0; j < d->m; ++j) phi[j] = regressor[d->selected[j]];
+        identifier_step(&d->id, d->obs.z_filtered, phi);
+        d->identifier_active = 1;
+    }
+}
+
+static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
+{
+    ObserverData *d = data;
+    publish_estimates(d);
+    for (int i = 0; i < d->n; ++i) {
+        if (!isfinite(d->obs.x1_hat[i]) || !isfinite(d->obs.x2_hat[i])) {
+            log->log(log->context, MODEL_ERROR,
+                     "observer diverged at t = %g: x1_hat[%d] = %g, x2_hat[%d] = %g (reduce h or "
+                     "the gains)", t, i + 1, d->obs.x1_hat[i], i + 1, d->obs.x2_hat[i]);
+            return MODEL_ERROR;
+        }
+    }
+    if (!isfinite(d->gamma_trace)) {
+        log->log(log->context, MODEL_ERROR,
+                 "identifier diverged at t = %g: trace(Gamma) = %g (explicit Euler needs "
+                 "h |Gamma| |phi|^2 < 2; increase rho or reduce h)", t, d->gamma_trace);
+        return MODEL_ERROR;
+    }
+    return MODEL_OK;
+}
+
+const ModelDescriptor MODEL_DESCRIPTOR = {
+    .model_name = "SuperTwistingObserver",
+    .model_identifier = "SuperTwistingObserver",
+    .guid = "{5d0c3f0e-7b7a-4c52-9d5e-2f1a6b8e9c01}",
+    .description = "Second-order sliding-mode (super-twisting) observer and LSM/MFF identifier "
+                   "for mechanical systems (Davila, Fridman, Poznyak 2006)",
+    .variables = VARIABLES,
+    .n_variables = sizeof VARIABLES / sizeof VARIABLES[0],
+    .data_size = sizeof(ObserverData),
+    .default_stop_time = 10.0,
+    .default_tolerance = 1e-6,
+    .initialize = initialize,
+    .internal_step = internal_step,
+    .step = step,
+    .communication_point = communication_point,
+};

@@ -1,0 +1,1 @@
+"""fmpy harness for the SuperTwistingObserver FMU and its closed-loop bench."""
