@@ -1,0 +1,32 @@
+"""Shared fixtures: the FMUs that build.sh produced."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+FMU_DIR = REPO / "build" / "fmus"
+
+
+def fmu_path(model_identifier: str) -> Path:
+    """Path of a built FMU; fails (never skips) with a hint if it is missing."""
+    path = FMU_DIR / f"{model_identifier}.fmu"
+    if not path.exists():
+        pytest.fail(f"{path} is missing: run ./build.sh fmus (./build.sh test builds it first)")
+    return path
+
+
+@pytest.fixture(scope="session")
+def observer_fmu() -> Path:
+    return fmu_path("SuperTwistingObserver")
+
+
+@pytest.fixture(scope="session")
+def pendulum_fmu() -> Path:
+    return fmu_path("Pendulum")
+
+
+@pytest.fixture(scope="session")
+def controller_fmu() -> Path:
+    return fmu_path("TwistingController")
