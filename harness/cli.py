@@ -1,0 +1,169 @@
+"""Command line: ``python -m harness`` (or ``sto-harness``).
+
+    reproduce [--scenario NAME|all] --out DIR   the paper's section 6 examples
+    identify DATA.csv --out DIR [--param NAME=VALUE ...]   offline identification
+    demo [--out DIR]                            the closed-loop demonstration (all scenarios)
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from .fmus import FMUError
+
+REPO = Path(__file__).resolve().parents[1]
+DEFAULT_FMU_DIR = REPO / "build" / "fmus"
+
+
+def _fmu_dir(args) -> Path:
+    path = Path(args.fmu_dir)
+    if not (path / "SuperTwistingObserver.fmu").exists():
+        raise SystemExit(f"harness: no FMUs in {path}: run ./build.sh fmus first "
+                         f"(or pass --fmu-dir)")
+    return path
+
+
+def _format(value: float) -> str:
+    return f"{value:.3g}" if isinstance(value, float) else str(value)
+
+
+def cmd_reproduce(args) -> int:
+    from .master import Progress
+    from .metrics import score
+    from .plots import plot_scenario
+    from .scenarios import SCENARIOS, all_choices, run_scenario
+
+    names = list(SCENARIOS) if args.scenario == "all" else [args.scenario]
+    fmu_dir = _fmu_dir(args)
+    out = Path(args.out)
+    summary = {}
+    for name in names:
+        scenario = SCENARIOS[name]
+        print(f"{name}: {scenario.title} ({scenario.stop_time:g} s)")
+        records = run_scenario(scenario, fmu_dir, noise_std=args.noise, seed=args.seed,
+                               use_native=False if args.python_loop else None,
+                               progress=Progress(name))
+        metrics = score(scenario, records)
+        folder = out / name
+        folder.mkdir(parents=True, exist_ok=True)
+        decimation = max(1, args.csv_decimation)
+        from .master import Records
+        Records(records.time[::decimation],
+                {k: v[::decimation] for k, v in records.signals.items()}).to_csv(
+            folder / "signals.csv")
+        (folder / "metrics.json").write_text(json.dumps(
+            {"scenario": name, "title": scenario.title, "noise_std": args.noise,
+             "metrics": metrics, "choices": all_choices(scenario)}, indent=2) + "\n")
+        for path in plot_scenario(scenario, records, folder):
+            print(f"  wrote {path}")
+        summary[name] = metrics
+    print()
+    print(summary_table(summary))
+    return 0
+
+
+def summary_table(summary: dict[str, dict[str, float]]) -> str:
+    headline = {
+        "perturbation": ["rms_perturbation", "delay"],
+        "lsm": ["a1_rel_error_end", "a2_rel_error_end", "a3_rel_error_end"],
+        "mff": ["rms_damping", "damping_lag"],
+    }
+    from .scenarios import SCENARIOS
+
+    lines = [f"{'scenario':<11} {'conv. [s]':>9} {'max|e2| [rad/s]':>15}  identification"]
+    for name, m in summary.items():
+        keys = headline[SCENARIOS[name].kind]
+        ident = ", ".join(f"{k} = {_format(m[k])}" for k in keys)
+        lines.append(f"{name:<11} {m['convergence_time']:>9.3f} {m['max_e2_after_1s']:>15.2e}  {ident}")
+    return "\n".join(lines)
+
+
+def _parse_params(items: list[str]) -> dict[str, float | bool]:
+    params: dict[str, float | bool] = {}
+    for item in items:
+        name, sep, text = item.partition("=")
+        if not sep or not name:
+            raise SystemExit(f"harness: --param {item!r}: expected NAME=VALUE")
+        lowered = text.strip().lower()
+        if lowered in ("true", "false"):
+            params[name.strip()] = lowered == "true"
+            continue
+        try:
+            params[name.strip()] = float(text)
+        except ValueError:
+            raise SystemExit(f"harness: --param {item!r}: {text!r} is not a number") from None
+    return params
+
+
+def cmd_identify(args) -> int:
+    from .identify import DataError, identify, read_recording, write_csv
+    from .plots import plot_identification
+
+    try:
+        recording = read_recording(args.data)
+    except DataError as error:
+        print(f"harness identify: {error}", file=sys.stderr)
+        return 2
+    parameters = {"identifier": {"off": 0, "lsm": 1, "mff": 2}[args.identifier],
+                  **_parse_params(args.param)}
+    columns = identify(recording, _fmu_dir(args) / "SuperTwistingObserver.fmu", parameters)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    write_csv(columns, out / "estimates.csv")
+    plot = plot_identification(columns["t"], columns, out)
+    final = {k: float(v[-1]) for k, v in columns.items() if k.startswith("theta_hat")}
+    (out / "estimates.json").write_text(json.dumps({"final": final, "parameters": parameters},
+                                                   indent=2) + "\n")
+    print(f"wrote {out / 'estimates.csv'}, {plot}")
+    for name, value in final.items():
+        print(f"  {name} = {value:.6g}")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    from .scenarios import SCENARIOS
+
+    parser = argparse.ArgumentParser(prog="python -m harness", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--fmu-dir", default=str(DEFAULT_FMU_DIR),
+                        help="folder with the built FMUs (default: build/fmus)")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("reproduce", help="run the paper's section 6 examples")
+    p.add_argument("--scenario", default="all", choices=["all", *SCENARIOS])
+    p.add_argument("--out", required=True)
+    p.add_argument("--noise", type=float, default=0.0, help="std of noise on theta [rad]")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--csv-decimation", type=int, default=10,
+                   help="write every Nth step to signals.csv (default 10)")
+    p.add_argument("--python-loop", action="store_true", help="use the plain-Python master loop")
+    p.set_defaults(func=cmd_reproduce)
+
+    p = sub.add_parser("demo", help="the closed-loop demonstration: all scenarios")
+    p.add_argument("--out", default=str(REPO / "build" / "demo"))
+    p.set_defaults(func=cmd_reproduce, scenario="all", noise=0.0, seed=0, csv_decimation=10,
+                   python_loop=False)
+
+    p = sub.add_parser("identify", help="identify from recorded data (columns t, y, u)")
+    p.add_argument("data")
+    p.add_argument("--out", required=True)
+    p.add_argument("--identifier", choices=["off", "lsm", "mff"], default="lsm")
+    p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="observer FMU parameter, e.g. --param b=1.12 --param 'c_nominal[1]=2'")
+    p.set_defaults(func=cmd_identify)
+
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except FMUError as error:
+        print(f"harness: {error}", file=sys.stderr)
+        return 2
+    except KeyError as error:
+        print(f"harness: {error.args[0] if error.args else error}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,179 @@
+"""Loading FMI 2.0 co-simulation FMUs with fmpy, with name-based, typed access.
+
+An :class:`FMUInstance` wraps :class:`fmpy.fmi2.FMU2Slave`: it captures the
+FMU's log messages (so that a failure raises an error that says what the FMU
+said) and exposes the raw ctypes FMI functions that the master loops use.
+"""
+from __future__ import annotations
+
+import ctypes
+import shutil
+import tempfile
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (
+    FMU2Slave,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+)
+from fmpy import calloc, free
+
+Value = float | int | bool
+
+STATUS_NAMES = ("OK", "Warning", "Discard", "Error", "Fatal", "Pending")
+
+
+class FMUError(RuntimeError):
+    """An FMI call failed; the message includes what the FMU logged."""
+
+
+@dataclass(frozen=True)
+class Variable:
+    name: str
+    value_reference: int
+    type: str  # "Real", "Integer" or "Boolean"
+    causality: str
+
+
+class FMUInstance:
+    """One instantiated co-simulation FMU.
+
+    Parameters are set by name with :meth:`set`; :meth:`initialize` runs
+    setupExperiment / enterInitializationMode / exitInitializationMode.
+    """
+
+    def __init__(self, fmu: str | Path, instance_name: str, *, debug_logging: bool = False):
+        self.path = Path(fmu)
+        self.name = instance_name
+        self.model_description = read_model_description(str(self.path))
+        if self.model_description.coSimulation is None:
+            raise FMUError(f"{self.path}: not a co-simulation FMU")
+        self._unzip_dir = extract(str(self.path), unzipdir=tempfile.mkdtemp(prefix="sto-fmu-"))
+        self.variables = {
+            v.name: Variable(v.name, v.valueReference, v.type, v.causality)
+            for v in self.model_description.modelVariables
+        }
+        self.messages: list[str] = []
+        self._callbacks = self._make_callbacks()
+        self.slave = FMU2Slave(
+            guid=self.model_description.guid,
+            unzipDirectory=self._unzip_dir,
+            modelIdentifier=self.model_description.coSimulation.modelIdentifier,
+            instanceName=instance_name,
+        )
+        self._call(lambda: self.slave.instantiate(callbacks=self._callbacks,
+                                                  loggingOn=debug_logging), "instantiate")
+        functions = self.slave._functions  # the raw ctypes functions fmpy loaded
+        self.fmi2DoStep = functions["fmi2DoStep"]
+        self.fmi2GetReal = functions["fmi2GetReal"]
+        self.fmi2SetReal = functions["fmi2SetReal"]
+
+    # -- logging -------------------------------------------------------------
+    def _make_callbacks(self) -> fmi2CallbackFunctions:
+        def log(_env, instance_name, status, category, message):
+            text = message.decode(errors="replace") if message else ""
+            label = STATUS_NAMES[status] if 0 <= status < len(STATUS_NAMES) else str(status)
+            self.messages.append(f"[{label}] {text}")
+
+        callbacks = fmi2CallbackFunctions()
+        callbacks.logger = fmi2CallbackLoggerTYPE(log)
+        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        return callbacks
+
+    def _call(self, action, what: str):
+        before = len(self.messages)
+        try:
+            return action()
+        except FMICallException as error:
+            said = "; ".join(self.messages[before:]) or "(the FMU logged nothing)"
+            raise FMUError(f"{self.name}: {what} failed: {said}") from error
+
+    def warnings(self) -> list[str]:
+        """Log lines of status Warning or worse received so far."""
+        return [m for m in self.messages if not m.startswith("[OK]")]
+
+    # -- variables -------------------------------------------------------------
+    def variable(self, name: str) -> Variable:
+        try:
+            return self.variables[name]
+        except KeyError:
+            raise KeyError(f"{self.name}: no variable named {name!r} in "
+                           f"{self.path.name}") from None
+
+    def vr(self, name: str) -> int:
+        return self.variable(name).value_reference
+
+    def set(self, values: Mapping[str, Value]) -> None:
+        """Set variables by name, converting each value to the variable's type."""
+        for name, value in values.items():
+            var = self.variable(name)
+            if var.type == "Real":
+                self._call(lambda: self.slave.setReal([var.value_reference], [float(value)]),
+                           f"setting {name} = {value!r}")
+            elif var.type == "Integer":
+                self._call(lambda: self.slave.setInteger([var.value_reference], [int(value)]),
+                           f"setting {name} = {value!r}")
+            elif var.type == "Boolean":
+                self._call(lambda: self.slave.setBoolean([var.value_reference], [bool(value)]),
+                           f"setting {name} = {value!r}")
+            else:
+                raise FMUError(f"{self.name}: cannot set {name} of type {var.type}")
+
+    def get(self, names: Iterable[str]) -> list[Value]:
+        """Get variables by name (any type)."""
+        out: list[Value] = []
+        for name in names:
+            var = self.variable(name)
+            getter = {"Real": self.slave.getReal, "Integer": self.slave.getInteger,
+                      "Boolean": self.slave.getBoolean}[var.type]
+            out.append(self._call(lambda: getter([var.value_reference])[0], f"getting {name}"))
+        return out
+
+    # -- lifecycle -------------------------------------------------------------
+    def setup(self, start_time: float, parameters: Mapping[str, Value]) -> None:
+        """setupExperiment, parameters, enterInitializationMode (inputs may follow)."""
+        self._call(lambda: self.slave.setupExperiment(startTime=start_time), "setupExperiment")
+        self.set(parameters)
+        self._call(self.slave.enterInitializationMode, "enterInitializationMode")
+
+    def exit_initialization(self) -> None:
+        self._call(self.slave.exitInitializationMode, "exitInitializationMode")
+
+    def do_step(self, t: float, step: float) -> None:
+        self._call(lambda: self.slave.doStep(t, step), f"doStep at t = {t}")
+
+    def describe_failure(self, what: str) -> str:
+        said = "; ".join(self.warnings()[-3:]) or "(the FMU logged nothing)"
+        return f"{self.name}: {what}: {said}"
+
+    def close(self) -> None:
+        """Terminate (when possible) and free the instance; remove the extracted files."""
+        if self.slave is not None:
+            try:
+                self.slave.terminate()
+            except FMICallException:
+                pass
+            self.slave.freeInstance()
+            self.slave = None
+        shutil.rmtree(self._unzip_dir, ignore_errors=True)
+
+    def __enter__(self) -> "FMUInstance":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    # -- raw handles for the native loop ----------------------------------------
+    def function_address(self, name: str) -> int:
+        return ctypes.cast(self.slave._functions[name], ctypes.c_void_p).value
+
+    @property
+    def component(self) -> int:
+        return ctypes.cast(self.slave.component, ctypes.c_void_p).value
