@@ -10,6 +10,7 @@
 
 #include "../core/gains.h"
 #include "../core/identifier.h"
+#include "../core/information_identifier.h"
 #include "../core/joint_model.h"
 #include "../core/super_twisting.h"
 #include "../fmi2/model_interface.h"
@@ -18,6 +19,8 @@
 #define MAX_L ID_MAX_REGRESSORS
 
 enum { NOMINAL_JOINT = 1, NOMINAL_EXTERNAL = 2 };
+enum { FORM_PAPER = 1, FORM_INFORMATION = 2 };
+enum { START_AT_T_ID = 0, START_WHEN_CONVERGED = 1 };
 
 typedef struct {
     /* parameters */
@@ -31,20 +34,26 @@ typedef struct {
     int identify[MAX_L];
     int start_from_measurement;
     double x1_hat_start[MAX_N], x2_hat_start[MAX_N];
+    int identifier_form, identifier_start, filter_regressor;
+    double convergence_window;
     /* calculated parameters */
     double alpha1_used[MAX_N], alpha2_used[MAX_N];
     /* inputs */
     double y[MAX_N], u, F[MAX_N], phi[MAX_L];
+    int identifier_reset;
     /* outputs not read straight from the algorithm state */
     double theta_hat[MAX_N][MAX_L];
-    double gamma_trace;
-    int identifier_active;
+    double gamma_trace, excitation;
+    int identifier_active, converged;
     /* derived at initialization */
     int m;                  /* number of identified regressors */
     int selected[MAX_L];    /* their indices in the full regressor */
     /* algorithm state */
     SuperTwistingObserver obs;
-    Identifier id;
+    Identifier id;              /* identifier_form = 1 (the paper's explicit Euler) */
+    InformationIdentifier info; /* identifier_form = 2 */
+    double phi_filtered[MAX_L]; /* selected regressors through the z_eq filter */
+    int reset_seen;             /* identifier_reset value at the last step */
 } ObserverData;
 
 #define OFF(field) offsetof(ObserverData, field)
@@ -77,8 +86,9 @@ static const ModelVariable VARIABLES[] = {
      .description = "1: built-in joint x'' = b u - sum c_k psi_k (n = 1); 2: external, "
                     "nominal acceleration F and regressor phi come as inputs")},
     {.name = "scheme", .vr = 4, .type = TYPE_INTEGER, PARAM(.offset = OFF(scheme),
-     .start = STO_SCHEME_PAPER, .min = 1, .max = 1,
-     .description = "Discretization: 1 = explicit Euler as in the paper")},
+     .start = STO_SCHEME_IMPLICIT, .min = 1, .max = 2,
+     .description = "Discretization: 1 explicit Euler as in the paper; 2 sampling-consistent "
+                    "implicit (no chattering, no filter needed)")},
     {.name = "identifier", .vr = 5, .type = TYPE_INTEGER, PARAM(.offset = OFF(identifier),
      .start = IDENTIFIER_OFF, .min = 0, .max = 2,
      .description = "Parameter identifier: 0 off, 1 least squares (18)-(19), 2 matrix "
@@ -97,7 +107,7 @@ static const ModelVariable VARIABLES[] = {
     {.name = "p", .vr = 22, .rows = MAX_N, .type = TYPE_REAL, PARAM(.offset = OFF(p),
      .starts = P_START, .min = 0.0, .max = 1.0, .min_exclusive = true, .max_exclusive = true,
      .description = "Constant p of condition (6), 0 < p < 1")},
-    {.name = "tau", .vr = 26, .type = TYPE_REAL, PARAM(.offset = OFF(tau), .start = 0.02,
+    {.name = "tau", .vr = 26, .type = TYPE_REAL, PARAM(.offset = OFF(tau), .start = 0.002,
      .min = 0.0, .max = NAN, .unit = "s",
      .description = "Time constant of the equivalent output injection filter; 0: no filter")},
     {.name = "b", .vr = 27, .type = TYPE_REAL, PARAM(.offset = OFF(b), .start = 1.0 / PAPER_J,
@@ -109,8 +119,8 @@ static const ModelVariable VARIABLES[] = {
      PARAM(.offset = OFF(theta_nominal), .start = 0.0, UNBOUNDED,
      .description = "External model: nominal parameters thetabar of (12), acceleration "
                     "F + thetabar phi")},
-    {.name = "t_id", .vr = 80, .type = TYPE_REAL, PARAM(.offset = OFF(t_id), .start = 1.0,
-     UNBOUNDED, .unit = "s", .description = "Time at which the identifier starts integrating")},
+    {.name = "t_id", .vr = 80, .type = TYPE_REAL, PARAM(.offset = OFF(t_id), .start = 0.0,
+     UNBOUNDED, .unit = "s", .description = "Earliest time at which the identifier starts")},
     {.name = "rho", .vr = 81, .type = TYPE_REAL, PARAM(.offset = OFF(rho), .start = 1e-3,
      .min = 0.0, .max = NAN, .min_exclusive = true,
      .description = "Regularization: Gamma(0) = I/rho")},
@@ -129,6 +139,21 @@ static const ModelVariable VARIABLES[] = {
     {.name = "x2_hat_start", .vr = 96, .rows = MAX_N, .type = TYPE_REAL,
      PARAM(.offset = OFF(x2_hat_start), .start = 0.0, UNBOUNDED, .unit = "rad/s",
      .description = "Initial velocity estimate")},
+    {.name = "identifier_form", .vr = 110, .type = TYPE_INTEGER,
+     PARAM(.offset = OFF(identifier_form), .start = FORM_INFORMATION, .min = 1, .max = 2,
+     .description = "1: explicit Euler on Gamma as in the paper; 2: information form with "
+                    "stabilized forgetting (Gamma <= I/rho, stable for any h)")},
+    {.name = "identifier_start", .vr = 111, .type = TYPE_INTEGER,
+     PARAM(.offset = OFF(identifier_start), .start = START_WHEN_CONVERGED, .min = 0, .max = 1,
+     .description = "0: start at t_id; 1: start once the observer has converged and t >= t_id")},
+    {.name = "filter_regressor", .vr = 112, .type = TYPE_BOOLEAN,
+     PARAM(.offset = OFF(filter_regressor), .start = 1, UNBOUNDED,
+     .description = "Pass the regressor through the same filter as z_eq (removes the O(tau) "
+                    "bias of filtering one side only)")},
+    {.name = "convergence_window", .vr = 113, .type = TYPE_REAL,
+     PARAM(.offset = OFF(convergence_window), .start = 0.05, .min = 0.0, .max = NAN,
+     .min_exclusive = true, .unit = "s",
+     .description = "Time constant of the convergence test (rate of sign switching of e)")},
     {.name = "alpha1_used", .vr = 100, .rows = MAX_N, .type = TYPE_REAL,
      CALC(.offset = OFF(alpha1_used), .unit = "rad/s2",
      .description = "alpha1 in use (given, or from Theorem 3.1)")},
@@ -143,6 +168,10 @@ static const ModelVariable VARIABLES[] = {
      .description = "External model: nominal acceleration F(t, y, x2_hat, u)")},
     {.name = "phi", .vr = 212, .rows = MAX_L, .type = TYPE_REAL,
      INPUT(.offset = OFF(phi), .description = "External model: regressor phi(t, y, x2_hat, u)")},
+    {.name = "identifier_reset", .vr = 220, .type = TYPE_BOOLEAN,
+     .causality = CAUSALITY_INPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
+     .offset = OFF(identifier_reset),
+     .description = "A rising edge restarts identification from the nominal parameters"},
     {.name = "x1_hat", .vr = 300, .rows = MAX_N, .type = TYPE_REAL,
      OUTPUT(.offset = OFF(obs.x1_hat), .unit = "rad", .description = "Position estimate")},
     {.name = "x2_hat", .vr = 304, .rows = MAX_N, .type = TYPE_REAL,
@@ -161,26 +190,49 @@ static const ModelVariable VARIABLES[] = {
      OUTPUT(.offset = OFF(gamma_trace), .description = "Trace of the identifier's Gamma")},
     {.name = "identifier_active", .vr = 361, .type = TYPE_BOOLEAN,
      .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
-     .offset = OFF(identifier_active), .description = "The identifier is integrating (t >= t_id)"},
+     .offset = OFF(identifier_active), .description = "The identifier is integrating"},
+    {.name = "converged", .vr = 362, .type = TYPE_BOOLEAN,
+     .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
+     .offset = OFF(converged),
+     .description = "The observer is in its sliding mode by the switching-rate test"},
+    {.name = "excitation", .vr = 363, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(excitation),
+     .description = "Smallest eigenvalue of the identifier's information per unit time "
+                    "(identifier_form 2); near 0: theta_hat is not being learned")},
 };
 
 /* theta_hat from the identified corrections.  Built-in joint: the injection
  * is z = xi = -(c - cbar) psi, so Delta = cbar - c and c_hat = cbar - Delta_hat
  * (the paper's 6.2 Delta = [-a1 + a1bar, ...]).  External: theta_hat = thetabar + Delta_hat. */
+static const double (*identified_delta(const ObserverData *d))[MAX_L]
+{
+    return d->identifier_form == FORM_PAPER ? (const double (*)[MAX_L])d->id.delta
+                                            : (const double (*)[MAX_L])d->info.delta;
+}
+
 static void publish_estimates(ObserverData *d)
 {
+    if (d->identifier != IDENTIFIER_OFF && d->identifier_form == FORM_INFORMATION)
+        info_solve(&d->info); /* keeps the previous estimate if it cannot solve */
+    const double (*delta)[MAX_L] = identified_delta(d);
     if (d->nominal_model == NOMINAL_JOINT) {
         for (int k = 0; k < JOINT_BASIS_SIZE; ++k) d->theta_hat[0][k] = d->c_nominal[k];
         for (int j = 0; j < d->m; ++j)
-            d->theta_hat[0][d->selected[j]] = d->c_nominal[d->selected[j]] - d->id.delta[0][j];
+            d->theta_hat[0][d->selected[j]] = d->c_nominal[d->selected[j]] - delta[0][j];
     } else {
         for (int i = 0; i < d->n; ++i) {
             for (int k = 0; k < d->l; ++k) d->theta_hat[i][k] = d->theta_nominal[i][k];
-            for (int j = 0; j < d->m; ++j)
-                d->theta_hat[i][d->selected[j]] += d->id.delta[i][j];
+            for (int j = 0; j < d->m; ++j) d->theta_hat[i][d->selected[j]] += delta[i][j];
         }
     }
-    d->gamma_trace = identifier_gamma_trace(&d->id);
+    if (d->identifier_form == FORM_PAPER) {
+        d->gamma_trace = identifier_gamma_trace(&d->id);
+        d->excitation = 0.0;
+    } else {
+        d->gamma_trace = d->info.gamma_trace;
+        d->excitation = d->info.excitation;
+    }
+    d->converged = sto_converged(&d->obs);
 }
 
 static ModelStatus complete_gains(ObserverData *d, const ModelLogger *log)
@@ -244,20 +296,33 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     for (int i = 0; i < MAX_N; ++i)
         x1_hat0[i] = d->start_from_measurement ? d->y[i] : d->x1_hat_start[i];
     sto_init(&d->obs, d->n, d->h, d->alpha1_used, d->alpha2_used, d->tau, x1_hat0, d->x2_hat_start);
+    sto_configure(&d->obs, (StoScheme)d->scheme, d->convergence_window);
     identifier_init(&d->id, (IdentifierKind)d->identifier, d->n, d->m, d->h, d->rho, d->R);
+    info_init(&d->info, (IdentifierKind)d->identifier, d->n, d->m, d->h, d->rho, d->R);
+    memset(d->phi_filtered, 0, sizeof d->phi_filtered);
     d->identifier_active = 0;
+    d->reset_seen = d->identifier_reset;
     publish_estimates(d);
     return status;
 }
 
 static double internal_step(const void *data) { return ((const ObserverData *)data)->h; }
 
+/* Restarts identification from the nominal parameters. */
+static void restart_identifier(ObserverData *d)
+{
+    identifier_init(&d->id, (IdentifierKind)d->identifier, d->n, d->m, d->h, d->rho, d->R);
+    info_reset(&d->info);
+    d->identifier_active = 0;
+}
+
 static void step(void *data, double t)
 {
     ObserverData *d = data;
-    double acceleration[MAX_N], regressor[MAX_L], phi[MAX_L];
+    double acceleration[MAX_N], regressor[MAX_L];
+    const double *x2 = sto_begin_step(&d->obs, d->y); /* velocity at this sample */
     if (d->nominal_model == NOMINAL_JOINT) {
-        joint_basis(d->y[0], d->obs.x2_hat[0], regressor);
+        joint_basis(d->y[0], x2[0], regressor);
         acceleration[0] = joint_acceleration(d->b, d->c_nominal, d->u, regressor);
     } else {
         memcpy(regressor, d->phi, sizeof regressor);
@@ -267,12 +332,26 @@ static void step(void *data, double t)
             acceleration[i] = a;
         }
     }
-    sto_step(&d->obs, d->y, acceleration);
-    if (d->identifier != IDENTIFIER_OFF && t >= d->t_id) {
-        for (int j = 0; j < d->m; ++j) phi[j] = regressor[d->selected[j]];
-        identifier_step(&d->id, d->obs.z_filtered, phi);
-        d->identifier_active = 1;
+    sto_end_step(&d->obs, d->y, acceleration);
+    if (d->identifier == IDENTIFIER_OFF) return;
+
+    /* The regressor goes through the z_eq filter too, so both sides of
+     * z = Delta phi carry the same lag. */
+    const double g = d->filter_regressor ? d->obs.filter_gain : 1.0;
+    for (int j = 0; j < d->m; ++j)
+        d->phi_filtered[j] += g * (regressor[d->selected[j]] - d->phi_filtered[j]);
+    if (d->identifier_reset != d->reset_seen) {
+        d->reset_seen = d->identifier_reset;
+        if (d->identifier_reset) restart_identifier(d);
     }
+    if (!d->identifier_active)
+        d->identifier_active = t >= d->t_id &&
+                               (d->identifier_start == START_AT_T_ID || sto_converged(&d->obs));
+    if (!d->identifier_active) return;
+    if (d->identifier_form == FORM_PAPER)
+        identifier_step(&d->id, d->obs.z_filtered, d->phi_filtered);
+    else
+        info_step(&d->info, d->obs.z_filtered, d->phi_filtered);
 }
 
 static ModelStatus communication_point(void *data, double t, const ModelLogger *log)

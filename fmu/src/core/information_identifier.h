@@ -1,0 +1,52 @@
+/* LSM and MFF in information form with stabilized forgetting: the default
+ * identifier (identifier_form = 2).  Same regression as the paper's
+ * (z = Delta phi, section 5), integrated without the paper's weaknesses:
+ *
+ * - Information form: accumulate P = Gamma^-1 and Theta = Delta P, eqs. (26)-(27)
+ *   and (35), instead of integrating Gamma by explicit Euler (19)/(36), which
+ *   diverges when h |Gamma| |phi|^2 > 2.  Each step is an exact quadrature:
+ *       P     <- lambda P     + (1 - lambda) rho I           + h phi phi^T
+ *       Theta <- lambda Theta + (1 - lambda) rho Delta_hat   + h z phi^T
+ *   with lambda = R^h (MFF) or 1 (LSM).  Stable for any h.
+ * - Stabilized forgetting: MFF forgets toward rho I (and toward the current
+ *   estimate), not toward 0.  Without excitation P tends to rho I, so
+ *   Gamma = P^-1 <= I/rho always (the bound), and the estimate stays where it
+ *   is instead of winding up.  (The paper's (36) forgets the rho I term: Gamma
+ *   grows like R^-t.)  P stays symmetric positive definite by construction.
+ * - Delta_hat = Theta P^-1 is solved by Cholesky only when asked (at
+ *   communication points), so the internal step costs O(m^2) multiply-adds.
+ * - A reset restarts from the nominal parameters (Delta_hat = 0, P = rho I). */
+#ifndef INFORMATION_IDENTIFIER_H
+#define INFORMATION_IDENTIFIER_H
+
+#include "identifier.h"
+
+typedef struct {
+    int rows, m;
+    double h, rho;
+    double lambda;        /* R^h per step (MFF), 1 (LSM) */
+    double one_minus_lambda_rho;
+    double active_time;   /* time integrated since the (re)start [s] */
+    double P[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];     /* information matrix, upper triangle kept */
+    double theta[ID_MAX_ROWS][ID_MAX_REGRESSORS];       /* Theta = Delta P */
+    double delta[ID_MAX_ROWS][ID_MAX_REGRESSORS];       /* last solved Delta_hat */
+    double gamma_trace;   /* trace(P^-1), from the last solve */
+    double excitation;    /* smallest eigenvalue of the information per unit time */
+    double eigvec[ID_MAX_REGRESSORS]; /* inverse-iteration vector for that eigenvalue */
+} InformationIdentifier;
+
+void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, double h,
+               double rho, double R);
+
+/* Back to the nominal parameters and P = rho I. */
+void info_reset(InformationIdentifier *id);
+
+/* One internal step with the (filtered) injection z and regressor phi. */
+void info_step(InformationIdentifier *id, const double z[], const double phi[]);
+
+/* Solves Delta_hat = Theta P^-1 and refreshes gamma_trace and excitation.
+ * Returns 0, or -1 if P is not positive definite (cannot happen with rho > 0
+ * and finite data; the previous estimate is then kept). */
+int info_solve(InformationIdentifier *id);
+
+#endif
