@@ -1,0 +1,126 @@
+"""Paper method vs the improved defaults, on every scenario, with and without noise.
+
+``python -m harness compare --out DIR`` writes compare.csv, compare.md (a
+side-by-side table) and one figure per scenario.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .master import Progress, Records
+from .metrics import score
+from .scenarios import SCENARIOS, Scenario, improved_overrides, run_scenario
+
+NOISE_LEVELS = (0.0, 1e-5, 1e-4)  # std of the noise on theta [rad]
+
+# The figures each kind of scenario is judged by.
+HEADLINE = {
+    "perturbation": ("rms_perturbation", "delay", "max_e2_after_1s"),
+    "lsm": ("a1_rel_error_20s", "a2_rel_error_20s", "a3_rel_error_20s", "a1_rel_error_end",
+            "a2_rel_error_end", "a3_rel_error_end", "max_e2_after_1s"),
+    "mff": ("rms_damping", "damping_lag", "max_e2_after_1s"),
+}
+
+
+@dataclass
+class Row:
+    scenario: str
+    noise: float
+    metric: str
+    paper: float
+    improved: float
+
+
+def compare_scenario(s: Scenario, fmu_dir: Path, noise: float, seed: int = 0
+                     ) -> tuple[dict[str, float], dict[str, float], Records, Records]:
+    """Runs the paper method and the improved one on the same noise sequence."""
+    paper = run_scenario(s, fmu_dir, noise_std=noise, seed=seed,
+                         progress=Progress(f"{s.name} paper, noise {noise:g}"))
+    better = run_scenario(s, fmu_dir, noise_std=noise, seed=seed,
+                          observer_overrides=improved_overrides(s, noise),
+                          progress=Progress(f"{s.name} improved, noise {noise:g}"))
+    return score(s, paper), score(s, better), paper, better
+
+
+def plot_comparison(s: Scenario, noise: float, paper: Records, better: Records, out: Path) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = paper.time
+    fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    for label, r in (("paper", paper), ("improved", better)):
+        axes[0].semilogy(t, np.abs(r["plant.omega"] - r["observer.x2_hat[1]"]) + 1e-12, lw=0.5,
+                         label=label)
+    axes[0].set_ylabel("|x2 - x2_hat| [rad/s]")
+    axes[0].legend(fontsize=8)
+    axes[0].set_title(f"{s.title}, noise std {noise:g} rad: paper vs improved")
+    if s.kind == "perturbation":
+        from .metrics import true_perturbation
+
+        axes[1].plot(t, true_perturbation(s, paper), "k", lw=1.0, label="true")
+        for label, r in (("paper", paper), ("improved", better)):
+            axes[1].plot(t, r["observer.z_eq_filtered[1]"], lw=0.6, label=label)
+        axes[1].set_ylabel("perturbation [rad/s2]")
+        axes[1].set_ylim(-1, 1)
+    elif s.kind == "mff":
+        axes[1].plot(t, paper["plant.d"], "k", lw=1.0, label="true d(t)")
+        for label, r in (("paper", paper), ("improved", better)):
+            axes[1].plot(t, r["observer.theta_hat[1,2]"], lw=0.6, label=label)
+        axes[1].set_ylim(-0.5, 1.5)
+        axes[1].set_ylabel("damping [1/s]")
+    else:
+        for label, r in (("paper", paper), ("improved", better)):
+            for k in range(3):
+                truth = s.c_true[k]
+                err = np.abs(r[f"observer.theta_hat[1,{k + 1}]"] - truth) / truth
+                axes[1].semilogy(t, err + 1e-9, lw=0.6, label=f"{label} a{k + 1}",
+                                 ls="-" if label == "improved" else "--")
+        axes[1].set_ylabel("relative error")
+        axes[1].set_ylim(1e-5, 10)
+    axes[1].legend(fontsize=7, ncol=2)
+    axes[1].set_xlabel("t [s]")
+    fig.tight_layout()
+    path = out / f"compare_{s.name}_noise{noise:g}.png"
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+def run_comparison(fmu_dir: Path, out: Path, scenarios: list[str] | None = None,
+                   noise_levels: tuple[float, ...] = NOISE_LEVELS) -> list[Row]:
+    out.mkdir(parents=True, exist_ok=True)
+    rows: list[Row] = []
+    for name in scenarios or list(SCENARIOS):
+        s = SCENARIOS[name]
+        for noise in noise_levels:
+            paper, better, rp, rb = compare_scenario(s, fmu_dir, noise)
+            plot_comparison(s, noise, rp, rb, out)
+            for metric in HEADLINE[s.kind]:
+                if metric in paper:
+                    rows.append(Row(name, noise, metric, paper[metric], better[metric]))
+    write_tables(rows, out)
+    return rows
+
+
+def write_tables(rows: list[Row], out: Path) -> None:
+    with (out / "compare.csv").open("w") as f:
+        f.write("scenario,noise_std,metric,paper,improved\n")
+        for r in rows:
+            f.write(f"{r.scenario},{r.noise:g},{r.metric},{r.paper:.6g},{r.improved:.6g}\n")
+    (out / "compare.json").write_text(json.dumps([r.__dict__ for r in rows], indent=1) + "\n")
+    (out / "compare.md").write_text(markdown_table(rows) + "\n")
+
+
+def markdown_table(rows: list[Row]) -> str:
+    lines = ["| scenario | noise std [rad] | metric | paper | improved |",
+             "|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r.scenario} | {r.noise:g} | {r.metric} | {r.paper:.3g} | "
+                     f"{r.improved:.3g} |")
+    return "\n".join(lines)
