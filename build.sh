@@ -35,18 +35,23 @@ setup_venv() {
 # model identifier | model file | core files | committed modelDescription.xml
 MODELS=(
     "SuperTwistingObserver|models/observer.c|core/super_twisting.c core/implicit_twisting.c core/identifier.c core/information_identifier.c core/gains.c|fmu/modelDescription.xml"
+    "Pendulum|models/pendulum.c||fmu/bench/Pendulum/modelDescription.xml"
+    "TwistingController|models/twisting_controller.c||fmu/bench/TwistingController/modelDescription.xml"
 )
 
 build_fmu() {
     local id=$1 model=$2 core=$3 xml=$4
     local fmi_include src=fmu/src out=$BUILD/$id
     fmi_include=$("$PY" -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))')
-    local sources=(fmi2/fmi2_layer.c $model $core)
+    local sources=(fmi2/fmi2_layer.c "$model")
+    local f
+    for f in $core; do sources+=("$f"); done
+    local model_files=()   # the model and its core files, without the FMI layer
+    for f in "${sources[@]:1}"; do model_files+=("$src/$f"); done
     rm -rf "$out" && mkdir -p "$out/binaries/linux64" "$out/sources"
 
     # The XML is generated from the C variable table and must match the committed one.
-    "$CC" "${CFLAGS[@]}" -o "$out/describe_model" fmu/tools/describe_model.c \
-        "$src/$model" $(printf "$src/%s " $core) -lm
+    "$CC" "${CFLAGS[@]}" -o "$out/describe_model" fmu/tools/describe_model.c "${model_files[@]}" -lm
     "$out/describe_model" "${sources[@]}" > "$out/modelDescription.xml"
     if ! cmp -s "$out/modelDescription.xml" "$xml"; then
         diff -u "$xml" "$out/modelDescription.xml" | head -40 || true
@@ -56,7 +61,7 @@ build_fmu() {
     fi
 
     "$CC" "${CFLAGS[@]}" -shared -I "$fmi_include" -o "$out/binaries/linux64/$id.so" \
-        $(printf "$src/%s " "${sources[@]}") -lm
+        "$src/fmi2/fmi2_layer.c" "${model_files[@]}" -lm
     # Only the fmi2 functions may be exported.
     local extra
     extra=$(nm -D --defined-only "$out/binaries/linux64/$id.so" | awk '{print $3}' | grep -v '^fmi2' || true)

@@ -1,0 +1,191 @@
+/* Pendulum: the paper's plant (section 6) as a bench FMU.
+ *
+ *   x1' = x2
+ *   x2' = u/J - (M g L/(2J)) sin x1 - (Vs/J) x2 - (Ps/J) sign(x2) - d(t) x2 + v(t)
+ *
+ * J = M L^2; d(t) = d_mean + d_amplitude sin(t/d_period) (section 6.3) or 0;
+ * v(t): none, v_amplitude sin(v_frequency t), or v_amplitude sign(sin(2 pi t/v_period)).
+ * Classical RK4 at the internal step h with u held over the communication step.
+ * The true coefficients and the true perturbation terms are outputs so that a
+ * harness can score an observer against them. */
+#include <math.h>
+#include <stddef.h>
+
+#include "../fmi2/model_interface.h"
+
+#define TWO_PI 6.283185307179586
+
+enum { DAMPING_NONE = 0, DAMPING_TIME_VARYING = 1 };
+enum { DISTURBANCE_NONE = 0, DISTURBANCE_SINE = 1, DISTURBANCE_SQUARE = 2 };
+
+typedef struct {
+    /* parameters */
+    double h, M, g, L, Vs, Ps, theta_start, omega_start;
+    int damping;
+    double d_mean, d_amplitude, d_period;
+    int disturbance;
+    double v_amplitude, v_frequency, v_period;
+    /* calculated parameters */
+    double a_gravity, a_viscous, a_coulomb, b_input;
+    /* input */
+    double u;
+    /* outputs */
+    double theta, omega, acceleration, v, d;
+} PendulumData;
+
+#define OFF(field) offsetof(PendulumData, field)
+#define UNBOUNDED .min = NAN, .max = NAN
+#define PARAM(...) .causality = CAUSALITY_PARAMETER, .variability = VARIABILITY_FIXED, __VA_ARGS__
+#define CALC(...) .causality = CAUSALITY_CALCULATED_PARAMETER, .variability = VARIABILITY_FIXED, \
+                  UNBOUNDED, __VA_ARGS__
+#define OUTPUT(...) .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_CONTINUOUS, \
+                    UNBOUNDED, __VA_ARGS__
+
+static const ModelVariable VARIABLES[] = {
+    {.name = "h", .vr = 1, .type = TYPE_REAL, PARAM(.offset = OFF(h), .start = 1e-5, .min = 0.0,
+     .max = 1.0, .min_exclusive = true, .unit = "s", .description = "Internal RK4 step")},
+    {.name = "M", .vr = 2, .type = TYPE_REAL, PARAM(.offset = OFF(M), .start = 1.1, .min = 0.0,
+     .max = NAN, .min_exclusive = true, .unit = "kg", .description = "Pendulum mass")},
+    {.name = "g", .vr = 3, .type = TYPE_REAL, PARAM(.offset = OFF(g), .start = 9.815, UNBOUNDED,
+     .unit = "m/s2", .description = "Gravity")},
+    {.name = "L", .vr = 4, .type = TYPE_REAL, PARAM(.offset = OFF(L), .start = 0.9, .min = 0.0,
+     .max = NAN, .min_exclusive = true, .unit = "m", .description = "Arm length (J = M L^2)")},
+    {.name = "Vs", .vr = 5, .type = TYPE_REAL, PARAM(.offset = OFF(Vs), .start = 0.18, .min = 0.0,
+     .max = NAN, .unit = "N.m.s", .description = "Viscous friction coefficient")},
+    {.name = "Ps", .vr = 6, .type = TYPE_REAL, PARAM(.offset = OFF(Ps), .start = 0.45, .min = 0.0,
+     .max = NAN, .unit = "N.m", .description = "Coulomb friction coefficient")},
+    {.name = "theta_start", .vr = 7, .type = TYPE_REAL, PARAM(.offset = OFF(theta_start),
+     .start = 0.1, UNBOUNDED, .unit = "rad", .description = "Initial angle")},
+    {.name = "omega_start", .vr = 8, .type = TYPE_REAL, PARAM(.offset = OFF(omega_start),
+     .start = 0.5, UNBOUNDED, .unit = "rad/s", .description = "Initial angular velocity")},
+    {.name = "damping", .vr = 9, .type = TYPE_INTEGER, PARAM(.offset = OFF(damping), .start = 0,
+     .min = 0, .max = 1,
+     .description = "0: d = 0; 1: d(t) = d_mean + d_amplitude sin(t / d_period) (paper 6.3)")},
+    {.name = "d_mean", .vr = 10, .type = TYPE_REAL, PARAM(.offset = OFF(d_mean), .start = 0.5,
+     UNBOUNDED, .unit = "1/s", .description = "Mean of the time-varying damping")},
+    {.name = "d_amplitude", .vr = 11, .type = TYPE_REAL, PARAM(.offset = OFF(d_amplitude),
+     .start = 0.6, UNBOUNDED, .unit = "1/s", .description = "Amplitude of the time-varying damping")},
+    {.name = "d_period", .vr = 12, .type = TYPE_REAL, PARAM(.offset = OFF(d_period), .start = 7.0,
+     .min = 0.0, .max = NAN, .min_exclusive = true, .unit = "s",
+     .description = "Time scale of the damping: sin(t / d_period)")},
+    {.name = "disturbance", .vr = 13, .type = TYPE_INTEGER, PARAM(.offset = OFF(disturbance),
+     .start = 0, .min = 0, .max = 2,
+     .description = "0: none; 1: v_amplitude sin(v_frequency t); 2: v_amplitude "
+                    "sign(sin(2 pi t / v_period))")},
+    {.name = "v_amplitude", .vr = 14, .type = TYPE_REAL, PARAM(.offset = OFF(v_amplitude),
+     .start = 0.5, UNBOUNDED, .unit = "rad/s2", .description = "Disturbance amplitude")},
+    {.name = "v_frequency", .vr = 15, .type = TYPE_REAL, PARAM(.offset = OFF(v_frequency),
+     .start = 2.0, UNBOUNDED, .unit = "rad/s", .description = "Sine disturbance frequency")},
+    {.name = "v_period", .vr = 16, .type = TYPE_REAL, PARAM(.offset = OFF(v_period),
+     .start = 6.283185307179586, .min = 0.0, .max = NAN, .min_exclusive = true, .unit = "s",
+     .description = "Square-wave disturbance period")},
+    {.name = "a_gravity", .vr = 50, .type = TYPE_REAL, CALC(.offset = OFF(a_gravity),
+     .unit = "rad/s2", .description = "True M g L / (2 J)")},
+    {.name = "a_viscous", .vr = 51, .type = TYPE_REAL, CALC(.offset = OFF(a_viscous),
+     .unit = "1/s", .description = "True Vs / J")},
+    {.name = "a_coulomb", .vr = 52, .type = TYPE_REAL, CALC(.offset = OFF(a_coulomb),
+     .unit = "rad/s2", .description = "True Ps / J")},
+    {.name = "b_input", .vr = 53, .type = TYPE_REAL, CALC(.offset = OFF(b_input),
+     .description = "True 1 / J [1/(kg.m2)]")},
+    {.name = "u", .vr = 100, .type = TYPE_REAL, .causality = CAUSALITY_INPUT,
+     .variability = VARIABILITY_CONTINUOUS, UNBOUNDED, .offset = OFF(u), .unit = "N.m",
+     .description = "Applied torque, held over each communication step"},
+    {.name = "theta", .vr = 200, .type = TYPE_REAL, OUTPUT(.offset = OFF(theta), .unit = "rad",
+     .description = "Angle x1")},
+    {.name = "omega", .vr = 201, .type = TYPE_REAL, OUTPUT(.offset = OFF(omega), .unit = "rad/s",
+     .description = "Angular velocity x2")},
+    {.name = "acceleration", .vr = 202, .type = TYPE_REAL, OUTPUT(.offset = OFF(acceleration),
+     .unit = "rad/s2", .description = "x2' at the current state and input")},
+    {.name = "v", .vr = 203, .type = TYPE_REAL, OUTPUT(.offset = OFF(v), .unit = "rad/s2",
+     .description = "Disturbance v(t) now")},
+    {.name = "d", .vr = 204, .type = TYPE_REAL, OUTPUT(.offset = OFF(d), .unit = "1/s",
+     .description = "Damping coefficient d(t) now")},
+};
+
+static double sign_of(double x) { return (x > 0.0) - (x < 0.0); }
+
+static double damping_at(const PendulumData *p, double t)
+{
+    return p->damping == DAMPING_TIME_VARYING ? p->d_mean + p->d_amplitude * sin(t / p->d_period)
+                                               : 0.0;
+}
+
+static double disturbance_at(const PendulumData *p, double t)
+{
+    switch (p->disturbance) {
+    case DISTURBANCE_SINE: return p->v_amplitude * sin(p->v_frequency * t);
+    case DISTURBANCE_SQUARE: return p->v_amplitude * sign_of(sin(TWO_PI * t / p->v_period));
+    default: return 0.0;
+    }
+}
+
+static double acceleration_at(const PendulumData *p, double t, double x1, double x2)
+{
+    return p->b_input * p->u - p->a_gravity * sin(x1) - p->a_viscous * x2 -
+           p->a_coulomb * sign_of(x2) - damping_at(p, t) * x2 + disturbance_at(p, t);
+}
+
+static void update_outputs(PendulumData *p, double t)
+{
+    p->acceleration = acceleration_at(p, t, p->theta, p->omega);
+    p->v = disturbance_at(p, t);
+    p->d = damping_at(p, t);
+}
+
+static ModelStatus initialize(void *data, double start_time, const ModelLogger *log)
+{
+    (void)log;
+    PendulumData *p = data;
+    const double J = p->M * p->L * p->L;
+    p->a_gravity = p->M * p->g * p->L / (2.0 * J);
+    p->a_viscous = p->Vs / J;
+    p->a_coulomb = p->Ps / J;
+    p->b_input = 1.0 / J;
+    p->theta = p->theta_start;
+    p->omega = p->omega_start;
+    update_outputs(p, start_time);
+    return MODEL_OK;
+}
+
+static double internal_step(const void *data) { return ((const PendulumData *)data)->h; }
+
+static void step(void *data, double t)
+{
+    PendulumData *p = data;
+    const double h = p->h, x1 = p->theta, x2 = p->omega;
+    const double k1x = x2, k1v = acceleration_at(p, t, x1, x2);
+    const double k2x = x2 + 0.5 * h * k1v, k2v = acceleration_at(p, t + 0.5 * h, x1 + 0.5 * h * k1x, k2x);
+    const double k3x = x2 + 0.5 * h * k2v, k3v = acceleration_at(p, t + 0.5 * h, x1 + 0.5 * h * k2x, k3x);
+    const double k4x = x2 + h * k3v, k4v = acceleration_at(p, t + h, x1 + h * k3x, k4x);
+    p->theta = x1 + h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+    p->omega = x2 + h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+}
+
+static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
+{
+    PendulumData *p = data;
+    update_outputs(p, t);
+    if (!isfinite(p->theta) || !isfinite(p->omega)) {
+        log->log(log->context, MODEL_ERROR, "pendulum state diverged at t = %g: theta = %g, "
+                 "omega = %g", t, p->theta, p->omega);
+        return MODEL_ERROR;
+    }
+    return MODEL_OK;
+}
+
+const ModelDescriptor MODEL_DESCRIPTOR = {
+    .model_name = "Pendulum",
+    .model_identifier = "Pendulum",
+    .guid = "{8f6b2c1d-3e4a-4b5c-9d6e-7f8091a2b3c4}",
+    .description = "Pendulum with viscous and Coulomb friction, time-varying damping and a "
+                   "disturbance (Davila, Fridman, Poznyak 2006, section 6)",
+    .variables = VARIABLES,
+    .n_variables = sizeof VARIABLES / sizeof VARIABLES[0],
+    .data_size = sizeof(PendulumData),
+    .default_stop_time = 10.0,
+    .default_tolerance = 1e-6,
+    .initialize = initialize,
+    .internal_step = internal_step,
+    .step = step,
+    .communication_point = communication_point,
+};
