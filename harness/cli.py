@@ -3,6 +3,7 @@
     reproduce [--scenario NAME|all] --out DIR   the paper's section 6 examples
     identify DATA.csv --out DIR [--param NAME=VALUE ...]   offline identification
     demo [--out DIR]                            the closed-loop demonstration (all scenarios)
+    compare --out DIR                           paper method vs the improved defaults
 """
 from __future__ import annotations
 
@@ -122,6 +123,17 @@ def cmd_identify(args) -> int:
     return 0
 
 
+def cmd_compare(args) -> int:
+    from .compare import markdown_table, run_comparison
+
+    noise = tuple(float(n) for n in args.noise.split(","))
+    rows = run_comparison(_fmu_dir(args), Path(args.out),
+                          None if args.scenario == "all" else [args.scenario], noise)
+    print(markdown_table(rows))
+    print(f"\nwrote {Path(args.out) / 'compare.md'}, compare.csv and figures")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     from .scenarios import SCENARIOS
 
@@ -145,6 +157,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", default=str(REPO / "build" / "demo"))
     p.set_defaults(func=cmd_reproduce, scenario="all", noise=0.0, seed=0, csv_decimation=10,
                    python_loop=False)
+
+    p = sub.add_parser("compare", help="paper method vs the improved defaults, with noise")
+    p.add_argument("--scenario", default="all", choices=["all", *SCENARIOS])
+    p.add_argument("--noise", default="0,1e-5,1e-4", help="comma-separated noise std [rad]")
+    p.add_argument("--out", required=True)
+    p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser("identify", help="identify from recorded data (columns t, y, u)")
     p.add_argument("data")

@@ -99,7 +99,11 @@ def _signal_name(source: str) -> str | None:
 
 def initialize(sim: CoSimulation, start_time: float, parameters: Mapping[str, Mapping[str, Value]],
                signals: Mapping[str, np.ndarray]) -> None:
-    """Initialize every FMU in data-flow order, propagating the links once."""
+    """Initialize every FMU in data-flow order, propagating the links once.
+
+    A link from an FMU that is not initialized yet (a feedback loop) is
+    skipped: its target keeps the input's start value until the first step."""
+    initialized: set[str] = set()
     for name, fmu in sim.fmus.items():
         fmu.setup(start_time, parameters.get(name, {}))
         inputs: dict[str, float] = {}
@@ -112,12 +116,15 @@ def initialize(sim: CoSimulation, start_time: float, parameters: Mapping[str, Ma
                 value = float(signals[signal][0])
             else:
                 source_fmu, source_var = sim._split(link.source)
+                if source_fmu not in initialized:
+                    continue
                 value = float(sim.fmus[source_fmu].get([source_var])[0])
             if link.noise:
                 value += float(signals[link.noise][0])
             inputs[target_var] = value
         fmu.set(inputs)
         fmu.exit_initialization()
+        initialized.add(name)
 
 
 class _Plan:
