@@ -3,12 +3,16 @@
 #include <math.h>
 #include <string.h>
 
+/* Size of the sums: m, or 2m with the drift model. */
+static int dimension(const InformationIdentifier *id) { return id->drift ? 2 * id->m : id->m; }
+
 void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, double h,
-               double rho, double R)
+               double rho, double R, int drift)
 {
     memset(id, 0, sizeof *id);
     id->rows = rows;
     id->m = m;
+    id->drift = drift && kind == IDENTIFIER_MFF && 2 * m <= ID_MAX_REGRESSORS;
     id->h = h;
     id->rho = rho;
     id->lambda = kind == IDENTIFIER_MFF ? pow(R, h) : 1.0;
@@ -21,18 +25,41 @@ void info_reset(InformationIdentifier *id)
     memset(id->P, 0, sizeof id->P);
     memset(id->theta, 0, sizeof id->theta);
     memset(id->delta, 0, sizeof id->delta);
-    for (int k = 0; k < id->m; ++k) {
+    const int n = dimension(id);
+    for (int k = 0; k < n; ++k) {
         id->P[k][k] = id->rho;
-        id->eigvec[k] = 1.0 / sqrt((double)id->m);
+        id->eigvec[k] = k < id->m ? 1.0 / sqrt((double)id->m) : 0.0;
     }
     id->active_time = 0.0;
     id->gamma_trace = id->m / id->rho;
     id->excitation = 0.0;
 }
 
-void info_step(InformationIdentifier *id, const double z[], const double phi[])
+/* Re-centres the drift sums on the next step's time: with A = [[I,0],[-hI,I]],
+ * P <- A P A^T and Theta <- Theta A^T (upper triangle of P kept). */
+static void recentre(InformationIdentifier *id)
 {
     const int m = id->m;
+    const double h = id->h;
+    for (int j = 0; j < m; ++j) {
+        for (int k = 0; k < m; ++k) { /* P22 first: it reads the old P12, P21 */
+            if (k < j) continue;
+            const double p11 = id->P[j][k];
+            const double p12 = id->P[j][m + k], p21 = id->P[k][m + j];
+            id->P[m + j][m + k] += h * h * p11 - h * p12 - h * p21;
+        }
+    }
+    for (int j = 0; j < m; ++j)
+        for (int k = 0; k < m; ++k) /* P12 block (rows j < m, columns m + k) */
+            id->P[j][m + k] -= h * (k >= j ? id->P[j][k] : id->P[k][j]);
+    for (int i = 0; i < id->rows; ++i)
+        for (int k = 0; k < m; ++k) id->theta[i][m + k] -= h * id->theta[i][k];
+}
+
+void info_step(InformationIdentifier *id, const double z[], const double phi[])
+{
+    if (id->drift) recentre(id);
+    const int m = id->m, n = dimension(id);
     const double h = id->h, lambda = id->lambda, pull = id->one_minus_lambda_rho;
     if (lambda == 1.0) { /* LSM: plain accumulation */
         for (int j = 0; j < m; ++j) {
@@ -43,25 +70,28 @@ void info_step(InformationIdentifier *id, const double z[], const double phi[])
             const double hz = h * z[i];
             for (int k = 0; k < m; ++k) id->theta[i][k] += hz * phi[k];
         }
-    } else { /* MFF: forget toward rho I and toward the current estimate */
-        for (int j = 0; j < m; ++j) {
-            const double hj = h * phi[j];
-            for (int k = j; k < m; ++k) id->P[j][k] = lambda * id->P[j][k] + hj * phi[k];
+    } else { /* MFF: forget toward rho I and toward the current estimate; the newest
+              * sample has s - t = 0, so it only enters the first m rows/columns */
+        for (int j = 0; j < n; ++j) {
+            const double hj = j < m ? h * phi[j] : 0.0;
+            for (int k = j; k < n; ++k)
+                id->P[j][k] = lambda * id->P[j][k] + (k < m ? hj * phi[k] : 0.0);
             id->P[j][j] += pull;
         }
         for (int i = 0; i < id->rows; ++i) {
             const double hz = h * z[i];
-            for (int k = 0; k < m; ++k)
-                id->theta[i][k] = lambda * id->theta[i][k] + pull * id->delta[i][k] + hz * phi[k];
+            for (int k = 0; k < n; ++k)
+                id->theta[i][k] = lambda * id->theta[i][k] + pull * id->delta[i][k] +
+                                  (k < m ? hz * phi[k] : 0.0);
         }
     }
     id->active_time += h;
 }
 
 /* Cholesky P = L L^T from the upper triangle; returns -1 if not positive definite. */
-static int cholesky(const InformationIdentifier *id, double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS])
+static int cholesky(const InformationIdentifier *id, int m,
+                    double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS])
 {
-    const int m = id->m;
     for (int j = 0; j < m; ++j) {
         double d = id->P[j][j];
         for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
@@ -91,31 +121,29 @@ static void cholesky_solve(int m, double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS]
 
 int info_solve(InformationIdentifier *id)
 {
-    const int m = id->m;
+    const int n = dimension(id), m = id->m;
     double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
     if (m == 0) return 0;
-    if (cholesky(id, L) != 0) return -1;
+    if (cholesky(id, n, L) != 0) return -1;
     for (int i = 0; i < id->rows; ++i) {
         double x[ID_MAX_REGRESSORS];
         memcpy(x, id->theta[i], sizeof x);
-        cholesky_solve(m, L, x);
+        cholesky_solve(n, L, x);
         memcpy(id->delta[i], x, sizeof x);
     }
-    /* trace(P^-1) = sum of squared entries of L^-1 */
+    /* trace of the first m diagonal entries of P^-1 (the current parameters'
+     * part): the squared norms of the rows of L^-1 ... via columns of L^-T. */
     double trace = 0.0;
     for (int j = 0; j < m; ++j) {
-        double col[ID_MAX_REGRESSORS] = {0};
-        col[j] = 1.0;
-        for (int i = j; i < m; ++i) { /* forward substitution for column j of L^-1 */
-            double s = col[i];
-            for (int k = j; k < i; ++k) s -= L[i][k] * col[k];
-            col[i] = s / L[i][i];
-            trace += col[i] * col[i];
-        }
+        double e[ID_MAX_REGRESSORS] = {0};
+        e[j] = 1.0;
+        cholesky_solve(n, L, e); /* column j of P^-1 */
+        trace += e[j];
     }
     id->gamma_trace = trace;
     /* One inverse-iteration step toward the eigenvector of the smallest
-     * eigenvalue of P; the Rayleigh quotient estimates that eigenvalue. */
+     * eigenvalue of the current parameters' information P11 (the leading
+     * block of L is its Cholesky factor); the Rayleigh quotient estimates it. */
     double v[ID_MAX_REGRESSORS];
     memcpy(v, id->eigvec, sizeof v);
     cholesky_solve(m, L, v);

@@ -15,28 +15,37 @@
  *   grows like R^-t.)  P stays symmetric positive definite by construction.
  * - Delta_hat = Theta P^-1 is solved by Cholesky only when asked (at
  *   communication points), so the internal step costs O(m^2) multiply-adds.
- * - A reset restarts from the nominal parameters (Delta_hat = 0, P = rho I). */
+ * - A reset restarts from the nominal parameters (Delta_hat = 0, P = rho I).
+ * - Drift model (MFF, optional): forgetting makes the estimate lag a moving
+ *   parameter by about the memory 1/|ln R| (0.43 s at R = 0.1).  With
+ *   drift on, each parameter is modelled locally as Delta(s) = Delta0 +
+ *   Delta1 (s - t): the regressor is augmented with phi (s - t), which is 0
+ *   for the newest sample, and the sums are re-centred at every step
+ *   (phi (s - t - h) = phi (s - t) - h phi, a congruence with
+ *   A = [[I, 0], [-h I, I]]).  Delta0 is then the estimate at the current
+ *   time, free of the lag for a linear drift.  Needs 2 m <= 8 regressors. */
 #ifndef INFORMATION_IDENTIFIER_H
 #define INFORMATION_IDENTIFIER_H
 
 #include "identifier.h"
 
 typedef struct {
-    int rows, m;
+    int rows, m;          /* m: the identified regressors; the sums have 2m with drift */
+    int drift;            /* drift model on (MFF only) */
     double h, rho;
     double lambda;        /* R^h per step (MFF), 1 (LSM) */
     double one_minus_lambda_rho;
     double active_time;   /* time integrated since the (re)start [s] */
     double P[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];     /* information matrix, upper triangle kept */
     double theta[ID_MAX_ROWS][ID_MAX_REGRESSORS];       /* Theta = Delta P */
-    double delta[ID_MAX_ROWS][ID_MAX_REGRESSORS];       /* last solved Delta_hat */
+    double delta[ID_MAX_ROWS][ID_MAX_REGRESSORS];       /* last solved Delta_hat (first m: Delta0) */
     double gamma_trace;   /* trace(P^-1), from the last solve */
     double excitation;    /* smallest eigenvalue of the information per unit time */
     double eigvec[ID_MAX_REGRESSORS]; /* inverse-iteration vector for that eigenvalue */
 } InformationIdentifier;
 
 void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, double h,
-               double rho, double R);
+               double rho, double R, int drift);
 
 /* Back to the nominal parameters and P = rho I. */
 void info_reset(InformationIdentifier *id);

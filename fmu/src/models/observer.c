@@ -34,7 +34,7 @@ typedef struct {
     int identify[MAX_L];
     int start_from_measurement;
     double x1_hat_start[MAX_N], x2_hat_start[MAX_N];
-    int identifier_form, identifier_start, filter_regressor;
+    int identifier_form, identifier_start, filter_regressor, mff_drift;
     double convergence_window;
     /* calculated parameters */
     double alpha1_used[MAX_N], alpha2_used[MAX_N];
@@ -53,6 +53,7 @@ typedef struct {
     Identifier id;              /* identifier_form = 1 (the paper's explicit Euler) */
     InformationIdentifier info; /* identifier_form = 2 */
     double phi_filtered[MAX_L]; /* selected regressors through the z_eq filter */
+    double phi_previous[MAX_L]; /* selected regressors of the previous sample (implicit scheme) */
     int reset_seen;             /* identifier_reset value at the last step */
 } ObserverData;
 
@@ -150,6 +151,10 @@ static const ModelVariable VARIABLES[] = {
      PARAM(.offset = OFF(filter_regressor), .start = 1, UNBOUNDED,
      .description = "Pass the regressor through the same filter as z_eq (removes the O(tau) "
                     "bias of filtering one side only)")},
+    {.name = "mff_drift", .vr = 114, .type = TYPE_BOOLEAN,
+     PARAM(.offset = OFF(mff_drift), .start = 1, UNBOUNDED,
+     .description = "MFF in information form: model each parameter as locally linear in "
+                    "time, which removes the lag of forgetting (needs 2 m <= 8)")},
     {.name = "convergence_window", .vr = 113, .type = TYPE_REAL,
      PARAM(.offset = OFF(convergence_window), .start = 0.05, .min = 0.0, .max = NAN,
      .min_exclusive = true, .unit = "s",
@@ -298,8 +303,17 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     sto_init(&d->obs, d->n, d->h, d->alpha1_used, d->alpha2_used, d->tau, x1_hat0, d->x2_hat_start);
     sto_configure(&d->obs, (StoScheme)d->scheme, d->convergence_window);
     identifier_init(&d->id, (IdentifierKind)d->identifier, d->n, d->m, d->h, d->rho, d->R);
-    info_init(&d->info, (IdentifierKind)d->identifier, d->n, d->m, d->h, d->rho, d->R);
+    if (d->identifier == IDENTIFIER_MFF && d->identifier_form == FORM_INFORMATION && d->mff_drift &&
+        2 * d->m > ID_MAX_REGRESSORS) {
+        log->log(log->context, MODEL_ERROR,
+                 "mff_drift needs 2 m <= %d identified regressors, %d are selected; select fewer "
+                 "or set mff_drift = false", ID_MAX_REGRESSORS, d->m);
+        return MODEL_ERROR;
+    }
+    info_init(&d->info, (IdentifierKind)d->identifier, d->n, d->m, d->h, d->rho, d->R,
+              d->mff_drift);
     memset(d->phi_filtered, 0, sizeof d->phi_filtered);
+    memset(d->phi_previous, 0, sizeof d->phi_previous);
     d->identifier_active = 0;
     d->reset_seen = d->identifier_reset;
     publish_estimates(d);
@@ -336,10 +350,17 @@ static void step(void *data, double t)
     if (d->identifier == IDENTIFIER_OFF) return;
 
     /* The regressor goes through the z_eq filter too, so both sides of
-     * z = Delta phi carry the same lag. */
+     * z = Delta phi carry the same lag.  The implicit scheme's injection
+     * belongs to the previous sample (its corrector runs one sample behind),
+     * so its regressor is taken one sample back as well. */
     const double g = d->filter_regressor ? d->obs.filter_gain : 1.0;
-    for (int j = 0; j < d->m; ++j)
-        d->phi_filtered[j] += g * (regressor[d->selected[j]] - d->phi_filtered[j]);
+    const int behind = d->scheme == STO_SCHEME_IMPLICIT;
+    for (int j = 0; j < d->m; ++j) {
+        const double current = regressor[d->selected[j]];
+        const double aligned = behind ? d->phi_previous[j] : current;
+        d->phi_previous[j] = current;
+        d->phi_filtered[j] += g * (aligned - d->phi_filtered[j]);
+    }
     if (d->identifier_reset != d->reset_seen) {
         d->reset_seen = d->identifier_reset;
         if (d->identifier_reset) restart_identifier(d);
