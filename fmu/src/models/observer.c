@@ -53,6 +53,7 @@ typedef struct {
     Identifier id;              /* identifier_form = 1 (the paper's explicit Euler) */
     InformationIdentifier info; /* identifier_form = 2 */
     double phi_filtered[MAX_L]; /* selected regressors through the z_eq filter */
+    double z_identifier[MAX_N]; /* z_eq through the same filter, started with phi_filtered */
     double phi_previous[MAX_L]; /* selected regressors of the previous sample (implicit scheme) */
     int reset_seen;             /* identifier_reset value at the last step */
 } ObserverData;
@@ -314,6 +315,7 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
               d->mff_drift);
     memset(d->phi_filtered, 0, sizeof d->phi_filtered);
     memset(d->phi_previous, 0, sizeof d->phi_previous);
+    memset(d->z_identifier, 0, sizeof d->z_identifier);
     d->identifier_active = 0;
     d->reset_seen = d->identifier_reset;
     publish_estimates(d);
@@ -349,30 +351,41 @@ static void step(void *data, double t)
     sto_end_step(&d->obs, d->y, acceleration);
     if (d->identifier == IDENTIFIER_OFF) return;
 
-    /* The regressor goes through the z_eq filter too, so both sides of
-     * z = Delta phi carry the same lag.  The implicit scheme's injection
-     * belongs to the previous sample (its corrector runs one sample behind),
-     * so its regressor is taken one sample back as well. */
-    const double g = d->filter_regressor ? d->obs.filter_gain : 1.0;
+    /* The implicit scheme's injection belongs to the previous sample (its
+     * corrector runs one sample behind), so its regressor is taken one sample
+     * back as well. */
     const int behind = d->scheme == STO_SCHEME_IMPLICIT;
+    double phi[MAX_L];
     for (int j = 0; j < d->m; ++j) {
         const double current = regressor[d->selected[j]];
-        const double aligned = behind ? d->phi_previous[j] : current;
+        phi[j] = behind ? d->phi_previous[j] : current;
         d->phi_previous[j] = current;
-        d->phi_filtered[j] += g * (aligned - d->phi_filtered[j]);
     }
     if (d->identifier_reset != d->reset_seen) {
         d->reset_seen = d->identifier_reset;
         if (d->identifier_reset) restart_identifier(d);
     }
-    if (!d->identifier_active)
+    if (!d->identifier_active) {
         d->identifier_active = t >= d->t_id &&
                                (d->identifier_start == START_AT_T_ID || sto_converged(&d->obs));
-    if (!d->identifier_active) return;
+        if (!d->identifier_active) return;
+        /* Both filters start from zero together: z = Delta phi then holds for
+         * the filtered pair exactly, with no trace of the observer's transient. */
+        memset(d->phi_filtered, 0, sizeof d->phi_filtered);
+        memset(d->z_identifier, 0, sizeof d->z_identifier);
+    }
+    const double *z = d->obs.z_filtered, *regressors = phi;
+    if (d->filter_regressor) { /* the same filter on both sides of z = Delta phi */
+        const double g = d->obs.filter_gain;
+        for (int i = 0; i < d->n; ++i) d->z_identifier[i] += g * (d->obs.z_eq[i] - d->z_identifier[i]);
+        for (int j = 0; j < d->m; ++j) d->phi_filtered[j] += g * (phi[j] - d->phi_filtered[j]);
+        z = d->z_identifier;
+        regressors = d->phi_filtered;
+    }
     if (d->identifier_form == FORM_PAPER)
-        identifier_step(&d->id, d->obs.z_filtered, d->phi_filtered);
+        identifier_step(&d->id, z, regressors);
     else
-        info_step(&d->info, d->obs.z_filtered, d->phi_filtered);
+        info_step(&d->info, z, regressors);
 }
 
 static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
