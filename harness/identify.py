@@ -94,9 +94,8 @@ def identify(recording: Recording, observer_fmu: Path, parameters: dict[str, Val
     sim = CoSimulation({"observer": observer},
                        [Link("signal:y", "observer.y[1]"), Link("signal:u", "observer.u")])
     # h = the sample step by default: sub-stepping would hold y constant over a
-    # sample, a staircase the observer then tracks.  rho = 1 keeps explicit Euler
-    # on Gamma stable at millisecond sampling (h |Gamma| |phi|^2 < 2).
-    parameters = {"h": recording.step, "rho": 1.0, **parameters}
+    # sample, a staircase the observer then tracks.
+    parameters = {"h": recording.step, **parameters}
     n = len(recording.t) - 1
     signals = {"y": recording.y[:n], "u": recording.u[:n]}
     try:

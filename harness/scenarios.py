@@ -210,7 +210,7 @@ def run_scenario(s: Scenario, fmu_dir: Path, *, noise_std: float = 0.0, seed: in
 # noise-free, the implicit scheme's injection does not chatter, so only a
 # short filter is needed (its lag is the perturbation delay); with noise the
 # injection saturates and must be averaged like the paper's.
-IMPROVED_TAU = {"perturbation": {0.0: 0.0005, 1e-5: 0.002, 1e-4: 0.02},
+IMPROVED_TAU = {"perturbation": {0.0: 0.0005, 1e-5: 0.02, 1e-4: 0.02},
                 "lsm": {0.0: 0.002, 1e-5: 0.002, 1e-4: 0.002},
                 "mff": {0.0: 0.002, 1e-5: 0.002, 1e-4: 0.002}}
 
