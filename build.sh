@@ -84,6 +84,8 @@ build_all() {
     done
     log "validating with fmpy"
     "$PY" -m harness.package --validate "$BUILD"/fmus/*.fmu
+    log "writing the closed loop as SSP"
+    "$PY" -m harness.ssp "$BUILD/fmus" "$BUILD/ClosedLoop.ssp"
 }
 
 setup_venv
