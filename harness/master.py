@@ -194,47 +194,55 @@ def _run_native(plan: _Plan, records: np.ndarray, row: int, t0: float, H: float,
 
 def _run_python(plan: _Plan, records: np.ndarray, row: int, t0: float, H: float, k_begin: int,
                 k_end: int, decimation: int) -> int:
-    """The same loop as native/master_loop.c, one FMI call per link, in plain Python."""
+    """The same loop as native/master_loop.c in plain Python.
+
+    Calls are batched (one fmi2GetReal per source FMU and one fmi2SetReal per
+    target FMU and step); reads have no side effects, so the values and the
+    records are the same as the native loop's, one call per link."""
     components = [f.slave.component for f in plan.fmus]
     do_step = [f.fmi2DoStep for f in plan.fmus]
     get_real = [f.fmi2GetReal for f in plan.fmus]
     set_real = [f.fmi2SetReal for f in plan.fmus]
-    value = ctypes.c_double()
-    value_ref = ctypes.byref(value)
-    vr = ctypes.c_uint()
-    vr_ref = ctypes.byref(vr)
     signals = plan.signals.tolist()
-    steps = []  # per FMU in order: (fmu, links into it)
+    steps = []  # per FMU in step order: its reads, its set, its doStep
     for f in plan.order:
-        steps.append((f, [l for l in plan.links if l[4] == f]))
+        links = [l for l in plan.links if l[4] == f]
+        values = (ctypes.c_double * max(1, len(links)))()
+        reads = []  # (source fmu, vr array, n, buffer, [(buffer index, slot)])
+        for source in sorted({l[0] for l in links if l[0] >= 0}):
+            mine = [(i, l) for i, l in enumerate(links) if l[0] == source]
+            vrs = (ctypes.c_uint * len(mine))(*[l[1] for _, l in mine])
+            buffer = (ctypes.c_double * len(mine))()
+            reads.append((source, vrs, len(mine), buffer, [(j, i) for j, (i, _) in enumerate(mine)]))
+        from_signals = [(i, l[2]) for i, l in enumerate(links) if l[0] < 0]
+        noises = [(i, l[3]) for i, l in enumerate(links) if l[3] >= 0]
+        targets = (ctypes.c_uint * max(1, len(links)))(*[l[5] for l in links])
+        steps.append((f, reads, from_signals, noises, targets, len(links), values))
+    probe_vrs = [(fmu, (ctypes.c_uint * 1)(vr)) for fmu, vr in plan.probes]
+    probe_value = (ctypes.c_double * 1)()
     for k in range(k_begin, k_end):
         t = t0 + k * H
-        for f, links in steps:
-            component = components[f]
-            for source_fmu, source_vr, source_signal, noise_signal, _, target_vr in links:
-                if source_fmu < 0:
-                    v = signals[source_signal][k]
-                else:
-                    vr.value = source_vr
-                    if get_real[source_fmu](components[source_fmu], vr_ref, 1, value_ref) >= 3:
-                        raise plan.failure(k, source_fmu, 1, t0, H)
-                    v = value.value
-                if noise_signal >= 0:
-                    v += signals[noise_signal][k]
-                value.value = v
-                vr.value = target_vr
-                if set_real[f](component, vr_ref, 1, value_ref) >= 3:
-                    raise plan.failure(k, f, 2, t0, H)
-            if do_step[f](component, t, H, 0) >= 3:
+        for f, reads, from_signals, noises, targets, n, values in steps:
+            for source, vrs, count, buffer, slots in reads:
+                if get_real[source](components[source], vrs, count, buffer) >= 3:
+                    raise plan.failure(k, source, 1, t0, H)
+                for j, i in slots:
+                    values[i] = buffer[j]
+            for i, signal in from_signals:
+                values[i] = signals[signal][k]
+            for i, noise in noises:
+                values[i] = values[i] + signals[noise][k]
+            if n and set_real[f](components[f], targets, n, values) >= 3:
+                raise plan.failure(k, f, 2, t0, H)
+            if do_step[f](components[f], t, H, 0) >= 3:
                 raise plan.failure(k, f, 0, t0, H)
         if (k + 1) % decimation == 0:
             out = records[row]
             out[0] = t0 + (k + 1) * H
-            for p, (fmu, probe_vr) in enumerate(plan.probes):
-                vr.value = probe_vr
-                if get_real[fmu](components[fmu], vr_ref, 1, value_ref) >= 3:
+            for p, (fmu, vr) in enumerate(probe_vrs):
+                if get_real[fmu](components[fmu], vr, 1, probe_value) >= 3:
                     raise plan.failure(k, fmu, 1, t0, H)
-                out[p + 1] = value.value
+                out[p + 1] = probe_value[0]
             row += 1
     return row
 

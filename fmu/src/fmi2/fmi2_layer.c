@@ -76,6 +76,9 @@ typedef struct {
     fmi2CallbackAllocateMemory allocate;
     fmi2CallbackFreeMemory release;
     fmi2Boolean logging_on;
+    /* value reference -> index in MD.variables (-1: none), built once */
+    int16_t *variable_of_vr;
+    uint32_t vr_limit;
     /* Snapshots handed out by this instance: a pointer the importer passes
      * back is only dereferenced if it is one of these. */
     Snapshot **snapshots;
@@ -211,6 +214,25 @@ static void apply_start_values(void *data)
     }
 }
 
+/* Value references are small and dense: one table lookup per get/set. */
+static uint32_t count_value_references(void)
+{
+    uint32_t limit = 0;
+    for (size_t v = 0; v < MD.n_variables; ++v) {
+        const uint32_t end = MD.variables[v].vr + (uint32_t)model_variable_count(&MD.variables[v]);
+        if (end > limit) limit = end;
+    }
+    return limit;
+}
+
+static void fill_vr_table(int16_t *table, uint32_t limit)
+{
+    for (uint32_t r = 0; r < limit; ++r) table[r] = -1;
+    for (size_t v = 0; v < MD.n_variables; ++v)
+        for (size_t e = 0; e < model_variable_count(&MD.variables[v]); ++e)
+            table[MD.variables[v].vr + e] = (int16_t)v;
+}
+
 static void reset_clock(Clock *clock)
 {
     memset(clock, 0, sizeof *clock);
@@ -284,14 +306,18 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     inst->logging_on = loggingOn ? fmi2True : fmi2False;
     inst->name = mem_alloc(allocate, strlen(instanceName) + 1);
     inst->data = mem_alloc(allocate, MD.data_size);
-    if (!inst->name || !inst->data) {
+    inst->vr_limit = count_value_references();
+    inst->variable_of_vr = mem_alloc(allocate, inst->vr_limit * sizeof *inst->variable_of_vr);
+    if (!inst->name || !inst->data || !inst->variable_of_vr) {
         mem_free(release, inst->name);
         mem_free(release, inst->data);
+        mem_free(release, inst->variable_of_vr);
         mem_free(release, inst);
         REFUSE("fmi2Instantiate: out of memory");
     }
 #undef REFUSE
     strcpy(inst->name, instanceName);
+    fill_vr_table(inst->variable_of_vr, inst->vr_limit);
     reset_clock(&inst->clock);
     apply_start_values(inst->data);
     return inst;
@@ -314,6 +340,7 @@ void fmi2FreeInstance(fmi2Component c)
                      state_name(inst->clock.state));
     }
     free_snapshots(inst);
+    mem_free(inst->release, inst->variable_of_vr);
     mem_free(inst->release, inst->data);
     mem_free(inst->release, inst->name);
     mem_free(inst->release, inst);
@@ -375,16 +402,13 @@ fmi2Status fmi2Reset(fmi2Component c)
 
 /* ---- get / set ---------------------------------------------------------- */
 
-static const ModelVariable *find_variable(fmi2ValueReference vr, size_t *element)
+static const ModelVariable *find_variable(const Instance *inst, fmi2ValueReference vr,
+                                          size_t *element)
 {
-    for (size_t v = 0; v < MD.n_variables; ++v) {
-        const ModelVariable *var = &MD.variables[v];
-        if (vr >= var->vr && vr - var->vr < model_variable_count(var)) {
-            *element = vr - var->vr;
-            return var;
-        }
-    }
-    return NULL;
+    if (vr >= inst->vr_limit || inst->variable_of_vr[vr] < 0) return NULL;
+    const ModelVariable *var = &MD.variables[inst->variable_of_vr[vr]];
+    *element = vr - var->vr;
+    return var;
 }
 
 static const char *type_name(VariableType type)
@@ -406,7 +430,7 @@ static void *locate(Instance *inst, const char *function, fmi2ValueReference vr,
                     VariableType type, const ModelVariable **out_var, size_t *out_element)
 {
     size_t element = 0;
-    const ModelVariable *var = find_variable(vr, &element);
+    const ModelVariable *var = find_variable(inst, vr, &element);
     if (!var) {
         log_instance(inst, fmi2Error, "%s: unknown value reference %u", function, (unsigned)vr);
         return NULL;
@@ -448,38 +472,46 @@ static fmi2Status get_values(Instance *inst, const char *function, VariableType 
     return fmi2OK;
 }
 
-/* Is this element settable now, and is the value valid?  Logs why not. */
+/* Is this element settable now, and is the value valid?  Logs why not (the
+ * element's name is only formatted then: this runs on every set). */
 static int accept_value(Instance *inst, const char *function, const ModelVariable *var,
                         size_t element, double value)
 {
+    enum { FINE, READ_ONLY, FIXED, NOT_FINITE, OUT_OF_RANGE } problem = FINE;
+    if (var->causality == CAUSALITY_OUTPUT || var->causality == CAUSALITY_CALCULATED_PARAMETER)
+        problem = READ_ONLY;
+    else if (var->causality == CAUSALITY_PARAMETER &&
+             !(inst->clock.state & (ST_INSTANTIATED | ST_INIT_MODE)))
+        problem = FIXED;
+    else if (!isfinite(value))
+        problem = NOT_FINITE;
+    else if ((!isnan(var->min) && (var->min_exclusive ? value <= var->min : value < var->min)) ||
+             (!isnan(var->max) && (var->max_exclusive ? value >= var->max : value > var->max)))
+        problem = OUT_OF_RANGE;
+    if (problem == FINE) return 1;
+
     char name[64];
     element_name(var, element, name, sizeof name);
-    if (var->causality == CAUSALITY_OUTPUT || var->causality == CAUSALITY_CALCULATED_PARAMETER) {
+    switch (problem) {
+    case READ_ONLY:
         log_instance(inst, fmi2Error, "%s: %s is %s and cannot be set", function, name,
                      var->causality == CAUSALITY_OUTPUT ? "an output" : "a calculated parameter");
-        return 0;
-    }
-    if (var->causality == CAUSALITY_PARAMETER &&
-        !(inst->clock.state & (ST_INSTANTIATED | ST_INIT_MODE))) {
+        break;
+    case FIXED:
         log_instance(inst, fmi2Error,
                      "%s: %s is a fixed parameter and cannot be set after initialization "
                      "(state %s)", function, name, state_name(inst->clock.state));
-        return 0;
-    }
-    if (!isfinite(value)) {
+        break;
+    case NOT_FINITE:
         log_instance(inst, fmi2Error, "%s: %s = %g is not finite; value rejected", function, name,
                      value);
-        return 0;
-    }
-    int below = !isnan(var->min) && (var->min_exclusive ? value <= var->min : value < var->min);
-    int above = !isnan(var->max) && (var->max_exclusive ? value >= var->max : value > var->max);
-    if (below || above) {
+        break;
+    default:
         log_instance(inst, fmi2Error, "%s: %s = %.17g is out of range %s%g, %g%s; value rejected",
                      function, name, value, var->min_exclusive ? "(" : "[", var->min, var->max,
                      var->max_exclusive ? ")" : "]");
-        return 0;
     }
-    return 1;
+    return 0;
 }
 
 /* All-or-nothing: every value is checked before any is written. */
