@@ -17,6 +17,7 @@ void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, 
     id->rho = rho;
     id->lambda = kind == IDENTIFIER_MFF ? pow(R, h) : 1.0;
     id->one_minus_lambda_rho = (1.0 - id->lambda) * rho;
+    id->forgetting_rate = kind == IDENTIFIER_MFF ? -log(R) : 0.0;
     info_reset(id);
 }
 
@@ -131,14 +132,28 @@ int info_solve(InformationIdentifier *id)
         cholesky_solve(n, L, x);
         memcpy(id->delta[i], x, sizeof x);
     }
-    /* trace of the first m diagonal entries of P^-1 (the current parameters'
-     * part): the squared norms of the rows of L^-1 ... via columns of L^-T. */
+    /* Trace of the current parameters' block of Gamma = P^-1.  Without the
+     * drift model that is the whole trace, ||L^-1||_F^2, by forward
+     * substitution of the columns of L^-1; with it, the first m diagonal
+     * entries of P^-1, one solve each. */
     double trace = 0.0;
-    for (int j = 0; j < m; ++j) {
-        double e[ID_MAX_REGRESSORS] = {0};
-        e[j] = 1.0;
-        cholesky_solve(n, L, e); /* column j of P^-1 */
-        trace += e[j];
+    if (n == m) {
+        for (int j = 0; j < m; ++j) {
+            double col[ID_MAX_REGRESSORS];
+            for (int i = j; i < m; ++i) {
+                double s = i == j ? 1.0 : 0.0;
+                for (int k = j; k < i; ++k) s -= L[i][k] * col[k];
+                col[i] = s / L[i][i];
+                trace += col[i] * col[i];
+            }
+        }
+    } else {
+        for (int j = 0; j < m; ++j) {
+            double e[ID_MAX_REGRESSORS] = {0};
+            e[j] = 1.0;
+            cholesky_solve(n, L, e); /* column j of P^-1 */
+            trace += e[j];
+        }
     }
     id->gamma_trace = trace;
     /* One inverse-iteration step toward the eigenvector of the smallest
@@ -162,7 +177,7 @@ int info_solve(InformationIdentifier *id)
     /* Information gathered per unit time: LSM averages over the active time,
      * MFF's window has length 1/|ln R| (lambda = R^h). */
     const double excess = rayleigh - id->rho;
-    if (id->lambda < 1.0) id->excitation = excess * (-log(id->lambda) / id->h);
+    if (id->lambda < 1.0) id->excitation = excess * id->forgetting_rate;
     else id->excitation = id->active_time > 0.0 ? excess / id->active_time : 0.0;
     if (id->excitation < 0.0) id->excitation = 0.0;
     return 0;

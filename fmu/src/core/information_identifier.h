@@ -35,6 +35,7 @@ typedef struct {
     double h, rho;
     double lambda;        /* R^h per step (MFF), 1 (LSM) */
     double one_minus_lambda_rho;
+    double forgetting_rate;  /* |ln R| per second (MFF) */
     double active_time;   /* time integrated since the (re)start [s] */
     double P[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];     /* information matrix, upper triangle kept */
     double theta[ID_MAX_ROWS][ID_MAX_REGRESSORS];       /* Theta = Delta P */
