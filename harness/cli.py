@@ -4,6 +4,7 @@
     identify DATA.csv --out DIR [--param NAME=VALUE ...]   offline identification
     demo [--out DIR]                            the closed-loop demonstration (all scenarios)
     compare --out DIR                           paper method vs the improved defaults
+    sweep SPEC --out DIR [--scheduler tcp://HOST:PORT]   parameter / noise sweeps on Dask
 """
 from __future__ import annotations
 
@@ -171,6 +172,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                    help="observer FMU parameter, e.g. --param b=1.12 --param 'c_nominal[1]=2'")
     p.set_defaults(func=cmd_identify)
+
+    from .sweep import register as register_sweep
+    register_sweep(sub)
 
     args = parser.parse_args(argv)
     try:

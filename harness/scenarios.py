@@ -54,7 +54,10 @@ class Scenario:
     @property
     def c_true(self) -> list[float]:
         """True coefficients of the joint basis [sin x1, x2, sign x2, x1, 1] (d(t) aside)."""
-        return [A_GRAVITY, self.plant.get("Vs", VS) / J, self.plant.get("Ps", PS) / J, 0.0, 0.0]
+        m, g, length = (float(self.plant.get(k, v)) for k, v in (("M", M), ("g", G), ("L", L)))
+        j = m * length * length
+        return [m * g * length / (2 * j), float(self.plant.get("Vs", VS)) / j,
+                float(self.plant.get("Ps", PS)) / j, 0.0, 0.0]
 
     @property
     def c_nominal(self) -> list[float]:

@@ -43,7 +43,8 @@ a variable of that FMU, e.g. "observer.alpha1[1]", "observer.scheme",
 "noise_std" (std of the white noise on the measured theta [rad], default 0)
 and "seed" (the noise seed; give either "seeds" or a "seed" entry).  Values
 override, in this order, the scenario's, the method's, "fixed", then the
-swept ones.  The runs are (grid x random samples) + points, each x seeds.
+swept ones.  The runs are (grid x random samples) + points, each x seeds;
+a noise-free run (noise_std = 0) does not depend on the seed and runs once.
 
 Outputs in DIR:
   results.csv   one row per run: key, status (ok/failed), message, wall_time [s],
@@ -76,8 +77,9 @@ import sys
 import tempfile
 import threading
 import time
+import uuid
 import warnings
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -92,8 +94,6 @@ FMU_FILES = {"plant": "Pendulum.fmu", "controller": "TwistingController.fmu",
              "observer": "SuperTwistingObserver.fmu"}
 PSEUDO = ("noise_std", "seed")
 METHODS = ("paper", "improved")
-BASE_COLUMNS = ["key", "status", "message", "wall_time", "worker", "scenario", "stop_time",
-                "transient", "method"]
 TABLE = "results.csv"
 METRICS_WINDOW = 1.0  # harness.metrics.score: max_e2_after_1s etc. use t >= 1 s
 
@@ -580,8 +580,6 @@ class FMUWorkerPlugin(_WorkerPlugin):
     """Writes the FMUs into the worker's local directory once and keeps the
     worker's pool of co-simulations (used by :func:`_worker_run`)."""
 
-    idempotent = True  # same FMUs (same name) registered again: keep the existing pool
-
     def __init__(self, payload: dict[str, bytes], name: str):
         self.payload = payload
         self.name = name
@@ -699,7 +697,8 @@ def result_row(spec: SweepSpec, run: Run, result: Mapping[str, Any]) -> dict[str
 class ProgressLine:
     """A one-line counter on stderr (a line per 10 % when stderr is not a terminal)."""
 
-    def __init__(self, label: str, total: int, stream=sys.stderr):
+    def __init__(self, label: str, total: int, stream=None):
+        stream = stream or sys.stderr
         self.label, self.total, self.stream = label, total, stream
         self.tty = hasattr(stream, "isatty") and stream.isatty()
         self.start = time.monotonic()
@@ -756,11 +755,12 @@ def start_client(scheduler: str | None, n_workers: int | None):
 def run_sweep(spec: SweepSpec, out: str | Path, fmu_dir: Path = DEFAULT_FMU_DIR, *,
               scheduler: str | None = None, client=None, n_workers: int | None = None,
               retry_failed: bool = False, plots: bool = True, progress: bool = True,
-              stream=sys.stderr) -> SweepResult:
+              stream=None) -> SweepResult:
     """Runs the spec's missing runs on Dask and appends them to DIR/results.csv.
 
     ``client``: an existing dask.distributed Client (else ``scheduler`` or a
     LocalCluster with ``n_workers`` workers is used and closed afterwards)."""
+    stream = stream or sys.stderr
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     table = ResultsTable(out / TABLE)
@@ -781,7 +781,8 @@ def run_sweep(spec: SweepSpec, out: str | Path, fmu_dir: Path = DEFAULT_FMU_DIR,
         plugin_name = None
         try:
             payload, digest = _fmu_payload(Path(fmu_dir))
-            plugin_name = f"sto-sweep-fmus-{digest}"
+            # One plugin per sweep: concurrent sweeps on a shared cluster keep their own.
+            plugin_name = f"sto-sweep-fmus-{digest}-{uuid.uuid4().hex[:8]}"
             client.register_plugin(FMUWorkerPlugin(payload, plugin_name), name=plugin_name)
             workers = len(client.scheduler_info().get("workers", {}))
             counter = ProgressLine(f"sweep {spec.scenario}", len(todo), stream) if progress else None
@@ -1058,7 +1059,8 @@ def cmd_sweep(args) -> int:
         return 130
     print(f"sweep {spec.scenario}: {result.total} runs, {result.resumed} already done, "
           f"{result.executed} run now: {result.ok} ok, {result.failed} failed"
-          + (f", {result.wall_time:.1f} s on {result.workers} workers "
+          + (f", {result.wall_time:.1f} s on {result.workers} "
+             f"worker{'s' if result.workers != 1 else ''} "
              f"({result.runs_per_second:.2f} runs/s)" if result.executed else ""))
     print(f"wrote {result.table}, {out / 'summary.json'}"
           + "".join(f", {p.name}" for p in result.plots))

@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# Instructions per internal step of the SuperTwistingObserver model, counted
+# by callgrind.
+#
+#   bench/step_instructions.sh [STEPS]        (default 10000)
+#
+# Builds bench/step_driver.c with the observer's sources (fmi2_layer.c,
+# models/observer.c, core/*.c; -O2 -g, FMI headers from the installed fmpy)
+# into build/bench/, then for each configuration runs
+#     valgrind --tool=callgrind --toggle-collect=fmi2DoStep step_driver CONFIG SCHEME STEPS
+# i.e. counts the instructions executed inside the one fmi2DoStep (STEPS
+# internal steps, plus one communication point) and divides by STEPS.  A
+# second count (step_driver CONFIG SCHEME 1 STEPS: STEPS doSteps of H = h)
+# gives the cost per step when every step is a communication point, as in
+# the closed-loop harness.
+# Callgrind outputs stay in build/bench/callgrind.out.CONFIG-sSCHEME[-H=h]; inspect one with
+#     callgrind_annotate --inclusive=yes build/bench/callgrind.out.joint-lsm-s1
+#     callgrind_annotate --auto=yes build/bench/callgrind.out.joint-lsm-s1   (per source line)
+# Environment: CC (default gcc), CFLAGS_EXTRA (added after -O2 -g, e.g. "-O3 -flto";
+# valgrind 3.19 cannot run AVX-512 code, so -march=native fails on such machines).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+STEPS=${1:-10000}
+CC=${CC:-gcc}
+PY=.venv/bin/python
+OUT=build/bench
+SRC=fmu/src
+command -v valgrind >/dev/null || { echo "step_instructions.sh: valgrind is not installed" >&2; exit 1; }
+[ -x "$PY" ] || { echo "step_instructions.sh: no $PY: run ./build.sh fmus first" >&2; exit 1; }
+
+FMI_INCLUDE=$("$PY" -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))')
+mkdir -p "$OUT"
+# shellcheck disable=SC2086
+"$CC" -std=c11 -Wall -Wextra -O2 -g ${CFLAGS_EXTRA:-} -I "$FMI_INCLUDE" -I "$SRC/fmi2" \
+    -o "$OUT/step_driver" bench/step_driver.c "$SRC/fmi2/fmi2_layer.c" "$SRC/models/observer.c" \
+    "$SRC"/core/*.c -lm
+
+# config | scheme | description
+CONFIGS=(
+    "joint-off|1|n=1 joint, identifier off"
+    "joint-off|2|n=1 joint, identifier off"
+    "joint-lsm|1|n=1 joint, LSM, m=3"
+    "joint-lsm|2|n=1 joint, LSM, m=3"
+    "joint-mff|1|n=1 joint, MFF, m=3"
+    "joint-mff|2|n=1 joint, MFF, m=3 (drift)"
+    "ext-lsm|1|n=4 external, LSM, l=m=8"
+    "ext-lsm|2|n=4 external, LSM, l=m=8"
+    "ext-mff|1|n=4 external, MFF, l=m=8"
+    "ext-mff|2|n=4 external, MFF, l=m=8"
+)
+
+# Instructions collected inside fmi2DoStep for one run of the driver.
+count() { # config scheme steps calls outfile
+    local out
+    out=$(valgrind --tool=callgrind --toggle-collect=fmi2DoStep --callgrind-out-file="$5" \
+        "$OUT/step_driver" "$1" "$2" "$3" "$4" 2>"$5.log") || {
+        echo "step_instructions.sh: $1 scheme $2 failed:" >&2; cat "$5.log" >&2; exit 1; }
+    local total
+    total=$(awk '/^(summary|totals):/ {print $2; exit}' "$5")
+    if [ -z "$total" ] || [ "$total" = 0 ]; then
+        echo "step_instructions.sh: no instructions collected in fmi2DoStep ($5)" >&2; exit 1
+    fi
+    echo "$total $(echo "$out" | grep -o 'identifier_active=[01] converged=[01]')"
+}
+
+printf '%-30s %-8s %13s %10s %12s  %s\n' "configuration" "scheme" "Ir in doStep" "Ir / step" \
+    "Ir / step" "state at the end"
+printf '%-30s %-8s %13s %10s %12s\n' "" "" "" "H=${STEPS}h" "H=h"
+for entry in "${CONFIGS[@]}"; do
+    IFS='|' read -r config scheme description <<< "$entry"
+    file="$OUT/callgrind.out.$config-s$scheme"
+    read -r total state <<< "$(count "$config" "$scheme" "$STEPS" 1 "$file")"
+    read -r total_h _ <<< "$(count "$config" "$scheme" 1 "$STEPS" "$file-H=h")"
+    per_step=$(awk -v t="$total" -v s="$STEPS" 'BEGIN {printf "%.1f", t / s}')
+    per_step_h=$(awk -v t="$total_h" -v s="$STEPS" 'BEGIN {printf "%.1f", t / s}')
+    if [ "$scheme" = 1 ]; then label="1 paper"; else label="2 default"; fi
+    printf '%-30s %-8s %13s %10s %12s  %s\n' "$description" "$label" "$total" "$per_step" \
+        "$per_step_h" "$state"
+done
+echo
+echo "Ir = instructions executed inside fmi2DoStep (callgrind).  'H=${STEPS}h': one doStep of"
+echo "$STEPS internal steps (+ one communication point), divided by $STEPS.  'H=h': $STEPS doSteps"
+echo "of one internal step each, as in the closed-loop harness, divided by $STEPS: internal step"
+echo "+ communication point (outputs, identifier solve, checks) + the doStep entry checks."
+echo "Goal (issue 6): n=1 joint LSM <= 200 instructions per internal step."

@@ -1,0 +1,228 @@
+"""Sweeps: the spec, instance reuse, and real runs on a local Dask cluster.
+
+The cluster is a real dask.distributed LocalCluster on loopback with two
+worker processes (one thread each); the runs are 1.2 s closed-loop 6.1-sine
+scenarios, so the whole module takes a few seconds beyond the cluster start.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from distributed import Client, LocalCluster
+
+from harness import sweep
+from harness.metrics import score
+from harness.scenarios import SCENARIOS, run_scenario
+
+STOP = 1.2  # s: just past the metrics' fixed 1-s window
+
+SPEC = {
+    "scenario": "6.1-sine",
+    "stop_time": STOP,
+    "grid": {"noise_std": [0.0, 1e-4]},
+    "random": {"method": "lhs", "n": 2, "seed": 3, "ranges": {"observer.alpha1[1]": [2.0, 4.0]}},
+    "points": [{"observer.h": -1.0}],  # the FMU rejects it: a run that fails on purpose
+    "seeds": [5],
+}  # 2 noise levels x 2 samples + 1 point = 5 runs
+
+
+@pytest.fixture(scope="module")
+def client():
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster, Client(cluster) as c:
+        c.wait_for_workers(2, timeout=60)
+        yield c
+
+
+@pytest.fixture(scope="module")
+def fmu_dir(observer_fmu, pendulum_fmu, controller_fmu) -> Path:
+    return observer_fmu.parent
+
+
+def write_spec(folder: Path, data: dict, name: str = "spec.json") -> Path:
+    path = folder / name
+    path.write_text(json.dumps(data))
+    return path
+
+
+def read_table(path: Path) -> list[dict[str, str]]:
+    with path.open() as f:
+        return list(csv.DictReader(f))
+
+
+# ---- the spec ----------------------------------------------------------------
+
+def test_spec_runs_grid_times_samples_plus_points(fmu_dir):
+    spec = sweep.parse_spec(SPEC, fmu_dir)
+    runs = spec.runs()
+    assert len(runs) == 5
+    assert len({r.key for r in runs}) == 5
+    assert spec.swept == ["noise_std", "observer.alpha1[1]", "observer.h"]
+    assert [r.params["noise_std"] for r in runs] == [0.0, 0.0, 1e-4, 1e-4, 0.0]
+    assert runs[-1].params == {"noise_std": 0.0, "seed": 0, "observer.h": -1.0}
+    # noise-free runs do not depend on the seed: seed 0; noisy runs keep theirs
+    assert [r.params["seed"] for r in runs] == [0, 0, 5, 5, 0]
+    # the same LHS samples for every noise level
+    assert runs[0].params["observer.alpha1[1]"] == runs[2].params["observer.alpha1[1]"]
+
+
+def test_latin_hypercube_puts_one_sample_in_each_stratum(fmu_dir):
+    data = {"scenario": "6.2", "stop_time": 2.0,
+            "random": {"method": "lhs", "n": 10, "seed": 0,
+                       "ranges": {"observer.tau": {"low": 1e-3, "high": 1e-1, "scale": "log"},
+                                  "observer.alpha2[1]": [10.0, 30.0]}}}
+    runs = sweep.parse_spec(data, fmu_dir).runs()
+    tau = np.array([r.params["observer.tau"] for r in runs])
+    alpha2 = np.array([r.params["observer.alpha2[1]"] for r in runs])
+    assert sorted(np.floor((np.log10(tau) + 3) / 2 * 10).astype(int)) == list(range(10))
+    assert sorted(np.floor((alpha2 - 10) / 20 * 10).astype(int)) == list(range(10))
+    again = sweep.parse_spec(data, fmu_dir).runs()  # the sampling seed makes it repeatable
+    assert [r.key for r in again] == [r.key for r in runs]
+
+
+def test_values_take_the_parameters_type_and_the_key_ignores_spelling(fmu_dir):
+    a = sweep.parse_spec({"scenario": "6.2", "stop_time": 2,
+                          "grid": {"observer.alpha1[1]": [8], "observer.scheme": [2.0],
+                                   "observer.filter_regressor": [1]}}, fmu_dir).runs()[0]
+    b = sweep.parse_spec({"scenario": "6.2", "stop_time": 2.0,
+                          "grid": {"observer.filter_regressor": [True], "observer.scheme": [2],
+                                   "observer.alpha1[1]": [8.0]}}, fmu_dir).runs()[0]
+    assert a.params["observer.alpha1[1]"] == 8.0 and isinstance(a.params["observer.alpha1[1]"], float)
+    assert a.params["observer.scheme"] == 2 and isinstance(a.params["observer.scheme"], int)
+    assert a.params["observer.filter_regressor"] is True
+    assert a.key == b.key
+    sampled = sweep.parse_spec({"scenario": "6.2", "stop_time": 2, "random": {
+        "method": "uniform", "n": 6, "ranges": {"observer.scheme": [1, 2]}}}, fmu_dir).runs()
+    assert {r.params["observer.scheme"] for r in sampled} <= {1, 2}
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"scenario": "6.9"}, "scenario '6.9' is not one of"),
+    ({"grid": {"pump.x": [1]}}, "a parameter is 'fmu.variable'"),
+    ({"grid": {"observer.nonsense": [1]}}, "has no variable 'nonsense'"),
+    ({"grid": {"observer.x1_hat[1]": [1]}}, "is an output, not a parameter"),
+    ({"grid": {"observer.alpha1[1]": ["big"]}}, "'big' is not a number"),
+    ({"stop_time": 0.5}, "the metrics need a run longer than 1 s"),
+    ({"random": {"n": 2, "ranges": {"observer.filter_regressor": [0, 1]}}}, "is a Boolean"),
+    ({"grid": {"seed": [1, 2]}}, "either as 'seeds' or as a 'seed' parameter"),
+    ({"grid": {"noise_std": [-1.0]}}, "noise_std = -1.0 must be >= 0"),
+    ({"gird": {}}, "unknown spec keys ['gird']"),
+])
+def test_a_bad_spec_says_what_is_wrong(fmu_dir, change, message):
+    with pytest.raises(sweep.SpecError) as error:
+        sweep.parse_spec({**SPEC, **change}, fmu_dir)
+    assert message in str(error.value)
+
+
+# ---- one worker's reuse of its instances ---------------------------------------
+
+def test_reused_instances_give_the_results_of_fresh_ones(fmu_dir):
+    """fmi2Reset between runs: a run on reused instances (after another run, and
+    after a run that failed) equals the same run on new instances."""
+    spec = sweep.parse_spec(SPEC, fmu_dir)
+    noisy = next(r for r in spec.runs() if r.params["noise_std"] > 0)
+    other = next(r for r in spec.runs() if r.params["noise_std"] == 0
+                 and "observer.alpha1[1]" in r.params)
+    failing = spec.runs()[-1]
+    pool = sweep.SimulationPool(fmu_dir)
+    try:
+        first = sweep.simulate(pool, *sweep.prepare(spec, noisy))
+        sweep.simulate(pool, *sweep.prepare(spec, other))
+        bad = sweep.simulate(pool, *sweep.prepare(spec, failing))
+        again = sweep.simulate(pool, *sweep.prepare(spec, noisy))
+        assert pool.size == 1  # one set of instances served every run
+    finally:
+        pool.close()
+    assert first["status"] == again["status"] == "ok"
+    assert bad["status"] == "failed" and "h = -1" in bad["message"]
+    assert first["metrics"] == again["metrics"]
+    scenario = dataclasses.replace(SCENARIOS["6.1-sine"], stop_time=STOP)
+    fresh = run_scenario(scenario, fmu_dir, noise_std=1e-4, seed=5, observer_overrides={
+        "alpha1[1]": noisy.params["observer.alpha1[1]"]})
+    assert score(scenario, fresh) == first["metrics"]
+
+
+# ---- sweeps on the cluster -------------------------------------------------------
+
+def test_sweep_on_a_local_cluster_records_failures_and_resumes(client, fmu_dir, tmp_path):
+    spec = sweep.parse_spec(SPEC, fmu_dir)
+    out = tmp_path / "out"
+    result = sweep.run_sweep(spec, out, fmu_dir, client=client, progress=False)
+    assert (result.total, result.executed, result.ok, result.failed) == (5, 5, 4, 1)
+    rows = read_table(out / "results.csv")
+    assert len(rows) == 5
+    failed = [r for r in rows if r["status"] == "failed"]
+    assert len(failed) == 1
+    assert failed[0]["observer.h"] == "-1.0"
+    assert "h = -1 is out of range" in failed[0]["message"]
+    workers = set(client.scheduler_info()["workers"][a]["name"]
+                  for a in client.scheduler_info()["workers"])
+    for r in rows:
+        assert r["worker"] in {str(w) for w in workers}
+        assert float(r["wall_time"]) > 0
+        if r["status"] == "ok":
+            assert np.isfinite(float(r["max_e2_after_1s"]))
+            assert 0 <= float(r["rms_perturbation"]) < 1
+    # a worker's result equals the in-process run of the same parameters
+    noisy = next(r for r in rows if r["status"] == "ok" and float(r["noise_std"]) > 0)
+    scenario = dataclasses.replace(SCENARIOS["6.1-sine"], stop_time=STOP)
+    fresh = score(scenario, run_scenario(scenario, fmu_dir, noise_std=1e-4, seed=5,
+                                         observer_overrides={"alpha1[1]": float(noisy["observer.alpha1[1]"])}))
+    assert {k: float(noisy[k]) for k in fresh} == fresh
+    assert sorted(p.name for p in result.plots) == ["sweep_noise_std.png",
+                                                    "sweep_observer.alpha1_1.png"]
+    summary = json.loads((out / "summary.json").read_text())
+    assert (summary["runs"], summary["ok"], summary["failed"]) == (5, 4, 1)
+
+    # The same sweep again: nothing to do.
+    again = sweep.run_sweep(spec, out, fmu_dir, client=client, progress=False, plots=False)
+    assert (again.resumed, again.executed) == (5, 0)
+    assert read_table(out / "results.csv") == rows
+
+    # An interrupted sweep: two rows lost, the last line half written.
+    text = (out / "results.csv").read_text().splitlines(keepends=True)
+    (out / "results.csv").write_text("".join(text[:4]) + text[4][:20])
+    resumed = sweep.run_sweep(spec, out, fmu_dir, client=client, progress=False, plots=False)
+    assert (resumed.resumed, resumed.executed) == (3, 2)
+    after = read_table(out / "results.csv")
+    assert len(after) == 5
+    assert [r for r in after if r["key"] in {x["key"] for x in rows[:3]}] == rows[:3]
+
+    # A wider grid runs only the new points; --retry-failed redoes the failed run only.
+    wider = sweep.parse_spec({**SPEC, "grid": {"noise_std": [0.0, 1e-5, 1e-4]}}, fmu_dir)
+    grown = sweep.run_sweep(wider, out, fmu_dir, client=client, progress=False, plots=False)
+    assert (grown.total, grown.resumed, grown.executed, grown.failed) == (7, 5, 2, 0)
+    retried = sweep.run_sweep(wider, out, fmu_dir, client=client, progress=False, plots=False,
+                              retry_failed=True)
+    assert (retried.executed, retried.failed) == (1, 1)
+    assert len(read_table(out / "results.csv")) == 7
+
+
+def test_command_line_with_a_running_scheduler(client, fmu_dir, tmp_path, capsys):
+    """``sweep SPEC --out DIR --scheduler ADDRESS``, through the CLI's subparser."""
+    spec = write_spec(tmp_path, {"scenario": "6.1-sine", "stop_time": STOP,
+                                 "grid": {"observer.tau": [0.02, 0.005]}})
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--fmu-dir", default=str(fmu_dir))
+    sweep.register(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(["sweep", str(spec), "--out", str(tmp_path / "cli"),
+                              "--scheduler", client.scheduler.address, "--no-plots"])
+    assert args.func(args) == 0
+    printed = capsys.readouterr()
+    assert "2 run now: 2 ok, 0 failed" in printed.out
+    assert "2/2 runs" in printed.err  # the progress counter
+    assert len(read_table(tmp_path / "cli" / "results.csv")) == 2
+    # the worker plugin is gone again: the shared cluster keeps no FMU instances
+    plugins = client.run(lambda dask_worker: sorted(dask_worker.plugins))
+    assert not any(name.startswith("sto-sweep-fmus-") for names in plugins.values()
+                   for name in names)
+
+    args = parser.parse_args(["sweep", str(spec), "--out", str(tmp_path / "cli"), "--dry-run"])
+    assert args.func(args) == 0
+    assert capsys.readouterr().out.count("  ok  ") == 2
