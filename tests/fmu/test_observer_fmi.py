@@ -46,8 +46,13 @@ def test_model_description_is_valid_and_structured(observer_fmu):
     assert names["h"].causality == "parameter" and names["h"].variability == "fixed"
     assert names["alpha1_used[1]"].causality == "calculatedParameter"
     assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
-    sources = [s for s in md.coSimulation.sourceFiles]
-    assert "fmi2/fmi2_layer.c" in sources and "models/observer.c" in sources
+    import zipfile
+    with zipfile.ZipFile(observer_fmu) as archive:  # sources for `fmpy compile`
+        files = archive.namelist()
+    assert "sources/fmi2/fmi2_layer.c" in files and "sources/models/observer.c" in files
+    assert "binaries/linux64/SuperTwistingObserver.so" in files
+    xml = zipfile.ZipFile(observer_fmu).read("modelDescription.xml").decode()
+    assert '<File name="models/observer.c"/>' in xml
 
 
 # ---- state machine --------------------------------------------------------------------------
