@@ -70,8 +70,12 @@ PLANT_START = {"theta_start": 0.1, "omega_start": 0.5}
 # method (issue 4); `improved` below switches a scenario to them.
 PAPER_METHOD = {"scheme": 1, "identifier_form": 1, "filter_regressor": False,
                 "identifier_start": 0}
+# The improved method keeps the scenario's t_id as a lower bound on the start:
+# with measurement noise the convergence test fires at the noise floor while
+# the closed loop is still in its reaching phase (the first 0.5 s), whose data
+# bias a2 by about 10 % at noise 1e-4 (1.9 % when starting at 1 s).
 IMPROVED_METHOD = {"scheme": 2, "identifier_form": 2, "filter_regressor": True,
-                   "identifier_start": 1, "t_id": 0.0}
+                   "identifier_start": 1}
 PAPER_GAINS = {"alpha1[1]": 2.2211, "alpha2[1]": 19.1819}  # section 6.3
 EXACT_NOMINAL = {"b": 1 / J, "c_nominal[1]": A_GRAVITY, "c_nominal[2]": A_VISCOUS,
                  "c_nominal[3]": 0.0, "c_nominal[4]": 0.0, "c_nominal[5]": 0.0}
