@@ -206,14 +206,18 @@ def _run_python(plan: _Plan, records: np.ndarray, row: int, t0: float, H: float,
     signals = plan.signals.tolist()
     steps = []  # per FMU in step order: its reads, its set, its doStep
     for f in plan.order:
-        links = [l for l in plan.links if l[4] == f]
+        # links grouped by source FMU, so that each group's values are
+        # contiguous in `values` and fmi2GetReal writes them in place
+        links = sorted((l for l in plan.links if l[4] == f), key=lambda l: (l[0] < 0, l[0]))
         values = (ctypes.c_double * max(1, len(links)))()
-        reads = []  # (source fmu, vr array, n, buffer, [(buffer index, slot)])
+        reads = []  # (source fmu, vr array, n, view into values)
+        start = 0
         for source in sorted({l[0] for l in links if l[0] >= 0}):
-            mine = [(i, l) for i, l in enumerate(links) if l[0] == source]
-            vrs = (ctypes.c_uint * len(mine))(*[l[1] for _, l in mine])
-            buffer = (ctypes.c_double * len(mine))()
-            reads.append((source, vrs, len(mine), buffer, [(j, i) for j, (i, _) in enumerate(mine)]))
+            group = [l for l in links if l[0] == source]
+            vrs = (ctypes.c_uint * len(group))(*[l[1] for l in group])
+            view = (ctypes.c_double * len(group)).from_buffer(values, start * 8)
+            reads.append((source, vrs, len(group), view))
+            start += len(group)
         from_signals = [(i, l[2]) for i, l in enumerate(links) if l[0] < 0]
         noises = [(i, l[3]) for i, l in enumerate(links) if l[3] >= 0]
         targets = (ctypes.c_uint * max(1, len(links)))(*[l[5] for l in links])
@@ -223,11 +227,9 @@ def _run_python(plan: _Plan, records: np.ndarray, row: int, t0: float, H: float,
     for k in range(k_begin, k_end):
         t = t0 + k * H
         for f, reads, from_signals, noises, targets, n, values in steps:
-            for source, vrs, count, buffer, slots in reads:
-                if get_real[source](components[source], vrs, count, buffer) >= 3:
+            for source, vrs, count, view in reads:
+                if get_real[source](components[source], vrs, count, view) >= 3:
                     raise plan.failure(k, source, 1, t0, H)
-                for j, i in slots:
-                    values[i] = buffer[j]
             for i, signal in from_signals:
                 values[i] = signals[signal][k]
             for i, noise in noises:
