@@ -5,9 +5,16 @@
  *
  * J = M L^2; d(t) = d_mean + d_amplitude sin(t/d_period) (section 6.3) or 0;
  * v(t): none, v_amplitude sin(v_frequency t), or v_amplitude sign(sin(2 pi t/v_period)).
- * Classical RK4 at the internal step h with u held over the communication step.
- * The true coefficients and the true perturbation terms are outputs so that a
- * harness can score an observer against them. */
+ * Classical RK4 at the internal step h with u held over the communication step
+ * (v and d are evaluated at the stage times).  The true coefficients and the
+ * true perturbation terms are outputs so that a harness can score an observer
+ * against them.
+ *
+ * The state (x1, x2) lives on the layer's grid start + k h.  A communication
+ * step that is not a multiple of h ends between two grid points; the outputs
+ * then come from one extra RK4 step of the remaining fraction of h, taken from
+ * the grid state into the outputs only (the state stays on the grid), so the
+ * outputs always describe the pendulum at the end of the communication step. */
 #include <math.h>
 #include <stddef.h>
 
@@ -31,6 +38,8 @@ typedef struct {
     double u;
     /* outputs */
     double theta, omega, acceleration, v, d;
+    /* state: on the grid, at time t_state */
+    double x1, x2, t_state;
 } PendulumData;
 
 #define OFF(field) offsetof(PendulumData, field)
@@ -64,7 +73,8 @@ static const ModelVariable VARIABLES[] = {
     {.name = "d_mean", .vr = 10, .type = TYPE_REAL, PARAM(.offset = OFF(d_mean), .start = 0.5,
      UNBOUNDED, .unit = "1/s", .description = "Mean of the time-varying damping")},
     {.name = "d_amplitude", .vr = 11, .type = TYPE_REAL, PARAM(.offset = OFF(d_amplitude),
-     .start = 0.6, UNBOUNDED, .unit = "1/s", .description = "Amplitude of the time-varying damping")},
+     .start = 0.6, UNBOUNDED, .unit = "1/s",
+     .description = "Amplitude of the time-varying damping")},
     {.name = "d_period", .vr = 12, .type = TYPE_REAL, PARAM(.offset = OFF(d_period), .start = 7.0,
      .min = 0.0, .max = NAN, .min_exclusive = true, .unit = "s",
      .description = "Time scale of the damping: sin(t / d_period)")},
@@ -119,17 +129,44 @@ static double disturbance_at(const PendulumData *p, double t)
     }
 }
 
-static double acceleration_at(const PendulumData *p, double t, double x1, double x2)
+/* x2' with the damping d and disturbance v of the stage time. */
+static double acceleration_at(const PendulumData *p, double x1, double x2, double d, double v)
 {
     return p->b_input * p->u - p->a_gravity * sin(x1) - p->a_viscous * x2 -
-           p->a_coulomb * sign_of(x2) - damping_at(p, t) * x2 + disturbance_at(p, t);
+           p->a_coulomb * sign_of(x2) - d * x2 + v;
 }
 
+/* One classical RK4 step of length dt from (x1, x2) at time t, u held. */
+static void rk4(const PendulumData *p, double t, double dt, double x1, double x2, double *x1_out,
+                double *x2_out)
+{
+    const double d0 = damping_at(p, t), v0 = disturbance_at(p, t);
+    const double dm = damping_at(p, t + 0.5 * dt), vm = disturbance_at(p, t + 0.5 * dt);
+    const double d1 = damping_at(p, t + dt), v1 = disturbance_at(p, t + dt);
+    const double k1x = x2, k1v = acceleration_at(p, x1, x2, d0, v0);
+    const double k2x = x2 + 0.5 * dt * k1v;
+    const double k2v = acceleration_at(p, x1 + 0.5 * dt * k1x, k2x, dm, vm);
+    const double k3x = x2 + 0.5 * dt * k2v;
+    const double k3v = acceleration_at(p, x1 + 0.5 * dt * k2x, k3x, dm, vm);
+    const double k4x = x2 + dt * k3v;
+    const double k4v = acceleration_at(p, x1 + dt * k3x, k4x, d1, v1);
+    *x1_out = x1 + dt / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+    *x2_out = x2 + dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+}
+
+/* The outputs at time t >= t_state (t - t_state < h). */
 static void update_outputs(PendulumData *p, double t)
 {
-    p->acceleration = acceleration_at(p, t, p->theta, p->omega);
+    const double dt = t - p->t_state;
+    if (dt > 1e-6 * p->h) { /* the layer counts a grid point within 1e-6 h as reached */
+        rk4(p, p->t_state, dt, p->x1, p->x2, &p->theta, &p->omega);
+    } else {
+        p->theta = p->x1;
+        p->omega = p->x2;
+    }
     p->v = disturbance_at(p, t);
     p->d = damping_at(p, t);
+    p->acceleration = acceleration_at(p, p->theta, p->omega, p->d, p->v);
 }
 
 static ModelStatus initialize(void *data, double start_time, const ModelLogger *log)
@@ -141,8 +178,9 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     p->a_viscous = p->Vs / J;
     p->a_coulomb = p->Ps / J;
     p->b_input = 1.0 / J;
-    p->theta = p->theta_start;
-    p->omega = p->omega_start;
+    p->x1 = p->theta_start;
+    p->x2 = p->omega_start;
+    p->t_state = start_time;
     update_outputs(p, start_time);
     return MODEL_OK;
 }
@@ -152,22 +190,24 @@ static double internal_step(const void *data) { return ((const PendulumData *)da
 static void step(void *data, double t)
 {
     PendulumData *p = data;
-    const double h = p->h, x1 = p->theta, x2 = p->omega;
-    const double k1x = x2, k1v = acceleration_at(p, t, x1, x2);
-    const double k2x = x2 + 0.5 * h * k1v, k2v = acceleration_at(p, t + 0.5 * h, x1 + 0.5 * h * k1x, k2x);
-    const double k3x = x2 + 0.5 * h * k2v, k3v = acceleration_at(p, t + 0.5 * h, x1 + 0.5 * h * k2x, k3x);
-    const double k4x = x2 + h * k3v, k4v = acceleration_at(p, t + h, x1 + h * k3x, k4x);
-    p->theta = x1 + h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
-    p->omega = x2 + h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+    rk4(p, t, p->h, p->x1, p->x2, &p->x1, &p->x2);
+    p->t_state = t + p->h;
 }
 
 static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
 {
     PendulumData *p = data;
     update_outputs(p, t);
-    if (!isfinite(p->theta) || !isfinite(p->omega)) {
-        log->log(log->context, MODEL_ERROR, "pendulum state diverged at t = %g: theta = %g, "
-                 "omega = %g", t, p->theta, p->omega);
+    const char *name = !isfinite(p->theta)          ? "theta"
+                       : !isfinite(p->omega)        ? "omega"
+                       : !isfinite(p->acceleration) ? "acceleration"
+                                                    : NULL;
+    if (name) {
+        log->log(log->context, MODEL_ERROR,
+                 "pendulum diverged at t = %g: %s is not finite (theta = %g, omega = %g, "
+                 "acceleration = %g); RK4 needs h (a_viscous + |d|) below about 2.78, "
+                 "here h = %g, a_viscous = %g", t, name, p->theta, p->omega, p->acceleration,
+                 p->h, p->a_viscous);
         return MODEL_ERROR;
     }
     return MODEL_OK;

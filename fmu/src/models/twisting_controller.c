@@ -8,7 +8,9 @@
  * initialization mode.  Each internal step from t to t + h computes them for
  * t + h from the current inputs (which the master has set to the plant's state
  * at the end of the communication step), so after fmi2DoStep(t, H) the outputs
- * are the control for t + H. */
+ * are the control for t + H.  A communication step that is not a multiple of h
+ * runs the samples on the grid start + k h only: the outputs are then those of
+ * the last sample at or before t + H (a zero-order hold). */
 #include <math.h>
 #include <stddef.h>
 
