@@ -8,6 +8,7 @@
 #ifndef MODEL_INTERFACE_H
 #define MODEL_INTERFACE_H
 
+#include <math.h> /* NAN in the variable tables */
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -50,6 +51,17 @@ typedef struct {
     const char *unit;        /* NULL: dimensionless */
     const char *description;
 } ModelVariable;
+
+/* Shorthands for the designated initializers of a model's variable table:
+ *   {.name = "h", .vr = 1, .type = TYPE_REAL, PARAM(.offset = ..., .start = 1e-4, ...)} */
+#define UNBOUNDED .min = NAN, .max = NAN
+#define PARAM(...) .causality = CAUSALITY_PARAMETER, .variability = VARIABILITY_FIXED, __VA_ARGS__
+#define CALC(...) .causality = CAUSALITY_CALCULATED_PARAMETER, \
+                  .variability = VARIABILITY_FIXED, UNBOUNDED, __VA_ARGS__
+#define INPUT(...) .causality = CAUSALITY_INPUT, .variability = VARIABILITY_CONTINUOUS, \
+                   UNBOUNDED, __VA_ARGS__
+#define OUTPUT(...) .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_CONTINUOUS, \
+                    UNBOUNDED, __VA_ARGS__
 
 /* Messages go through this; the model never sees the FMI logger. */
 typedef struct {

@@ -59,16 +59,6 @@ typedef struct {
 } ObserverData;
 
 #define OFF(field) offsetof(ObserverData, field)
-#define UNBOUNDED .min = NAN, .max = NAN
-
-#define PARAM(...) .causality = CAUSALITY_PARAMETER, .variability = VARIABILITY_FIXED, __VA_ARGS__
-#define CALC(...) .causality = CAUSALITY_CALCULATED_PARAMETER, .variability = VARIABILITY_FIXED, \
-                  UNBOUNDED, __VA_ARGS__
-#define INPUT(...) .causality = CAUSALITY_INPUT, .variability = VARIABILITY_CONTINUOUS, \
-                   UNBOUNDED, __VA_ARGS__
-#define OUTPUT(...) .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_CONTINUOUS, \
-                    UNBOUNDED, __VA_ARGS__
-
 /* The paper's pendulum (section 6): J = M L^2, c = [MgL/(2J), Vs/J, Ps/J, 0, 0]. */
 #define PAPER_J (1.1 * 0.9 * 0.9)
 static const double C_NOMINAL_START[JOINT_BASIS_SIZE] = {

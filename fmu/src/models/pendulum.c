@@ -43,13 +43,6 @@ typedef struct {
 } PendulumData;
 
 #define OFF(field) offsetof(PendulumData, field)
-#define UNBOUNDED .min = NAN, .max = NAN
-#define PARAM(...) .causality = CAUSALITY_PARAMETER, .variability = VARIABILITY_FIXED, __VA_ARGS__
-#define CALC(...) .causality = CAUSALITY_CALCULATED_PARAMETER, .variability = VARIABILITY_FIXED, \
-                  UNBOUNDED, __VA_ARGS__
-#define OUTPUT(...) .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_CONTINUOUS, \
-                    UNBOUNDED, __VA_ARGS__
-
 static const ModelVariable VARIABLES[] = {
     {.name = "h", .vr = 1, .type = TYPE_REAL, PARAM(.offset = OFF(h), .start = 1e-5, .min = 0.0,
      .max = 1.0, .min_exclusive = true, .unit = "s", .description = "Internal RK4 step")},

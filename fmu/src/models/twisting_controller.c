@@ -23,13 +23,6 @@ typedef struct {
 } ControllerData;
 
 #define OFF(field) offsetof(ControllerData, field)
-#define UNBOUNDED .min = NAN, .max = NAN
-#define PARAM(...) .causality = CAUSALITY_PARAMETER, .variability = VARIABILITY_FIXED, __VA_ARGS__
-#define INPUT(...) .causality = CAUSALITY_INPUT, .variability = VARIABILITY_CONTINUOUS, \
-                   UNBOUNDED, __VA_ARGS__
-#define OUTPUT(...) .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_CONTINUOUS, \
-                    UNBOUNDED, __VA_ARGS__
-
 static const ModelVariable VARIABLES[] = {
     {.name = "h", .vr = 1, .type = TYPE_REAL, PARAM(.offset = OFF(h), .start = 1e-4, .min = 0.0,
      .max = 1.0, .min_exclusive = true, .unit = "s", .description = "Sample period")},
