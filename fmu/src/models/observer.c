@@ -59,6 +59,7 @@ typedef struct {
 } ObserverData;
 
 #define OFF(field) offsetof(ObserverData, field)
+
 /* The paper's pendulum (section 6): J = M L^2, c = [MgL/(2J), Vs/J, Ps/J, 0, 0]. */
 #define PAPER_J (1.1 * 0.9 * 0.9)
 static const double C_NOMINAL_START[JOINT_BASIS_SIZE] = {
