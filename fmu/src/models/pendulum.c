@@ -43,6 +43,7 @@ typedef struct {
 } PendulumData;
 
 #define OFF(field) offsetof(PendulumData, field)
+
 static const ModelVariable VARIABLES[] = {
     {.name = "h", .vr = 1, .type = TYPE_REAL, PARAM(.offset = OFF(h), .start = 1e-5, .min = 0.0,
      .max = 1.0, .min_exclusive = true, .unit = "s", .description = "Internal RK4 step")},

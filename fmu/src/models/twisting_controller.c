@@ -23,6 +23,7 @@ typedef struct {
 } ControllerData;
 
 #define OFF(field) offsetof(ControllerData, field)
+
 static const ModelVariable VARIABLES[] = {
     {.name = "h", .vr = 1, .type = TYPE_REAL, PARAM(.offset = OFF(h), .start = 1e-4, .min = 0.0,
      .max = 1.0, .min_exclusive = true, .unit = "s", .description = "Sample period")},
