@@ -4,7 +4,7 @@
 
 void implicit_correct(SuperTwistingObserver *o, const double y[])
 {
-    const double h = o->h;
+    const double h = o->h, h2 = h * h, inverse_h2 = 1.0 / h2;
     for (int i = 0; i < o->n; ++i) {
         if (!o->primed) {
             o->z1[i] = o->x1_hat[i];
@@ -12,12 +12,12 @@ void implicit_correct(SuperTwistingObserver *o, const double y[])
             continue;
         }
         const double a_mean = 0.5 * (o->a_previous[i] + o->a_current[i]);
-        const double w = y[i] - o->z1[i] - h * o->mid_velocity[i] - h * h * a_mean;
-        const double reach = h * h * o->alpha1[i];
+        const double w = y[i] - o->z1[i] - h * o->mid_velocity[i] - h2 * a_mean;
+        const double reach = h2 * o->alpha1[i];
         double e, v;
         if (fabs(w) <= reach) { /* sliding: the injection keeps x1_hat on y */
             e = 0.0;
-            v = w / (h * h);
+            v = w * inverse_h2;
         } else {
             const double s = sto_sign(w), r = fabs(w) - reach, b = h * o->alpha2[i];
             const double q = 2.0 * r / (b + sqrt(b * b + 4.0 * r)); /* stable root form */

@@ -55,7 +55,6 @@ void sto_end_step(SuperTwistingObserver *o, const double y[], const double nomin
         implicit_predict(o, nominal_acceleration);
         return;
     }
-    for (int i = 0; i < o->n; ++i) sto_track_switching(o, i, sto_sign(y[i] - o->x1_hat[i]));
     sto_step(o, y, nominal_acceleration);
 }
 
@@ -66,6 +65,7 @@ void sto_step(SuperTwistingObserver *o, const double y[], const double nominal_a
         const double e = y[i] - o->x1_hat[i];
         const double s = sto_sign(e);
         const double z = o->alpha1[i] * s;
+        sto_track_switching(o, i, s);
         o->x1_hat[i] += h * (o->x2_hat[i] + o->alpha2[i] * sqrt(fabs(e)) * s);
         o->x2_hat[i] += h * (nominal_acceleration[i] + z);
         o->z_eq[i] = z;

@@ -58,7 +58,7 @@ void sto_end_step(SuperTwistingObserver *o, const double y[], const double nomin
 /* All DOFs converged by the switching-rate test. */
 int sto_converged(const SuperTwistingObserver *o);
 
-/* One explicit Euler step of (12) with measurement y and the nominal
+/* One explicit Euler step of (12) (it also feeds the convergence test) with measurement y and the nominal
  * acceleration F(t, y, x2_hat, u) + thetabar*phi evaluated by the caller at the
  * current estimates. */
 void sto_step(SuperTwistingObserver *o, const double y[], const double nominal_acceleration[]);
