@@ -71,7 +71,8 @@ void info_step(InformationIdentifier *id, const double z[], const double phi[])
             const double hz = h * z[i];
             for (int k = 0; k < m; ++k) id->theta[i][k] += hz * phi[k];
         }
-    } else { /* MFF: forget toward rho I and toward the current estimate; the newest
+    } else { /* MFF: forget toward rho I and toward the current estimate (its drift part
+              * toward 0, so that a learned slope fades without data); the newest
               * sample has s - t = 0, so it only enters the first m rows/columns */
         for (int j = 0; j < n; ++j) {
             const double hj = j < m ? h * phi[j] : 0.0;
@@ -82,8 +83,8 @@ void info_step(InformationIdentifier *id, const double z[], const double phi[])
         for (int i = 0; i < id->rows; ++i) {
             const double hz = h * z[i];
             for (int k = 0; k < n; ++k)
-                id->theta[i][k] = lambda * id->theta[i][k] + pull * id->delta[i][k] +
-                                  (k < m ? hz * phi[k] : 0.0);
+                id->theta[i][k] = lambda * id->theta[i][k] +
+                                  (k < m ? pull * id->delta[i][k] + hz * phi[k] : 0.0);
         }
     }
     id->active_time += h;

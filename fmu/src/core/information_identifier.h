@@ -23,7 +23,9 @@
  *   for the newest sample, and the sums are re-centred at every step
  *   (phi (s - t - h) = phi (s - t) - h phi, a congruence with
  *   A = [[I, 0], [-h I, I]]).  Delta0 is then the estimate at the current
- *   time, free of the lag for a linear drift.  Needs 2 m <= 8 regressors. */
+ *   time, free of the lag for a linear drift.  Without data the slope Delta1
+ *   is forgotten toward 0 (not toward itself), so the estimate does not keep
+ *   extrapolating its last trend.  Needs 2 m <= 8 regressors. */
 #ifndef INFORMATION_IDENTIFIER_H
 #define INFORMATION_IDENTIFIER_H
 
