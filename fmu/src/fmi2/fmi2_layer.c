@@ -801,6 +801,8 @@ fmi2Status fmi2CancelStep(fmi2Component c)
 
 /* ---- stepping ----------------------------------------------------------- */
 
+#define GRID_SLACK 1e-3
+
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint)
 {
@@ -822,8 +824,10 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                     clock->stop_time);
     /* Internal grid points start_time + k*h with k an integer (no drift).  A step
      * that is not a multiple of h runs every internal step ending at or before
-     * t_end; the outputs then belong to the last grid point, less than h before t_end. */
-    const double k_end_real = floor((t_end - clock->start_time) / h + 1e-6);
+     * t_end; the outputs then belong to the last grid point, less than h before t_end.
+     * A grid point less than GRID_SLACK h after t_end counts as reached: a master
+     * that accumulates t += H drifts off the grid by rounding, far more at large t. */
+    const double k_end_real = floor((t_end - clock->start_time) / h + GRID_SLACK);
     if (!(k_end_real < 9007199254740992.0))
         return fail(inst, "fmi2DoStep: step to %.17g needs more than 2^53 internal steps of "
                     "h = %g", t_end, h);
