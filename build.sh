@@ -82,6 +82,8 @@ build_all() {
         log "building $id.fmu"
         build_fmu "$id" "$model" "$core" "$xml"
     done
+    log "reference results of the default experiments (FMI-LS-REF)"
+    "$PY" tools/importers/make_reference.py "$BUILD"/fmus/*.fmu
     log "validating with fmpy"
     "$PY" -m harness.package --validate "$BUILD"/fmus/*.fmu
     log "writing the closed loop as SSP"

@@ -159,7 +159,9 @@ static const ModelVariable VARIABLES[] = {
     {.name = "y", .vr = 200, .rows = MAX_N, .type = TYPE_REAL,
      INPUT(.offset = OFF(y), .unit = "rad", .description = "Measured position x1")},
     {.name = "u", .vr = 204, .type = TYPE_REAL,
-     INPUT(.offset = OFF(u), .unit = "N.m", .description = "Built-in joint: actuator torque")},
+     INPUT(.offset = OFF(u), .start = 1.0, .unit = "N.m",
+     .description = "Built-in joint: actuator torque (start 1 N.m: with y held at 0 the "
+                    "default experiment shows the injection cancelling b u)")},
     {.name = "F", .vr = 208, .rows = MAX_N, .type = TYPE_REAL,
      INPUT(.offset = OFF(F), .unit = "rad/s2",
      .description = "External model: nominal acceleration F(t, y, x2_hat, u)")},
