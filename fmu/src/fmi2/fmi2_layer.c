@@ -239,6 +239,57 @@ static void reset_clock(Clock *clock)
     clock->state = ST_INSTANTIATED;
 }
 
+/* ---- sanity of a whole data block ----------------------------------------- */
+
+static void element_name(const ModelVariable *var, size_t element, char *out, size_t size);
+static int in_range(const ModelVariable *var, double value);
+static double element_value(const void *data, const ModelVariable *var, size_t element);
+
+/* An OK status never comes with a non-finite output: checks every Real output
+ * and calculated parameter; logs the first offender. */
+static int outputs_finite(const Instance *inst, const char *function)
+{
+    for (size_t v = 0; v < MD.n_variables; ++v) {
+        const ModelVariable *var = &MD.variables[v];
+        if (var->type != TYPE_REAL || (var->causality != CAUSALITY_OUTPUT &&
+                                       var->causality != CAUSALITY_CALCULATED_PARAMETER))
+            continue;
+        const double *values = (const double *)((const char *)inst->data + var->offset);
+        for (size_t e = 0; e < model_variable_count(var); ++e) {
+            if (!isfinite(values[e])) {
+                char name[64];
+                element_name(var, e, name, sizeof name);
+                log_instance(inst, fmi2Error, "%s: %s = %g is not finite (the parameters or "
+                             "inputs drive the model out of range)", function, name, values[e]);
+                return 0;
+            }
+        }
+    }
+    return 1;
+}
+
+/* A restored data block must satisfy what fmi2Set* enforces: every parameter
+ * and input inside its range.  (The state checksum detects accidents, not a
+ * forged buffer.)  Logs the first offender. */
+static int data_valid(const Instance *inst, const char *function, const void *data)
+{
+    for (size_t v = 0; v < MD.n_variables; ++v) {
+        const ModelVariable *var = &MD.variables[v];
+        if (var->causality != CAUSALITY_PARAMETER && var->causality != CAUSALITY_INPUT) continue;
+        for (size_t e = 0; e < model_variable_count(var); ++e) {
+            const double value = element_value(data, var, e);
+            if (!in_range(var, value)) {
+                char name[64];
+                element_name(var, e, name, sizeof name);
+                log_instance(inst, fmi2Error, "%s: %s = %g in the state is not finite or out of "
+                             "range", function, name, value);
+                return 0;
+            }
+        }
+    }
+    return 1;
+}
+
 /* ---- common functions --------------------------------------------------- */
 
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
@@ -377,7 +428,8 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
     ENTER("fmi2ExitInitializationMode", MASK_ExitInitializationMode);
     ModelLogger logger = model_logger(inst);
     ModelStatus status = MD.initialize(inst->data, inst->clock.start_time, &logger);
-    if (status == MODEL_ERROR) return escalate(inst, fmi2Error);
+    if (status == MODEL_ERROR || !outputs_finite(inst, "fmi2ExitInitializationMode"))
+        return escalate(inst, fmi2Error);
     inst->clock.steps = 0;
     inst->clock.comm_time = inst->clock.start_time;
     inst->clock.state = ST_STEP_COMPLETE;
@@ -472,6 +524,23 @@ static fmi2Status get_values(Instance *inst, const char *function, VariableType 
     return fmi2OK;
 }
 
+/* Is the value finite and inside the variable's declared range? */
+static int in_range(const ModelVariable *var, double value)
+{
+    if (!isfinite(value)) return 0;
+    if (!isnan(var->min) && (var->min_exclusive ? value <= var->min : value < var->min)) return 0;
+    if (!isnan(var->max) && (var->max_exclusive ? value >= var->max : value > var->max)) return 0;
+    return 1;
+}
+
+/* The value of one element of a data block, as a double. */
+static double element_value(const void *data, const ModelVariable *var, size_t element)
+{
+    const char *base = (const char *)data + var->offset;
+    return var->type == TYPE_REAL ? ((const double *)base)[element]
+                                  : (double)((const int *)base)[element];
+}
+
 /* Is this element settable now, and is the value valid?  Logs why not (the
  * element's name is only formatted then: this runs on every set). */
 static int accept_value(Instance *inst, const char *function, const ModelVariable *var,
@@ -485,8 +554,7 @@ static int accept_value(Instance *inst, const char *function, const ModelVariabl
         problem = FIXED;
     else if (!isfinite(value))
         problem = NOT_FINITE;
-    else if ((!isnan(var->min) && (var->min_exclusive ? value <= var->min : value < var->min)) ||
-             (!isnan(var->max) && (var->max_exclusive ? value >= var->max : value > var->max)))
+    else if (!in_range(var, value))
         problem = OUT_OF_RANGE;
     if (problem == FINE) return 1;
 
@@ -752,6 +820,20 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     memcpy(&clock, payload, sizeof clock);
     if (!(clock.state & ALIVE) || (clock.state & (clock.state - 1)))
         return fail(inst, "fmi2DeSerializeFMUstate: invalid instance state in buffer");
+    const fmi2Byte *data = payload + offsetof(Snapshot, data);
+    if (!data_valid(inst, "fmi2DeSerializeFMUstate", data)) return escalate(inst, fmi2Error);
+    ModelLogger logger = model_logger(inst);
+    if (MD.check_restored && MD.check_restored(data, &logger) == MODEL_ERROR)
+        return escalate(inst, fmi2Error);
+    /* The clock must be where its step count says: comm_time = start + steps h
+     * (within a step); otherwise the next doStep could run ~2^53 steps. */
+    const double h = MD.internal_step(data);
+    const double grid_time = clock.start_time + (double)clock.steps * h;
+    if (!isfinite(clock.start_time) || !isfinite(clock.comm_time) ||
+        !isfinite(clock.stop_time) || !(fabs(clock.comm_time - grid_time) <= 2.0 * h))
+        return fail(inst, "fmi2DeSerializeFMUstate: inconsistent clock in the state (time %g, "
+                    "%llu steps of %g from %g)", clock.comm_time, (unsigned long long)clock.steps,
+                    h, clock.start_time);
     Snapshot *s = *FMUstate;
     if (s && !owns_snapshot(inst, s))
         return fail(inst, "fmi2DeSerializeFMUstate: *FMUstate is not a state of this instance");
@@ -837,7 +919,9 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     clock->steps = k_end;
     clock->comm_time = t_end;
     ModelLogger logger = model_logger(inst);
-    if (MD.communication_point(inst->data, t_end, &logger) == MODEL_ERROR) return escalate(inst, fmi2Error);
+    if (MD.communication_point(inst->data, t_end, &logger) == MODEL_ERROR ||
+        !outputs_finite(inst, "fmi2DoStep"))
+        return escalate(inst, fmi2Error);
     return fmi2OK;
 }
 

@@ -96,6 +96,11 @@ typedef struct {
      * outputs that are not read straight from the state, and check them (a
      * diverged state).  May log; MODEL_ERROR if the outputs cannot be trusted. */
     ModelStatus (*communication_point)(void *data, double t, const ModelLogger *log);
+    /* Optional (NULL: nothing to check): consistency of a deserialized data
+     * block's internal state beyond the parameter ranges the layer checks
+     * (array counts, indices), so that a forged state cannot index out of
+     * bounds.  May log; MODEL_ERROR refuses the state. */
+    ModelStatus (*check_restored)(const void *data, const ModelLogger *log);
 } ModelDescriptor;
 
 /* Each model file defines exactly one of these (read-only, not state). */

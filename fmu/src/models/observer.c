@@ -402,6 +402,27 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
     return MODEL_OK;
 }
 
+/* A deserialized state: every count and index the step loops trust must fit
+ * its array (a state saved before initialization has zero counts). */
+static ModelStatus check_restored(const void *data, const ModelLogger *log)
+{
+    const ObserverData *d = data;
+    const int info_columns = d->info.drift ? 2 * d->info.m : d->info.m;
+    int ok = d->obs.n >= 0 && d->obs.n <= MAX_N && d->m >= 0 && d->m <= MAX_L &&
+             d->id.rows >= 0 && d->id.rows <= ID_MAX_ROWS && d->id.m >= 0 &&
+             d->id.m <= ID_MAX_REGRESSORS && d->info.rows >= 0 && d->info.rows <= ID_MAX_ROWS &&
+             d->info.m >= 0 && info_columns <= ID_MAX_REGRESSORS &&
+             (d->obs.n == 0 || d->obs.n == d->n);
+    for (int j = 0; ok && j < d->m; ++j) ok = d->selected[j] >= 0 && d->selected[j] < MAX_L;
+    if (!ok) {
+        log->log(log->context, MODEL_ERROR,
+                 "fmi2DeSerializeFMUstate: the observer's internal counts are inconsistent "
+                 "(n = %d, observer n = %d, m = %d); state refused", d->n, d->obs.n, d->m);
+        return MODEL_ERROR;
+    }
+    return MODEL_OK;
+}
+
 const ModelDescriptor MODEL_DESCRIPTOR = {
     .model_name = "SuperTwistingObserver",
     .model_identifier = "SuperTwistingObserver",
@@ -417,4 +438,5 @@ const ModelDescriptor MODEL_DESCRIPTOR = {
     .internal_step = internal_step,
     .step = step,
     .communication_point = communication_point,
+    .check_restored = check_restored,
 };

@@ -1,0 +1,90 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets (clang -fsanitize=fuzzer,address,undefined) for
+# each FMU and runs each for a bounded time, starting from the seed corpus in
+# tools/abuse/corpus/ (copied: the committed corpus is not changed).
+#
+#   tools/abuse/fuzz.sh                  every target, FUZZ_SECONDS each (default 30)
+#   FUZZ_SECONDS=60 tools/abuse/fuzz.sh fuzz_calls SuperTwistingObserver
+#   FUZZ_FORGED=0 ...                    leave out the forged-checksum states
+#
+# Targets: fuzz_deserialize (fmi2DeSerializeFMUstate of arbitrary bytes) and
+# fuzz_calls (random FMI call sequences); each is linked statically with
+# fmi2_layer.c and the model's sources as build.sh ships them.  A crash leaves
+# its input in build/fuzz/artifacts/ and fails the script.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+REPO=$PWD
+PY=$REPO/.venv/bin/python
+OUT=$REPO/build/fuzz
+SECONDS_EACH=${FUZZ_SECONDS:-30}
+TARGETS=(${1:-fuzz_deserialize fuzz_calls})
+MODELS=(${2:-SuperTwistingObserver Pendulum TwistingController})
+die() { echo "fuzz.sh: $*" >&2; exit 1; }
+log() { printf '\033[1m== %s\033[0m\n' "$*"; }
+
+CLANG=${CLANG:-clang}
+probe_fuzzer() {
+    command -v "$CLANG" >/dev/null || return 1
+    echo 'int LLVMFuzzerTestOneInput(const char *d, unsigned long n) { (void)d; return (int)n * 0; }' \
+        > "$OUT/probe.c"
+    "$CLANG" -fsanitize=fuzzer,address,undefined -o "$OUT/probe" "$OUT/probe.c" 2>/dev/null
+}
+mkdir -p "$OUT"
+if ! probe_fuzzer; then
+    log "installing clang with libFuzzer (Debian: clang, libclang-rt-dev)"
+    if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+        export DEBIAN_FRONTEND=noninteractive
+        apt-get update -qq >/dev/null
+        apt-get install -y -qq clang >/dev/null
+        # the runtime (libclang_rt.fuzzer) is in libclang-rt-<version>-dev since LLVM 14
+        version=$(clang --version | sed -n 's/.*clang version \([0-9]*\).*/\1/p' | head -1)
+        apt-get install -y -qq "libclang-rt-$version-dev" >/dev/null 2>&1 || true
+    fi
+    probe_fuzzer || die "clang with -fsanitize=fuzzer is not available (apt-get install -y clang libclang-rt-14-dev)"
+fi
+
+log "building the FMUs (build.sh fmus)"
+./build.sh fmus >/dev/null
+FMI_INCLUDE=$("$PY" -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))')
+DEFINES=()
+[ "${FUZZ_FORGED:-1}" = 1 ] || DEFINES+=(-DFUZZ_NO_FORGED)
+
+mkdir -p "$OUT/artifacts"
+summary=()
+failed=0
+for target in "${TARGETS[@]}"; do
+    for id in "${MODELS[@]}"; do
+        src=$REPO/build/$id/sources
+        [ -d "$src" ] || die "$src missing"
+        mapfile -t sources < <(find "$src" -name '*.c' | sort)
+        binary=$OUT/$target-$id
+        "$CLANG" -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all \
+            -fno-omit-frame-pointer "${DEFINES[@]}" -I "$FMI_INCLUDE" -I "$src/fmi2" \
+            -o "$binary" "tools/abuse/$target.c" "${sources[@]}" -lm
+        corpus=$OUT/corpus/$target/$id
+        rm -rf "$corpus" && mkdir -p "$corpus"
+        seeds=tools/abuse/corpus/$target
+        [ -d "$seeds/$id" ] && seeds=$seeds/$id
+        log "$target on $id for $SECONDS_EACH s (seeds: $(find "$seeds" -maxdepth 1 -type f | wc -l))"
+        status=0
+        ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 UBSAN_OPTIONS=print_stacktrace=1 \
+            "$binary" -max_total_time="$SECONDS_EACH" -timeout=20 -rss_limit_mb=2048 \
+            -print_final_stats=1 -artifact_prefix="$OUT/artifacts/$target-$id-" \
+            "$corpus" "$seeds" > "$OUT/$target-$id.log" 2>&1 || status=$?
+        runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$OUT/$target-$id.log" || true)
+        speed=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$OUT/$target-$id.log" || true)
+        cov=$( (grep -E '^#[0-9]+' "$OUT/$target-$id.log" || true) | tail -1 |
+              sed -n 's/.*cov: \([0-9]*\) ft: \([0-9]*\) corp: \([0-9]*\).*/cov \1, ft \2, corpus \3/p')
+        if [ "$status" -ne 0 ]; then
+            failed=1
+            grep -E 'ERROR|FUZZ INVARIANT|runtime error|SUMMARY|Test unit written|#[0-9] 0x' \
+                "$OUT/$target-$id.log" | head -30 >&2 || true
+            summary+=("$target $id: FAILED (exit $status) after ${runs:-?} runs; log $OUT/$target-$id.log")
+        else
+            summary+=("$target $id: ${runs:-?} runs, ${speed:-?} exec/s, ${cov:-}")
+        fi
+    done
+done
+log "summary"
+printf '  %s\n' "${summary[@]}"
+[ "$failed" = 0 ] || die "a fuzz target crashed or broke an invariant (inputs in $OUT/artifacts/)"
