@@ -407,13 +407,14 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
 static ModelStatus check_restored(const void *data, const ModelLogger *log)
 {
     const ObserverData *d = data;
-    const int info_columns = d->info.drift ? 2 * d->info.m : d->info.m;
-    int ok = d->obs.n >= 0 && d->obs.n <= MAX_N && d->m >= 0 && d->m <= MAX_L &&
+    const int regressors = d->nominal_model == NOMINAL_JOINT ? JOINT_BASIS_SIZE : d->l;
+    int ok = d->obs.n >= 0 && d->obs.n <= MAX_N && d->m >= 0 && d->m <= regressors &&
              d->id.rows >= 0 && d->id.rows <= ID_MAX_ROWS && d->id.m >= 0 &&
              d->id.m <= ID_MAX_REGRESSORS && d->info.rows >= 0 && d->info.rows <= ID_MAX_ROWS &&
-             d->info.m >= 0 && info_columns <= ID_MAX_REGRESSORS &&
+             d->info.m >= 0 && d->info.m <= ID_MAX_REGRESSORS &&
+             (!d->info.drift || d->info.m <= ID_MAX_REGRESSORS / 2) &&
              (d->obs.n == 0 || d->obs.n == d->n);
-    for (int j = 0; ok && j < d->m; ++j) ok = d->selected[j] >= 0 && d->selected[j] < MAX_L;
+    for (int j = 0; ok && j < d->m; ++j) ok = d->selected[j] >= 0 && d->selected[j] < regressors;
     if (!ok) {
         log->log(log->context, MODEL_ERROR,
                  "fmi2DeSerializeFMUstate: the observer's internal counts are inconsistent "
