@@ -174,6 +174,13 @@ class FMUInstance:
     def function_address(self, name: str) -> int:
         return ctypes.cast(self.slave._functions[name], ctypes.c_void_p).value
 
+    def raw_function(self, name: str):
+        """The FMI function without ctypes argument types (the caller passes ctypes
+        objects); cached per instance.  The library stays loaded while it is held."""
+        if not hasattr(self, "_raw_library"):
+            self._raw_library = ctypes.CDLL(self.slave.dll._name)
+        return getattr(self._raw_library, name)
+
     @property
     def component(self) -> int:
         return ctypes.cast(self.slave.component, ctypes.c_void_p).value

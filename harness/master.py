@@ -199,10 +199,14 @@ def _run_python(plan: _Plan, records: np.ndarray, row: int, t0: float, H: float,
     Calls are batched (one fmi2GetReal per source FMU and one fmi2SetReal per
     target FMU and step); reads have no side effects, so the values and the
     records are the same as the native loop's, one call per link."""
-    components = [f.slave.component for f in plan.fmus]
-    do_step = [f.fmi2DoStep for f in plan.fmus]
-    get_real = [f.fmi2GetReal for f in plan.fmus]
-    set_real = [f.fmi2SetReal for f in plan.fmus]
+    # Raw function pointers without argtypes, called with ready-made ctypes
+    # arguments: ctypes then skips its per-argument conversions.
+    components = [ctypes.c_void_p(f.component) for f in plan.fmus]
+    do_step = [f.raw_function("fmi2DoStep") for f in plan.fmus]
+    get_real = [f.raw_function("fmi2GetReal") for f in plan.fmus]
+    set_real = [f.raw_function("fmi2SetReal") for f in plan.fmus]
+    c_double, no = ctypes.c_double, ctypes.c_int(0)
+    step = c_double(H)
     signals = plan.signals.tolist()
     steps = []  # per FMU in step order: its reads, its set, its doStep
     for f in plan.order:
@@ -216,14 +220,16 @@ def _run_python(plan: _Plan, records: np.ndarray, row: int, t0: float, H: float,
             group = [l for l in links if l[0] == source]
             vrs = (ctypes.c_uint * len(group))(*[l[1] for l in group])
             view = (ctypes.c_double * len(group)).from_buffer(values, start * 8)
-            reads.append((source, vrs, len(group), view))
+            reads.append((source, vrs, ctypes.c_size_t(len(group)), view))
             start += len(group)
         from_signals = [(i, l[2]) for i, l in enumerate(links) if l[0] < 0]
         noises = [(i, l[3]) for i, l in enumerate(links) if l[3] >= 0]
         targets = (ctypes.c_uint * max(1, len(links)))(*[l[5] for l in links])
-        steps.append((f, reads, from_signals, noises, targets, len(links), values))
+        steps.append((f, reads, from_signals, noises, targets, ctypes.c_size_t(len(links)),
+                      values))
     probe_vrs = [(fmu, (ctypes.c_uint * 1)(vr)) for fmu, vr in plan.probes]
     probe_value = (ctypes.c_double * 1)()
+    one = ctypes.c_size_t(1)
     for k in range(k_begin, k_end):
         t = t0 + k * H
         for f, reads, from_signals, noises, targets, n, values in steps:
@@ -234,15 +240,15 @@ def _run_python(plan: _Plan, records: np.ndarray, row: int, t0: float, H: float,
                 values[i] = signals[signal][k]
             for i, noise in noises:
                 values[i] = values[i] + signals[noise][k]
-            if n and set_real[f](components[f], targets, n, values) >= 3:
+            if n.value and set_real[f](components[f], targets, n, values) >= 3:
                 raise plan.failure(k, f, 2, t0, H)
-            if do_step[f](components[f], t, H, 0) >= 3:
+            if do_step[f](components[f], c_double(t), step, no) >= 3:
                 raise plan.failure(k, f, 0, t0, H)
         if (k + 1) % decimation == 0:
             out = records[row]
             out[0] = t0 + (k + 1) * H
             for p, (fmu, vr) in enumerate(probe_vrs):
-                if get_real[fmu](components[fmu], vr, 1, probe_value) >= 3:
+                if get_real[fmu](components[fmu], vr, one, probe_value) >= 3:
                     raise plan.failure(k, fmu, 1, t0, H)
                 out[p + 1] = probe_value[0]
             row += 1
