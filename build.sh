@@ -2,7 +2,7 @@
 # Builds, packages and validates the project's FMUs, then runs what was asked.
 #
 #   ./build.sh            build the FMUs, then run the closed-loop demonstration
-#   ./build.sh test       build the FMUs, then run the test suite
+#   ./build.sh test       build the FMUs, install the importers (FMI4j, fmi-sim), run the tests
 #   ./build.sh fmus       build the FMUs only
 #
 # On a fresh machine it first creates .venv from the pinned requirements.txt.
@@ -94,7 +94,12 @@ setup_venv
 build_all
 case "${1:-demo}" in
     fmus) ;;
-    test) log "running tests"; "$PY" -m pytest -q tests ;;
+    test)
+        # The tests run every FMU in two independent importers too (tests/importers).
+        log "installing the independent FMI importers (cached)"
+        bash tools/importers/install.sh
+        log "running tests"
+        "$PY" -m pytest -q tests ;;
     demo) log "closed-loop demonstration"; "$PY" -m harness demo --out "$BUILD/demo" ;;
     *) echo "usage: $0 [demo|test|fmus]" >&2; exit 2 ;;
 esac
