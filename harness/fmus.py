@@ -143,6 +143,11 @@ class FMUInstance:
         self.set(parameters)
         self._call(self.slave.enterInitializationMode, "enterInitializationMode")
 
+    def reset(self) -> None:
+        """fmi2Reset: back to the freshly instantiated state; forgets the log."""
+        self._call(self.slave.reset, "fmi2Reset")
+        self.messages.clear()
+
     def exit_initialization(self) -> None:
         self._call(self.slave.exitInitializationMode, "exitInitializationMode")
 

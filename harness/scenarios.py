@@ -191,10 +191,11 @@ PROBES = [
 ]
 
 
-def run_scenario(s: Scenario, fmu_dir: Path, *, noise_std: float = 0.0, seed: int = 0,
-                 observer_overrides: dict[str, Value] | None = None,
-                 use_native: bool | None = None, progress=None):
-    """Run one scenario; returns the Records of PROBES at every communication step."""
+def run_on(sim: CoSimulation, s: Scenario, *, noise_std: float = 0.0, seed: int = 0,
+           observer_overrides: dict[str, Value] | None = None, use_native: bool | None = None,
+           progress=None):
+    """Initialize instantiated (or reset) FMUs for a scenario and run it; returns the
+    Records of PROBES at every communication step."""
     import numpy as np
 
     from .master import initialize, run
@@ -202,13 +203,18 @@ def run_scenario(s: Scenario, fmu_dir: Path, *, noise_std: float = 0.0, seed: in
     n_steps = int(round(s.stop_time / COMMUNICATION_STEP))
     noise = (np.random.default_rng(seed).normal(0.0, noise_std, n_steps) if noise_std > 0
              else np.zeros(n_steps))
+    parameters = {"plant": s.plant, "controller": s.controller,
+                  "observer": {**s.observer, **(observer_overrides or {})}}
+    initialize(sim, 0.0, parameters, {"noise": noise})
+    return run(sim, 0.0, s.stop_time, COMMUNICATION_STEP, PROBES, signals={"noise": noise},
+               use_native=use_native, progress=progress)
+
+
+def run_scenario(s: Scenario, fmu_dir: Path, **options):
+    """Run one scenario on fresh FMUs (options as for run_on)."""
     sim = build(s, fmu_dir)
     try:
-        parameters = {"plant": s.plant, "controller": s.controller,
-                      "observer": {**s.observer, **(observer_overrides or {})}}
-        initialize(sim, 0.0, parameters, {"noise": noise})
-        return run(sim, 0.0, s.stop_time, COMMUNICATION_STEP, PROBES, signals={"noise": noise},
-                   use_native=use_native, progress=progress)
+        return run_on(sim, s, **options)
     finally:
         sim.close()
 

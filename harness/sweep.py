@@ -446,18 +446,6 @@ def prepare(spec: SweepSpec, run: Run):
     return scenario, noise_std, seed
 
 
-def reset_instance(fmu) -> None:
-    """fmi2Reset: the instance returns to its freshly instantiated state (start values)."""
-    from fmpy.fmi1 import FMICallException
-
-    try:
-        fmu.slave.reset()
-    except FMICallException as error:
-        raise FMUError(f"{fmu.name}: fmi2Reset failed: "
-                       f"{'; '.join(fmu.warnings()[-3:]) or '(the FMU logged nothing)'}") from error
-    fmu.messages.clear()
-
-
 class SimulationPool:
     """Closed-loop co-simulations of one process, built once and reused.
 
@@ -510,9 +498,8 @@ def simulate(pool: SimulationPool, scenario, noise_std: float, seed: int,
     """One scored run on a pooled co-simulation: what scenarios.run_scenario + score do.
 
     Never raises for a failed run: returns status "failed" and the message."""
-    from .master import initialize, run
     from .metrics import score
-    from .scenarios import COMMUNICATION_STEP, PROBES
+    from .scenarios import run_on
 
     start = time.perf_counter()
     result: dict[str, Any] = {"status": "ok", "message": "", "metrics": {}}
@@ -520,16 +507,9 @@ def simulate(pool: SimulationPool, scenario, noise_std: float, seed: int,
     healthy = True
     try:
         sim = pool.acquire()
-        n_steps = int(round(scenario.stop_time / COMMUNICATION_STEP))
-        noise = (np.random.default_rng(seed).normal(0.0, noise_std, n_steps) if noise_std > 0
-                 else np.zeros(n_steps))
         for fmu in sim.fmus.values():
-            reset_instance(fmu)
-        parameters = {"plant": scenario.plant, "controller": scenario.controller,
-                      "observer": scenario.observer}
-        initialize(sim, 0.0, parameters, {"noise": noise})
-        records = run(sim, 0.0, scenario.stop_time, COMMUNICATION_STEP, PROBES,
-                      signals={"noise": noise}, use_native=use_native)
+            fmu.reset()
+        records = run_on(sim, scenario, noise_std=noise_std, seed=seed, use_native=use_native)
         with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.simplefilter("ignore", RuntimeWarning)
             try:
