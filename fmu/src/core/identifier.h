@@ -25,8 +25,17 @@ typedef struct {
 void identifier_init(Identifier *id, IdentifierKind kind, int rows, int m, double h, double rho,
                      double R);
 
+/* One sample of the regression z = Delta phi (rows entries of z, m of phi). */
+typedef struct {
+    double z[ID_MAX_ROWS];
+    double phi[ID_MAX_REGRESSORS];
+} IdSample;
+
 /* One explicit Euler step of (18)/(37) and (19)/(36). */
 void identifier_step(Identifier *id, const double z[], const double phi[]);
+
+/* identifier_step over `count` samples in turn. */
+void identifier_run(Identifier *id, const IdSample samples[], int count);
 
 double identifier_gamma_trace(const Identifier *id);
 

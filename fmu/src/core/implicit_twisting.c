@@ -2,51 +2,90 @@
 
 #include <math.h>
 
-void implicit_correct(SuperTwistingObserver *o, const double y[])
+/* One DOF's state over a run, in locals. */
+typedef struct {
+    double z1, mid, a_current, a_mean, v, z_filtered, rate, previous_sign, x2_now;
+} DofState;
+
+/* The corrector at sample y: completes the interval that ends there. */
+static inline void correct(DofState *s, double y, double h, double h2, double inverse_h2,
+                           double reach, double b, double alpha1, double rate_gain)
 {
-    const double h = o->h, h2 = h * h, inverse_h2 = 1.0 / h2;
-    for (int i = 0; i < o->n; ++i) {
-        if (!o->primed) {
-            o->z1[i] = o->x1_hat[i];
-            o->x2_now[i] = o->x2_hat[i];
-            continue;
-        }
-        const double a_mean = 0.5 * (o->a_previous[i] + o->a_current[i]);
-        const double w = y[i] - o->z1[i] - h * o->mid_velocity[i] - h2 * a_mean;
-        const double reach = h2 * o->alpha1[i];
-        double e, v;
-        if (fabs(w) <= reach) { /* sliding: the injection keeps x1_hat on y */
-            e = 0.0;
-            v = w * inverse_h2;
-        } else {
-            const double s = sto_sign(w), r = fabs(w) - reach, b = h * o->alpha2[i];
-            const double q = 2.0 * r / (b + sqrt(b * b + 4.0 * r)); /* stable root form */
-            e = s * q * q;
-            v = o->alpha1[i] * s;
-        }
-        sto_track_switching(o, i, sto_sign(e));
-        o->mid_velocity[i] += h * (a_mean + v);
-        o->z1[i] = y[i] - e;
-        o->z_eq[i] = v;
-        o->x2_now[i] = o->mid_velocity[i] + 0.5 * h * (o->a_current[i] + v);
+    const double w = y - s->z1 - h * s->mid - h2 * s->a_mean;
+    double e;
+    if (fabs(w) <= reach) { /* sliding: the injection keeps x1_hat on y */
+        e = 0.0;
+        s->v = w * inverse_h2;
+        sto_track_switching(&s->rate, &s->previous_sign, rate_gain, 0.0);
+    } else {
+        const double sign_w = w > 0.0 ? 1.0 : -1.0, r = fabs(w) - reach;
+        const double q = 2.0 * r / (b + sqrt(b * b + 4.0 * r)); /* stable root form */
+        e = sign_w * q * q;
+        s->v = alpha1 * sign_w;
+        sto_track_switching(&s->rate, &s->previous_sign, rate_gain, e != 0.0 ? sign_w : 0.0);
     }
+    s->mid += h * (s->a_mean + s->v);
+    s->z1 = y - e;
+    s->x2_now = s->mid + 0.5 * h * (s->a_current + s->v);
 }
 
-void implicit_predict(SuperTwistingObserver *o, const double nominal_acceleration[])
+/* The acceleration of the interval that starts at this sample, at the corrected velocity. */
+static inline double record(DofState *s, StoAcceleration a, double g, StoTrace *trace, int i, int k)
 {
-    const double h = o->h, g = o->filter_gain;
+    const double sign_v = sto_sign(s->x2_now), acceleration = sto_acceleration(a, s->x2_now, sign_v);
+    s->a_mean = 0.5 * (s->a_current + acceleration);
+    s->a_current = acceleration;
+    s->z_filtered += g * (s->v - s->z_filtered);
+    trace->velocity[i][k] = s->x2_now;
+    trace->velocity_sign[i][k] = sign_v;
+    trace->z_eq[i][k] = s->v;
+    trace->z_filtered[i][k] = s->z_filtered;
+    return acceleration;
+}
+
+void implicit_run(SuperTwistingObserver *o, const double y[], const StoAcceleration a[], int count,
+                  StoTrace *trace)
+{
+    const double h = o->h, h2 = o->h_squared, inverse_h2 = o->inverse_h_squared;
+    const double g = o->filter_gain, rate_gain = o->rate_gain;
     for (int i = 0; i < o->n; ++i) {
-        const double a = nominal_acceleration[i], v = o->z_eq[i];
-        if (!o->primed) { /* start the leapfrog half a step back, at the initial velocity */
-            o->a_current[i] = a;
-            o->mid_velocity[i] = o->x2_now[i] - 0.5 * h * a;
+        const double reach = h2 * o->alpha1[i], b = h * o->alpha2[i], alpha1 = o->alpha1[i];
+        const StoAcceleration ai = a[i];
+        DofState s = {o->z1[i], o->mid_velocity[i], o->a_current[i], o->a_mean[i], o->z_eq[i],
+                      o->z_filtered[i], o->switching_rate[i], o->previous_sign[i], o->x2_now[i]};
+        int k = 0;
+        if (!o->primed) { /* the initial estimates; the leapfrog starts half a step back */
+            s.z1 = o->x1_hat[i];
+            s.x2_now = o->x2_hat[i];
+            s.a_current = sto_acceleration(ai, s.x2_now, sto_sign(s.x2_now));
+            s.mid = s.x2_now - 0.5 * h * s.a_current;
+            record(&s, ai, g, trace, i, k++);
         }
-        o->a_previous[i] = o->a_current[i];
-        o->a_current[i] = a;
-        const double mid_next = o->mid_velocity[i] + h * (0.5 * (o->a_previous[i] + a) + v);
-        o->x1_hat[i] = o->z1[i] + h * mid_next;
-        o->x2_hat[i] = mid_next + 0.5 * h * (a + v);
-        o->z_filtered[i] += g * (v - o->z_filtered[i]);
+        for (; k < count; ++k) {
+            correct(&s, y[i], h, h2, inverse_h2, reach, b, alpha1, rate_gain);
+            record(&s, ai, g, trace, i, k);
+        }
+        o->z1[i] = s.z1;
+        o->mid_velocity[i] = s.mid;
+        o->a_current[i] = s.a_current;
+        o->a_mean[i] = s.a_mean;
+        o->z_eq[i] = s.v;
+        o->z_filtered[i] = s.z_filtered;
+        o->switching_rate[i] = s.rate;
+        o->previous_sign[i] = s.previous_sign;
+        o->x2_now[i] = s.x2_now;
     }
     o->primed = 1;
+}
+
+void implicit_outputs(SuperTwistingObserver *o)
+{
+    if (!o->primed) return; /* still the initial estimates */
+    const double h = o->h;
+    for (int i = 0; i < o->n; ++i) {
+        const double v = o->z_eq[i];
+        const double mid_next = o->mid_velocity[i] + h * (o->a_mean[i] + v);
+        o->x1_hat[i] = o->z1[i] + h * mid_next;
+        o->x2_hat[i] = mid_next + 0.5 * h * (o->a_current[i] + v);
+    }
 }

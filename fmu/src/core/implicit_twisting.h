@@ -28,12 +28,15 @@
 
 #include "super_twisting.h"
 
-/* Completes the interval ending at the sample y (first call: takes y as the
- * initial position) and sets o->x2_now, o->z_eq. */
-void implicit_correct(SuperTwistingObserver *o, const double y[]);
+/* Runs `count` steps (sto_run): at each sample the corrector completes the
+ * interval that ends there (the first sample only takes the initial
+ * estimates), then the nominal acceleration of the interval that starts is
+ * evaluated at the corrected velocity and recorded. */
+void implicit_run(SuperTwistingObserver *o, const double y[], const StoAcceleration a[], int count,
+                  StoTrace *trace);
 
-/* Records the nominal acceleration of the interval starting now and predicts
- * x1_hat, x2_hat at its end; updates the filtered injection. */
-void implicit_predict(SuperTwistingObserver *o, const double nominal_acceleration[]);
+/* x1_hat, x2_hat: the prediction for the end of the last interval with the
+ * injection held (only the outputs need it, so it is not made every step). */
+void implicit_outputs(SuperTwistingObserver *o);
 
 #endif

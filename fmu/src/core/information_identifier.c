@@ -3,6 +3,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "small_loops.h"
+
 /* Size of the sums: m, or 2m with the drift model. */
 static int dimension(const InformationIdentifier *id) { return id->drift ? 2 * id->m : id->m; }
 
@@ -38,56 +40,92 @@ void info_reset(InformationIdentifier *id)
 
 /* Re-centres the drift sums on the next step's time: with A = [[I,0],[-hI,I]],
  * P <- A P A^T and Theta <- Theta A^T (upper triangle of P kept). */
-static void recentre(InformationIdentifier *id)
+KERNEL recentre(InformationIdentifier *id, const int m)
 {
-    const int m = id->m;
     const double h = id->h;
-    for (int j = 0; j < m; ++j) {
-        for (int k = 0; k < m; ++k) { /* P22 first: it reads the old P12, P21 */
-            if (k < j) continue;
+    UNROLL for (int j = 0; j < m; ++j) {
+        UNROLL for (int k = j; k < m; ++k) { /* P22 first: it reads the old P12, P21 */
             const double p11 = id->P[j][k];
             const double p12 = id->P[j][m + k], p21 = id->P[k][m + j];
             id->P[m + j][m + k] += h * h * p11 - h * p12 - h * p21;
         }
     }
-    for (int j = 0; j < m; ++j)
-        for (int k = 0; k < m; ++k) /* P12 block (rows j < m, columns m + k) */
+    UNROLL for (int j = 0; j < m; ++j)
+        UNROLL for (int k = 0; k < m; ++k) /* P12 block (rows j < m, columns m + k) */
             id->P[j][m + k] -= h * (k >= j ? id->P[j][k] : id->P[k][j]);
     for (int i = 0; i < id->rows; ++i)
-        for (int k = 0; k < m; ++k) id->theta[i][m + k] -= h * id->theta[i][k];
+        UNROLL for (int k = 0; k < m; ++k) id->theta[i][m + k] -= h * id->theta[i][k];
+}
+
+/* LSM: plain accumulation. */
+KERNEL lsm_accumulate(InformationIdentifier *id, const double z[], const double phi[], const int m)
+{
+    const double h = id->h;
+    UNROLL for (int j = 0; j < m; ++j) {
+        const double hj = h * phi[j];
+        UNROLL for (int k = j; k < m; ++k) id->P[j][k] += hj * phi[k];
+    }
+    for (int i = 0; i < id->rows; ++i) {
+        const double hz = h * z[i];
+        UNROLL for (int k = 0; k < m; ++k) id->theta[i][k] += hz * phi[k];
+    }
+}
+
+/* MFF over sums of size n (m, or 2m with the drift model): forget toward
+ * rho I and toward the current estimate (its drift part toward 0, so that a
+ * learned slope fades without data); the newest sample has s - t = 0, so it
+ * only enters the first m rows/columns. */
+KERNEL mff_accumulate_n(InformationIdentifier *id, const double z[], const double phi[],
+                        const int m, const int n)
+{
+    const double h = id->h, lambda = id->lambda, pull = id->one_minus_lambda_rho;
+    UNROLL for (int j = 0; j < n; ++j) {
+        const double hj = j < m ? h * phi[j] : 0.0;
+        UNROLL for (int k = j; k < n; ++k)
+            id->P[j][k] = lambda * id->P[j][k] + (k < m ? hj * phi[k] : 0.0);
+        id->P[j][j] += pull;
+    }
+    for (int i = 0; i < id->rows; ++i) {
+        const double hz = h * z[i];
+        UNROLL for (int k = 0; k < n; ++k)
+            id->theta[i][k] = lambda * id->theta[i][k] +
+                              (k < m ? pull * id->delta[i][k] + hz * phi[k] : 0.0);
+    }
+}
+
+KERNEL mff_accumulate(InformationIdentifier *id, const double z[], const double phi[], const int m)
+{
+    if (id->drift && 2 * m <= ID_MAX_REGRESSORS) { /* (the second test removes the
+                                                     * impossible large-m copies) */
+        recentre(id, m);
+        mff_accumulate_n(id, z, phi, m, 2 * m);
+    } else {
+        mff_accumulate_n(id, z, phi, m, m);
+    }
 }
 
 void info_step(InformationIdentifier *id, const double z[], const double phi[])
 {
-    if (id->drift) recentre(id);
-    const int m = id->m, n = dimension(id);
-    const double h = id->h, lambda = id->lambda, pull = id->one_minus_lambda_rho;
-    if (lambda == 1.0) { /* LSM: plain accumulation */
-        for (int j = 0; j < m; ++j) {
-            const double hj = h * phi[j];
-            for (int k = j; k < m; ++k) id->P[j][k] += hj * phi[k];
-        }
-        for (int i = 0; i < id->rows; ++i) {
-            const double hz = h * z[i];
-            for (int k = 0; k < m; ++k) id->theta[i][k] += hz * phi[k];
-        }
-    } else { /* MFF: forget toward rho I and toward the current estimate (its drift part
-              * toward 0, so that a learned slope fades without data); the newest
-              * sample has s - t = 0, so it only enters the first m rows/columns */
-        for (int j = 0; j < n; ++j) {
-            const double hj = j < m ? h * phi[j] : 0.0;
-            for (int k = j; k < n; ++k)
-                id->P[j][k] = lambda * id->P[j][k] + (k < m ? hj * phi[k] : 0.0);
-            id->P[j][j] += pull;
-        }
-        for (int i = 0; i < id->rows; ++i) {
-            const double hz = h * z[i];
-            for (int k = 0; k < n; ++k)
-                id->theta[i][k] = lambda * id->theta[i][k] +
-                                  (k < m ? pull * id->delta[i][k] + hz * phi[k] : 0.0);
-        }
-    }
-    id->active_time += h;
+    if (id->lambda == 1.0) WITH_CONSTANT_M(id->m, lsm_accumulate, id, z, phi);
+    else WITH_CONSTANT_M(id->m, mff_accumulate, id, z, phi);
+    id->active_time += id->h;
+}
+
+KERNEL lsm_run(InformationIdentifier *id, const IdSample samples[], int count, const int m)
+{
+    for (int k = 0; k < count; ++k) lsm_accumulate(id, samples[k].z, samples[k].phi, m);
+}
+
+KERNEL mff_run(InformationIdentifier *id, const IdSample samples[], int count, const int m)
+{
+    for (int k = 0; k < count; ++k) mff_accumulate(id, samples[k].z, samples[k].phi, m);
+}
+
+void info_run(InformationIdentifier *id, const IdSample samples[], int count)
+{
+    if (id->lambda == 1.0) WITH_CONSTANT_M(id->m, lsm_run, id, samples, count);
+    else WITH_CONSTANT_M(id->m, mff_run, id, samples, count);
+    for (int k = 0; k < count; ++k) id->active_time += id->h; /* as count single steps */
 }
 
 /* Cholesky P = L L^T from the upper triangle; returns -1 if not positive definite. */

@@ -56,6 +56,9 @@ void info_reset(InformationIdentifier *id);
 /* One internal step with the (filtered) injection z and regressor phi. */
 void info_step(InformationIdentifier *id, const double z[], const double phi[]);
 
+/* info_step over `count` samples in turn. */
+void info_run(InformationIdentifier *id, const IdSample samples[], int count);
+
 /* Solves Delta_hat = Theta P^-1 and refreshes gamma_trace and excitation.
  * Returns 0, or -1 if P is not positive definite (cannot happen with rho > 0
  * and finite data; the previous estimate is then kept). */

@@ -3,8 +3,6 @@
 #include <math.h>
 #include <string.h>
 
-#include "implicit_twisting.h"
-
 void sto_init(SuperTwistingObserver *o, int n, double h, const double alpha1[],
               const double alpha2[], double tau, const double x1_hat0[], const double x2_hat0[])
 {
@@ -13,6 +11,8 @@ void sto_init(SuperTwistingObserver *o, int n, double h, const double alpha1[],
     o->rate_gain = 1.0;
     o->n = n;
     o->h = h;
+    o->h_squared = h * h;
+    o->inverse_h_squared = 1.0 / o->h_squared;
     /* Exact discretization of tau*z' = -z + z_eq over one step: stable for any
      * tau >= 0, and equal to explicit Euler (h/tau) up to O((h/tau)^2). */
     o->filter_gain = tau > 0.0 ? -expm1(-h / tau) : 1.0;
@@ -40,35 +40,43 @@ int sto_converged(const SuperTwistingObserver *o)
     return 1;
 }
 
-const double *sto_begin_step(SuperTwistingObserver *o, const double y[])
+void sto_run(SuperTwistingObserver *o, const double y[], const StoAcceleration a[], int count,
+             StoTrace *trace)
 {
-    if (o->scheme == STO_SCHEME_IMPLICIT) {
-        implicit_correct(o, y);
-        return o->x2_now;
-    }
-    return o->x2_hat;
+    if (count < 1 || count > STO_RUN_MAX) return;
+    StoTrace unused;
+    if (!trace) trace = &unused;
+    if (o->scheme == STO_SCHEME_IMPLICIT) implicit_run(o, y, a, count, trace);
+    else sto_run_paper(o, y, a, count, trace);
 }
 
-void sto_end_step(SuperTwistingObserver *o, const double y[], const double nominal_acceleration[])
+void sto_run_paper(SuperTwistingObserver *o, const double y[], const StoAcceleration a[],
+                   int count, StoTrace *trace)
 {
-    if (o->scheme == STO_SCHEME_IMPLICIT) {
-        implicit_predict(o, nominal_acceleration);
-        return;
-    }
-    sto_step(o, y, nominal_acceleration);
-}
-
-void sto_step(SuperTwistingObserver *o, const double y[], const double nominal_acceleration[])
-{
-    const double h = o->h, g = o->filter_gain;
+    const double h = o->h, g = o->filter_gain, rate_gain = o->rate_gain;
     for (int i = 0; i < o->n; ++i) {
-        const double e = y[i] - o->x1_hat[i];
-        const double s = sto_sign(e);
-        const double z = o->alpha1[i] * s;
-        sto_track_switching(o, i, s);
-        o->x1_hat[i] += h * (o->x2_hat[i] + o->alpha2[i] * sqrt(fabs(e)) * s);
-        o->x2_hat[i] += h * (nominal_acceleration[i] + z);
+        const double yi = y[i], alpha1 = o->alpha1[i], alpha2 = o->alpha2[i];
+        const StoAcceleration ai = a[i];
+        double x1 = o->x1_hat[i], x2 = o->x2_hat[i], z = o->z_eq[i], zf = o->z_filtered[i];
+        double rate = o->switching_rate[i], previous_sign = o->previous_sign[i];
+        for (int k = 0; k < count; ++k) {
+            const double sign_v = sto_sign(x2), acceleration = sto_acceleration(ai, x2, sign_v);
+            const double e = yi - x1, s = sto_sign(e);
+            z = alpha1 * s;
+            sto_track_switching(&rate, &previous_sign, rate_gain, s);
+            trace->velocity[i][k] = x2;
+            trace->velocity_sign[i][k] = sign_v;
+            x1 += h * (x2 + alpha2 * sqrt(fabs(e)) * s);
+            x2 += h * (acceleration + z);
+            zf += g * (z - zf);
+            trace->z_eq[i][k] = z;
+            trace->z_filtered[i][k] = zf;
+        }
+        o->x1_hat[i] = x1;
+        o->x2_hat[i] = x2;
         o->z_eq[i] = z;
-        o->z_filtered[i] += g * (z - o->z_filtered[i]);
+        o->z_filtered[i] = zf;
+        o->switching_rate[i] = rate;
+        o->previous_sign[i] = previous_sign;
     }
 }

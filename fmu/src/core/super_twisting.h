@@ -14,6 +14,7 @@ typedef enum {
 typedef struct {
     int n;                       /* degrees of freedom, 1..STO_MAX_DOF */
     double h;                    /* internal step [s] */
+    double h_squared, inverse_h_squared; /* h^2 and 1/h^2, for the implicit corrector */
     double alpha1[STO_MAX_DOF];  /* gain of the discontinuous term */
     double alpha2[STO_MAX_DOF];  /* gain of the square-root term */
     double filter_gain;          /* 1 - exp(-h/tau); 1 means no filter (tau = 0) */
@@ -33,7 +34,8 @@ typedef struct {
     int primed;                  /* a corrected sample exists */
     double z1[STO_MAX_DOF];      /* corrected position at the last sample */
     double mid_velocity[STO_MAX_DOF]; /* velocity at the middle of the last interval */
-    double a_previous[STO_MAX_DOF], a_current[STO_MAX_DOF]; /* nominal accelerations of the last two intervals */
+    double a_current[STO_MAX_DOF]; /* nominal acceleration of the interval that starts at the sample */
+    double a_mean[STO_MAX_DOF];  /* mean of it and the previous interval's */
     double x2_now[STO_MAX_DOF];  /* velocity estimate at the current sample */
 } SuperTwistingObserver;
 
@@ -47,32 +49,68 @@ void sto_init(SuperTwistingObserver *o, int n, double h, const double alpha1[],
 /* Selects the scheme and the convergence window [s] (after sto_init). */
 void sto_configure(SuperTwistingObserver *o, StoScheme scheme, double convergence_window);
 
-/* One step of either scheme, in two halves so that the caller can evaluate
- * the nominal acceleration with the freshest velocity estimate:
- *   x2 = sto_begin_step(o, y);            velocity estimate at the sample time
- *   a = F(t, y, x2, u) + thetabar*phi(y, x2, u);
- *   sto_end_step(o, y, a);                 estimates for the end of the step */
-const double *sto_begin_step(SuperTwistingObserver *o, const double y[]);
-void sto_end_step(SuperTwistingObserver *o, const double y[], const double nominal_acceleration[]);
+/* The nominal acceleration of one DOF over a run of steps, affine in its
+ * velocity estimate v:  held - viscous v - coulomb sign(v).  The built-in
+ * joint uses all three; an external model's acceleration F + thetabar phi
+ * is held over the run (viscous = coulomb = 0). */
+typedef struct {
+    double held, viscous, coulomb;
+} StoAcceleration;
+
+/* Longest run of steps sto_run takes at once. */
+#define STO_RUN_MAX 32
+
+/* What each step of a run leaves for the identifier, per DOF and step. */
+typedef struct {
+    double velocity[STO_MAX_DOF][STO_RUN_MAX];      /* x2 estimate at the sample (the regressor's) */
+    double velocity_sign[STO_MAX_DOF][STO_RUN_MAX]; /* its sign */
+    double z_eq[STO_MAX_DOF][STO_RUN_MAX];          /* injection */
+    double z_filtered[STO_MAX_DOF][STO_RUN_MAX];    /* filtered injection */
+} StoTrace;
+
+/* Runs `count` (1..STO_RUN_MAX) steps of the selected scheme with the
+ * measurement y held; trace (may be NULL) receives every step.  With y and
+ * the acceleration held the DOFs are independent over the run, so each DOF
+ * runs all its steps in turn with its state in registers.  Before x1_hat and
+ * x2_hat are read, call sto_update_outputs. */
+void sto_run(SuperTwistingObserver *o, const double y[], const StoAcceleration a[], int count,
+             StoTrace *trace);
+
+/* The two schemes' runs (super_twisting.c: the paper's explicit Euler on (12);
+ * implicit_twisting.c) and the implicit scheme's outputs. */
+void sto_run_paper(SuperTwistingObserver *o, const double y[], const StoAcceleration a[],
+                   int count, StoTrace *trace);
+void implicit_run(SuperTwistingObserver *o, const double y[], const StoAcceleration a[], int count,
+                  StoTrace *trace);
+void implicit_outputs(SuperTwistingObserver *o);
+
+/* x1_hat, x2_hat for the end of the last step (the implicit scheme computes
+ * its prediction only when asked). */
+static inline void sto_update_outputs(SuperTwistingObserver *o)
+{
+    if (o->scheme == STO_SCHEME_IMPLICIT) implicit_outputs(o);
+}
 
 /* All DOFs converged by the switching-rate test. */
 int sto_converged(const SuperTwistingObserver *o);
 
-/* One explicit Euler step of (12) (it also feeds the convergence test) with measurement y and the nominal
- * acceleration F(t, y, x2_hat, u) + thetabar*phi evaluated by the caller at the
- * current estimates. */
-void sto_step(SuperTwistingObserver *o, const double y[], const double nominal_acceleration[]);
-
 /* sign with sign(0) = 0, as the observer requires. */
 static inline double sto_sign(double x) { return (x > 0.0) - (x < 0.0); }
 
-/* Convergence detector update for DOF i with s = sign(e): a step counts as
- * switching if e = 0 or sign(e) flipped. */
-static inline void sto_track_switching(SuperTwistingObserver *o, int i, double s)
+/* Nominal acceleration at the velocity v, whose sign is sign_v. */
+static inline double sto_acceleration(StoAcceleration a, double v, double sign_v)
 {
-    const double switched = (s == 0.0 || s != o->previous_sign[i]) ? 1.0 : 0.0;
-    o->switching_rate[i] += o->rate_gain * (switched - o->switching_rate[i]);
-    o->previous_sign[i] = s;
+    return a.held - a.viscous * v - a.coulomb * sign_v;
+}
+
+/* Convergence detector update with s = sign(e): a step counts as switching if
+ * e = 0 or sign(e) flipped.  (On a DOF's rate and previous sign, which the
+ * runs keep in locals.) */
+static inline void sto_track_switching(double *rate, double *previous_sign, double gain, double s)
+{
+    const double switched = (s == 0.0 || s != *previous_sign) ? 1.0 : 0.0;
+    *rate += gain * (switched - *rate);
+    *previous_sign = s;
 }
 
 #endif

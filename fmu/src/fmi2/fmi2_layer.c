@@ -951,8 +951,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
         return fail(inst, "fmi2DoStep: step to %.17g needs more than 2^53 internal steps of "
                     "h = %g", t_end, h);
     const uint64_t k_end = k_end_real > (double)clock->steps ? (uint64_t)k_end_real : clock->steps;
-    for (uint64_t k = clock->steps; k < k_end; ++k)
-        MD.step(inst->data, clock->start_time + (double)k * h);
+    if (k_end > clock->steps) MD.advance(inst->data, clock->start_time, clock->steps, k_end);
     clock->steps = k_end;
     clock->comm_time = t_end;
     ModelLogger logger = model_logger(inst);

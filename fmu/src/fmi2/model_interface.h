@@ -89,9 +89,12 @@ typedef struct {
     ModelStatus (*initialize)(void *data, double start_time, const ModelLogger *log);
     /* The fixed internal step h of this instance (valid after initialize). */
     double (*internal_step)(const void *data);
-    /* One internal step from time t to t + h.  Runs millions of times:
-     * no allocation, no logging, no I/O. */
-    void (*step)(void *data, double t);
+    /* The internal steps k = k_first .. k_end - 1 of one communication step,
+     * step k going from start_time + k h to start_time + (k + 1) h with the
+     * inputs held.  One call per communication step, so that the model can
+     * work out once what depends only on the held inputs.  Runs millions of
+     * steps: no allocation, no logging, no I/O. */
+    void (*advance)(void *data, double start_time, uint64_t k_first, uint64_t k_end);
     /* Once per communication step, after the internal steps: derive the
      * outputs that are not read straight from the state, and check them (a
      * diverged state).  May log; MODEL_ERROR if the outputs cannot be trusted. */

@@ -12,6 +12,7 @@
 #include "../core/identifier.h"
 #include "../core/information_identifier.h"
 #include "../core/joint_model.h"
+#include "../core/small_loops.h"
 #include "../core/super_twisting.h"
 #include "../fmi2/model_interface.h"
 
@@ -56,6 +57,10 @@ typedef struct {
     double z_identifier[MAX_N]; /* z_eq through the same filter, started with phi_filtered */
     double phi_previous[MAX_L]; /* selected regressors of the previous sample (implicit scheme) */
     int reset_seen;             /* identifier_reset value at the last step */
+    /* the selected regressors held over a communication step (hold_inputs) */
+    double phi_now[MAX_L + 1];  /* selected regressors at this sample; [MAX_L] is a scratch slot */
+    int slot_velocity, slot_velocity_sign; /* joint: where x2, sign(x2) go in phi_now (MAX_L:
+                                            * not selected) */
 } ObserverData;
 
 #define OFF(field) offsetof(ObserverData, field)
@@ -280,8 +285,14 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     }
     const int regressors = d->nominal_model == NOMINAL_JOINT ? JOINT_BASIS_SIZE : d->l;
     d->m = 0;
-    for (int k = 0; k < regressors; ++k)
-        if (d->identify[k]) d->selected[d->m++] = k;
+    d->slot_velocity = d->slot_velocity_sign = MAX_L;
+    for (int k = 0; k < regressors; ++k) {
+        if (!d->identify[k]) continue;
+        if (d->nominal_model == NOMINAL_JOINT && k == JOINT_VELOCITY) d->slot_velocity = d->m;
+        if (d->nominal_model == NOMINAL_JOINT && k == JOINT_VELOCITY_SIGN)
+            d->slot_velocity_sign = d->m;
+        d->selected[d->m++] = k;
+    }
     if (d->identifier != IDENTIFIER_OFF && d->m == 0) {
         log->log(log->context, MODEL_ERROR,
                  "identifier = %d but no regressor is selected (identify[1..%d] are all false)",
@@ -308,6 +319,7 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
               d->mff_drift);
     memset(d->phi_filtered, 0, sizeof d->phi_filtered);
     memset(d->phi_previous, 0, sizeof d->phi_previous);
+    memset(d->phi_now, 0, sizeof d->phi_now);
     memset(d->z_identifier, 0, sizeof d->z_identifier);
     d->identifier_active = 0;
     d->reset_seen = d->identifier_reset;
@@ -325,65 +337,117 @@ static void restart_identifier(ObserverData *d)
     d->identifier_active = 0;
 }
 
-static void step(void *data, double t)
+/* What depends only on the inputs held over the communication step: the
+ * nominal acceleration (the joint: affine in the velocity, its position part
+ * with the sin evaluated here) and the selected regressors (the joint: all
+ * but the velocity ones, which come from the observer's trace). */
+static void hold_inputs(ObserverData *d, StoAcceleration acceleration[MAX_N])
 {
-    ObserverData *d = data;
-    double acceleration[MAX_N], regressor[MAX_L];
-    const double *x2 = sto_begin_step(&d->obs, d->y); /* velocity at this sample */
+    double regressor[MAX_L] = {0};
     if (d->nominal_model == NOMINAL_JOINT) {
-        joint_basis(d->y[0], x2[0], regressor);
+        joint_position_basis(d->y[0], regressor);
         acceleration[0] = joint_acceleration(d->b, d->c_nominal, d->u, regressor);
     } else {
-        memcpy(regressor, d->phi, sizeof regressor);
         for (int i = 0; i < d->n; ++i) {
             double a = d->F[i];
-            for (int k = 0; k < d->l; ++k) a += d->theta_nominal[i][k] * regressor[k];
-            acceleration[i] = a;
+            for (int k = 0; k < d->l; ++k) a += d->theta_nominal[i][k] * d->phi[k];
+            acceleration[i] = (StoAcceleration){.held = a, .viscous = 0.0, .coulomb = 0.0};
         }
+        memcpy(regressor, d->phi, sizeof regressor);
     }
-    sto_end_step(&d->obs, d->y, acceleration);
-    if (d->identifier == IDENTIFIER_OFF) return;
+    for (int j = 0; j < d->m; ++j) d->phi_now[j] = regressor[d->selected[j]];
+}
 
-    /* The implicit scheme's injection belongs to the previous sample (its
-     * corrector runs one sample behind), so its regressor is taken one sample
-     * back as well. */
-    const int behind = d->scheme == STO_SCHEME_IMPLICIT;
-    double phi[MAX_L];
-    for (int j = 0; j < d->m; ++j) {
-        const double current = regressor[d->selected[j]];
-        phi[j] = behind ? d->phi_previous[j] : current;
-        d->phi_previous[j] = current;
-    }
-    if (d->identifier_reset != d->reset_seen) {
-        d->reset_seen = d->identifier_reset;
-        if (d->identifier_reset) restart_identifier(d);
-    }
-    if (!d->identifier_active) {
-        d->identifier_active = t >= d->t_id &&
-                               (d->identifier_start == START_AT_T_ID || sto_converged(&d->obs));
-        if (!d->identifier_active) return;
+/* The regressor of step k of a trace: the joint's velocity entries. */
+static void take_velocity(ObserverData *d, const StoTrace *trace, int k)
+{
+    d->phi_now[d->slot_velocity] = trace->velocity[0][k];
+    d->phi_now[d->slot_velocity_sign] = trace->velocity_sign[0][k];
+}
+
+/* Whether the identifier starts at this sample (time t); restarts its filters if so. */
+static int start_identifier(ObserverData *d, double t)
+{
+    d->identifier_active = t >= d->t_id &&
+                           (d->identifier_start == START_AT_T_ID || sto_converged(&d->obs));
+    if (d->identifier_active) {
         /* Both filters start from zero together: z = Delta phi then holds for
          * the filtered pair exactly, with no trace of the observer's transient. */
         memset(d->phi_filtered, 0, sizeof d->phi_filtered);
         memset(d->z_identifier, 0, sizeof d->z_identifier);
     }
-    const double *z = d->obs.z_filtered, *regressors = phi;
-    if (d->filter_regressor) { /* the same filter on both sides of z = Delta phi */
-        const double g = d->obs.filter_gain;
-        for (int i = 0; i < d->n; ++i) d->z_identifier[i] += g * (d->obs.z_eq[i] - d->z_identifier[i]);
-        for (int j = 0; j < d->m; ++j) d->phi_filtered[j] += g * (phi[j] - d->phi_filtered[j]);
-        z = d->z_identifier;
-        regressors = d->phi_filtered;
+    return d->identifier_active;
+}
+
+/* The identifier over the `count` steps just observed (m constant: small_loops.h). */
+KERNEL identify_run(ObserverData *d, const StoTrace *trace, int count, const int m)
+{
+    /* The implicit scheme's injection belongs to the previous sample (its
+     * corrector runs one sample behind), so its regressor is taken one sample
+     * back as well. */
+    const double *sample = d->scheme == STO_SCHEME_IMPLICIT ? d->phi_previous : d->phi_now;
+    const double g = d->obs.filter_gain;
+    IdSample samples[STO_RUN_MAX];
+    for (int k = 0; k < count; ++k) {
+        IdSample *out = &samples[k];
+        take_velocity(d, trace, k);
+        if (d->filter_regressor) { /* the same filter on both sides of z = Delta phi */
+            for (int i = 0; i < d->n; ++i) {
+                d->z_identifier[i] += g * (trace->z_eq[i][k] - d->z_identifier[i]);
+                out->z[i] = d->z_identifier[i];
+            }
+            UNROLL for (int j = 0; j < m; ++j) {
+                d->phi_filtered[j] += g * (sample[j] - d->phi_filtered[j]);
+                out->phi[j] = d->phi_filtered[j];
+                d->phi_previous[j] = d->phi_now[j];
+            }
+        } else {
+            for (int i = 0; i < d->n; ++i) out->z[i] = trace->z_filtered[i][k];
+            UNROLL for (int j = 0; j < m; ++j) {
+                out->phi[j] = sample[j];
+                d->phi_previous[j] = d->phi_now[j];
+            }
+        }
     }
-    if (d->identifier_form == FORM_PAPER)
-        identifier_step(&d->id, z, regressors);
-    else
-        info_step(&d->info, z, regressors);
+    if (d->identifier_form == FORM_PAPER) identifier_run(&d->id, samples, count);
+    else info_run(&d->info, samples, count);
+}
+
+static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
+{
+    ObserverData *d = data;
+    StoAcceleration acceleration[MAX_N];
+    hold_inputs(d, acceleration);
+    const int identifying = d->identifier != IDENTIFIER_OFF;
+    if (identifying && d->identifier_reset != d->reset_seen) {
+        d->reset_seen = d->identifier_reset;
+        if (d->identifier_reset) restart_identifier(d);
+    }
+    StoTrace trace;
+    while (k < k_end) {
+        /* Runs of up to STO_RUN_MAX steps; single steps while the identifier
+         * waits to start, as its start condition is checked after each. */
+        const uint64_t left = k_end - k;
+        const int count = identifying && !d->identifier_active ? 1
+                          : left < STO_RUN_MAX             ? (int)left
+                                                           : STO_RUN_MAX;
+        sto_run(&d->obs, d->y, acceleration, count, &trace);
+        if (identifying) {
+            if (d->identifier_active || start_identifier(d, start_time + (double)k * d->h)) {
+                WITH_CONSTANT_M(d->m, identify_run, d, &trace, count);
+            } else { /* the delay line still moves */
+                take_velocity(d, &trace, 0);
+                memcpy(d->phi_previous, d->phi_now, sizeof d->phi_previous);
+            }
+        }
+        k += count;
+    }
 }
 
 static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
 {
     ObserverData *d = data;
+    sto_update_outputs(&d->obs);
     publish_estimates(d);
     for (int i = 0; i < d->n; ++i) {
         if (!isfinite(d->obs.x1_hat[i]) || !isfinite(d->obs.x2_hat[i])) {
@@ -414,6 +478,8 @@ static ModelStatus check_restored(const void *data, const ModelLogger *log)
              d->info.m >= 0 && d->info.m <= ID_MAX_REGRESSORS &&
              (!d->info.drift || d->info.m <= ID_MAX_REGRESSORS / 2) &&
              (d->obs.n == 0 || d->obs.n == d->n);
+    ok = ok && d->slot_velocity >= 0 && d->slot_velocity <= MAX_L && d->slot_velocity_sign >= 0 &&
+         d->slot_velocity_sign <= MAX_L;
     for (int j = 0; ok && j < d->m; ++j) ok = d->selected[j] >= 0 && d->selected[j] < regressors;
     if (!ok) {
         log->log(log->context, MODEL_ERROR,
@@ -437,7 +503,7 @@ const ModelDescriptor MODEL_DESCRIPTOR = {
     .default_tolerance = 1e-6,
     .initialize = initialize,
     .internal_step = internal_step,
-    .step = step,
+    .advance = advance,
     .communication_point = communication_point,
     .check_restored = check_restored,
 };

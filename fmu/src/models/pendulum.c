@@ -181,11 +181,14 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
 
 static double internal_step(const void *data) { return ((const PendulumData *)data)->h; }
 
-static void step(void *data, double t)
+static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
 {
     PendulumData *p = data;
-    rk4(p, t, p->h, p->x1, p->x2, &p->x1, &p->x2);
-    p->t_state = t + p->h;
+    for (; k < k_end; ++k) {
+        const double t = start_time + (double)k * p->h;
+        rk4(p, t, p->h, p->x1, p->x2, &p->x1, &p->x2);
+        p->t_state = t + p->h;
+    }
 }
 
 static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
@@ -220,6 +223,6 @@ const ModelDescriptor MODEL_DESCRIPTOR = {
     .default_tolerance = 1e-6,
     .initialize = initialize,
     .internal_step = internal_step,
-    .step = step,
+    .advance = advance,
     .communication_point = communication_point,
 };

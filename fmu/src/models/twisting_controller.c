@@ -73,10 +73,13 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
 
 static double internal_step(const void *data) { return ((const ControllerData *)data)->h; }
 
-static void step(void *data, double t)
+/* The control law is a function of the time and the held inputs: only the
+ * last internal step's sample is ever seen. */
+static void advance(void *data, double start_time, uint64_t k_first, uint64_t k_end)
 {
+    (void)k_first;
     ControllerData *c = data;
-    control(c, t + c->h);
+    control(c, start_time + (double)(k_end - 1) * c->h + c->h);
 }
 
 static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
@@ -98,6 +101,6 @@ const ModelDescriptor MODEL_DESCRIPTOR = {
     .default_tolerance = 1e-6,
     .initialize = initialize,
     .internal_step = internal_step,
-    .step = step,
+    .advance = advance,
     .communication_point = communication_point,
 };

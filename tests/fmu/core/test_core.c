@@ -76,9 +76,9 @@ static Observation observe(const Trajectory *tr, int scheme, double alpha1, doub
     for (long k = 0; k < steps; ++k) {
         const double t = k * h, t1 = t + h;
         const double y[1] = {tr->x1(t)};
-        sto_begin_step(&o, y);
-        const double nominal[1] = {tr->known(t)};
-        sto_end_step(&o, y, nominal);
+        const StoAcceleration nominal[1] = {{.held = tr->known(t), .viscous = 0.0, .coulomb = 0.0}};
+        sto_run(&o, y, nominal, 1, NULL);
+        sto_update_outputs(&o);
         /* the filter (9), discretized exactly as the observer does, applied to xi itself:
          * what z_filtered can at best be, lag included */
         reference += o.filter_gain * (tr->unknown(t) - reference);
