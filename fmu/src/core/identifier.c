@@ -19,7 +19,8 @@ void identifier_init(Identifier *id, IdentifierKind kind, int rows, int m, doubl
     for (int k = 0; k < m; ++k) id->gamma[k][k] = 1.0 / rho;
 }
 
-KERNEL euler_step(Identifier *id, const double z[], const double phi[], const int m)
+KERNEL euler_step(Identifier *id, const double z[], const double phi[], const int m,
+                  const int rows)
 {
     const double h = id->h;
     double g[ID_MAX_REGRESSORS]; /* Gamma * phi (= (phi^T Gamma)^T, Gamma symmetric) */
@@ -29,7 +30,7 @@ KERNEL euler_step(Identifier *id, const double z[], const double phi[], const in
         g[j] = sum;
     }
     /* (18)/(37): Delta' = (z - Delta phi) phi^T Gamma */
-    for (int i = 0; i < id->rows; ++i) {
+    for (int i = 0; i < rows; ++i) {
         double prediction = 0.0;
         UNROLL for (int k = 0; k < m; ++k) prediction += id->delta[i][k] * phi[k];
         const double step = h * (z[i] - prediction);
@@ -47,14 +48,23 @@ KERNEL euler_step(Identifier *id, const double z[], const double phi[], const in
     }
 }
 
-void identifier_step(Identifier *id, const double z[], const double phi[])
+KERNEL euler_step_m(Identifier *id, const double z[], const double phi[], const int m)
 {
-    WITH_CONSTANT_M(id->m, euler_step, id, z, phi);
+    euler_step(id, z, phi, m, id->rows);
 }
 
+void identifier_step(Identifier *id, const double z[], const double phi[])
+{
+    WITH_CONSTANT_M(id->m, euler_step_m, id, z, phi);
+}
+
+/* One DOF (the built-in joint) is the common case: its copy has no loop over rows. */
 KERNEL euler_run(Identifier *id, const IdSample samples[], int count, const int m)
 {
-    for (int k = 0; k < count; ++k) euler_step(id, samples[k].z, samples[k].phi, m);
+    if (id->rows == 1)
+        for (int k = 0; k < count; ++k) euler_step(id, samples[k].z, samples[k].phi, m, 1);
+    else
+        for (int k = 0; k < count; ++k) euler_step(id, samples[k].z, samples[k].phi, m, id->rows);
 }
 
 void identifier_run(Identifier *id, const IdSample samples[], int count)

@@ -58,14 +58,15 @@ KERNEL recentre(InformationIdentifier *id, const int m)
 }
 
 /* LSM: plain accumulation. */
-KERNEL lsm_accumulate(InformationIdentifier *id, const double z[], const double phi[], const int m)
+KERNEL lsm_accumulate(InformationIdentifier *id, const double z[], const double phi[], const int m,
+                      const int rows)
 {
     const double h = id->h;
     UNROLL for (int j = 0; j < m; ++j) {
         const double hj = h * phi[j];
         UNROLL for (int k = j; k < m; ++k) id->P[j][k] += hj * phi[k];
     }
-    for (int i = 0; i < id->rows; ++i) {
+    for (int i = 0; i < rows; ++i) {
         const double hz = h * z[i];
         UNROLL for (int k = 0; k < m; ++k) id->theta[i][k] += hz * phi[k];
     }
@@ -76,7 +77,7 @@ KERNEL lsm_accumulate(InformationIdentifier *id, const double z[], const double 
  * learned slope fades without data); the newest sample has s - t = 0, so it
  * only enters the first m rows/columns. */
 KERNEL mff_accumulate_n(InformationIdentifier *id, const double z[], const double phi[],
-                        const int m, const int n)
+                        const int m, const int n, const int rows)
 {
     const double h = id->h, lambda = id->lambda, pull = id->one_minus_lambda_rho;
     UNROLL for (int j = 0; j < n; ++j) {
@@ -85,7 +86,7 @@ KERNEL mff_accumulate_n(InformationIdentifier *id, const double z[], const doubl
             id->P[j][k] = lambda * id->P[j][k] + (k < m ? hj * phi[k] : 0.0);
         id->P[j][j] += pull;
     }
-    for (int i = 0; i < id->rows; ++i) {
+    for (int i = 0; i < rows; ++i) {
         const double hz = h * z[i];
         UNROLL for (int k = 0; k < n; ++k)
             id->theta[i][k] = lambda * id->theta[i][k] +
@@ -93,32 +94,52 @@ KERNEL mff_accumulate_n(InformationIdentifier *id, const double z[], const doubl
     }
 }
 
-KERNEL mff_accumulate(InformationIdentifier *id, const double z[], const double phi[], const int m)
+KERNEL mff_accumulate(InformationIdentifier *id, const double z[], const double phi[], const int m,
+                      const int rows)
 {
     if (id->drift && 2 * m <= ID_MAX_REGRESSORS) { /* (the second test removes the
                                                      * impossible large-m copies) */
         recentre(id, m);
-        mff_accumulate_n(id, z, phi, m, 2 * m);
+        mff_accumulate_n(id, z, phi, m, 2 * m, rows);
     } else {
-        mff_accumulate_n(id, z, phi, m, m);
+        mff_accumulate_n(id, z, phi, m, m, rows);
     }
+}
+
+KERNEL lsm_step(InformationIdentifier *id, const double z[], const double phi[], const int m)
+{
+    lsm_accumulate(id, z, phi, m, id->rows);
+}
+
+KERNEL mff_step(InformationIdentifier *id, const double z[], const double phi[], const int m)
+{
+    mff_accumulate(id, z, phi, m, id->rows);
 }
 
 void info_step(InformationIdentifier *id, const double z[], const double phi[])
 {
-    if (id->lambda == 1.0) WITH_CONSTANT_M(id->m, lsm_accumulate, id, z, phi);
-    else WITH_CONSTANT_M(id->m, mff_accumulate, id, z, phi);
+    if (id->lambda == 1.0) WITH_CONSTANT_M(id->m, lsm_step, id, z, phi);
+    else WITH_CONSTANT_M(id->m, mff_step, id, z, phi);
     id->active_time += id->h;
 }
 
+/* One DOF (the built-in joint) is the common case: its copies have no loop over rows. */
 KERNEL lsm_run(InformationIdentifier *id, const IdSample samples[], int count, const int m)
 {
-    for (int k = 0; k < count; ++k) lsm_accumulate(id, samples[k].z, samples[k].phi, m);
+    if (id->rows == 1)
+        for (int k = 0; k < count; ++k) lsm_accumulate(id, samples[k].z, samples[k].phi, m, 1);
+    else
+        for (int k = 0; k < count; ++k)
+            lsm_accumulate(id, samples[k].z, samples[k].phi, m, id->rows);
 }
 
 KERNEL mff_run(InformationIdentifier *id, const IdSample samples[], int count, const int m)
 {
-    for (int k = 0; k < count; ++k) mff_accumulate(id, samples[k].z, samples[k].phi, m);
+    if (id->rows == 1)
+        for (int k = 0; k < count; ++k) mff_accumulate(id, samples[k].z, samples[k].phi, m, 1);
+    else
+        for (int k = 0; k < count; ++k)
+            mff_accumulate(id, samples[k].z, samples[k].phi, m, id->rows);
 }
 
 void info_run(InformationIdentifier *id, const IdSample samples[], int count)

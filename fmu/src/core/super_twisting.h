@@ -95,7 +95,7 @@ static inline void sto_update_outputs(SuperTwistingObserver *o)
 int sto_converged(const SuperTwistingObserver *o);
 
 /* sign with sign(0) = 0, as the observer requires. */
-static inline double sto_sign(double x) { return (x > 0.0) - (x < 0.0); }
+static inline double sto_sign(double x) { return x > 0.0 ? 1.0 : x < 0.0 ? -1.0 : 0.0; }
 
 /* Nominal acceleration at the velocity v, whose sign is sign_v. */
 static inline double sto_acceleration(StoAcceleration a, double v, double sign_v)

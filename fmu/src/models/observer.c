@@ -388,23 +388,26 @@ KERNEL identify_run(ObserverData *d, const StoTrace *trace, int count, const int
     const double *sample = d->scheme == STO_SCHEME_IMPLICIT ? d->phi_previous : d->phi_now;
     const double g = d->obs.filter_gain;
     IdSample samples[STO_RUN_MAX];
-    for (int k = 0; k < count; ++k) {
-        IdSample *out = &samples[k];
-        take_velocity(d, trace, k);
+    for (int i = 0; i < d->n; ++i) { /* z side: DOF by DOF, each over the run */
+        double z = d->z_identifier[i];
         if (d->filter_regressor) { /* the same filter on both sides of z = Delta phi */
-            for (int i = 0; i < d->n; ++i) {
-                d->z_identifier[i] += g * (trace->z_eq[i][k] - d->z_identifier[i]);
-                out->z[i] = d->z_identifier[i];
-            }
+            for (int k = 0; k < count; ++k) samples[k].z[i] = z += g * (trace->z_eq[i][k] - z);
+        } else {
+            for (int k = 0; k < count; ++k) samples[k].z[i] = trace->z_filtered[i][k];
+        }
+        d->z_identifier[i] = z;
+    }
+    for (int k = 0; k < count; ++k) { /* regressor side */
+        double *phi = samples[k].phi;
+        take_velocity(d, trace, k);
+        if (d->filter_regressor) {
             UNROLL for (int j = 0; j < m; ++j) {
-                d->phi_filtered[j] += g * (sample[j] - d->phi_filtered[j]);
-                out->phi[j] = d->phi_filtered[j];
+                phi[j] = d->phi_filtered[j] += g * (sample[j] - d->phi_filtered[j]);
                 d->phi_previous[j] = d->phi_now[j];
             }
         } else {
-            for (int i = 0; i < d->n; ++i) out->z[i] = trace->z_filtered[i][k];
             UNROLL for (int j = 0; j < m; ++j) {
-                out->phi[j] = sample[j];
+                phi[j] = sample[j];
                 d->phi_previous[j] = d->phi_now[j];
             }
         }
