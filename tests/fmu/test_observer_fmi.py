@@ -420,6 +420,57 @@ def test_steps_that_are_not_multiples_of_h(observer_fmu, make):
     assert run([1e-4] * 100)[-1] == run([1e-2])[-1]
 
 
+CONFIGURATIONS = [  # (nominal model, scheme, identifier, identifier_form, filter_regressor)
+    (model, scheme, identifier, form, filtered)
+    for model in (1, 2) for scheme in (1, 2) for identifier in (1, 2) for form in (1, 2)
+    for filtered in (False, True)]
+
+
+@pytest.mark.parametrize("model,scheme,identifier,form,filtered", CONFIGURATIONS)
+def test_a_long_communication_step_equals_its_internal_steps(make, model, scheme, identifier,
+                                                             form, filtered):
+    """The observer runs a communication step in runs of up to 32 internal steps (each
+    DOF in turn, the identifier over blocks of samples); with the inputs held that must
+    give bit for bit what one doStep per internal step gives, in every configuration and
+    with the identifier starting in the middle of a communication step."""
+    h, per_step, macro_steps = 1e-4, 75, 40   # 75 = 32 + 32 + 11
+    names = ["x1_hat[1]", "x2_hat[1]", "z_eq[1]", "z_eq_filtered[1]", "theta_hat[1,1]",
+             "theta_hat[1,2]", "theta_hat[1,3]", "gamma_trace"]
+
+    def inputs(t):
+        if model == 1:
+            return {"y[1]": 0.3 * math.sin(2 * t) + 0.1 * t, "u": 0.5 * math.sin(3 * t)}
+        return {"y[1]": 0.2 * math.sin(2 * t), "y[2]": 0.1 * math.cos(t),
+                "F[1]": -math.sin(t), "F[2]": 0.5, "phi[1]": math.sin(2 * t),
+                "phi[2]": math.cos(2 * t), "phi[3]": 1.0}
+
+    def run(internal_steps_per_call):
+        fmu = make()
+        integers = {"nominal_model": model, "scheme": scheme, "identifier": identifier,
+                    "identifier_form": form}
+        if model == 2:
+            integers.update({"n": 2, "l": 3})
+        assert fmu.initialize(integers=integers, booleans={"filter_regressor": filtered},
+                              reals={"h": h, "t_id": 0.01}) <= WARNING, fmu.messages()
+        H, out, active = internal_steps_per_call * h, [], []
+        for j in range(macro_steps):
+            t0 = j * per_step * h
+            for c in range(per_step // internal_steps_per_call):
+                t = t0 + c * H
+                assert fmu.set_real(inputs(t0)) == OK
+                assert fmu.do_step(t, H) == OK, fmu.messages()
+            out.append(fmu.get_real(names))
+            active.append(fmu.get_boolean(["identifier_active", "converged"]))
+        return np.array(out), active
+
+    single, single_flags = run(1)
+    long, long_flags = run(per_step)
+    assert single_flags[-1] == [True, True]
+    assert any(not a for a, _ in single_flags)  # the identifier started during the run
+    assert long_flags == single_flags
+    np.testing.assert_array_equal(long, single)
+
+
 # ---- FMU state ------------------------------------------------------------------------------
 
 def test_get_and_set_fmu_state_continue_bit_identically(fmu):

@@ -20,6 +20,10 @@ void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, 
     id->lambda = kind == IDENTIFIER_MFF ? pow(R, h) : 1.0;
     id->one_minus_lambda_rho = (1.0 - id->lambda) * rho;
     id->forgetting_rate = kind == IDENTIFIER_MFF ? -log(R) : 0.0;
+    const double interval = id->forgetting_rate > 0.0 ? 0.01 / (h * id->forgetting_rate) : 1.0;
+    id->anchor_interval = interval >= INFO_ANCHOR_MAX_INTERVAL ? INFO_ANCHOR_MAX_INTERVAL
+                          : interval >= 1.0                    ? (int)interval
+                                                               : 1;
     info_reset(id);
 }
 
@@ -28,6 +32,8 @@ void info_reset(InformationIdentifier *id)
     memset(id->P, 0, sizeof id->P);
     memset(id->theta, 0, sizeof id->theta);
     memset(id->delta, 0, sizeof id->delta);
+    memset(id->anchor, 0, sizeof id->anchor);
+    id->anchor_age = 0;
     const int n = dimension(id);
     for (int k = 0; k < n; ++k) {
         id->P[k][k] = id->rho;
@@ -56,6 +62,8 @@ KERNEL recentre(InformationIdentifier *id, const int m)
     for (int i = 0; i < id->rows; ++i)
         UNROLL for (int k = 0; k < m; ++k) id->theta[i][m + k] -= h * id->theta[i][k];
 }
+
+static void refresh_anchor(InformationIdentifier *id);
 
 /* LSM: plain accumulation. */
 KERNEL lsm_accumulate(InformationIdentifier *id, const double z[], const double phi[], const int m,
@@ -90,7 +98,7 @@ KERNEL mff_accumulate_n(InformationIdentifier *id, const double z[], const doubl
         const double hz = h * z[i];
         UNROLL for (int k = 0; k < n; ++k)
             id->theta[i][k] = lambda * id->theta[i][k] +
-                              (k < m ? pull * id->delta[i][k] + hz * phi[k] : 0.0);
+                              (k < m ? pull * id->anchor[i][k] + hz * phi[k] : 0.0);
     }
 }
 
@@ -114,6 +122,7 @@ KERNEL lsm_step(InformationIdentifier *id, const double z[], const double phi[],
 KERNEL mff_step(InformationIdentifier *id, const double z[], const double phi[], const int m)
 {
     mff_accumulate(id, z, phi, m, id->rows);
+    if (++id->anchor_age >= id->anchor_interval) refresh_anchor(id);
 }
 
 void info_step(InformationIdentifier *id, const double z[], const double phi[])
@@ -135,11 +144,11 @@ KERNEL lsm_run(InformationIdentifier *id, const IdSample samples[], int count, c
 
 KERNEL mff_run(InformationIdentifier *id, const IdSample samples[], int count, const int m)
 {
-    if (id->rows == 1)
-        for (int k = 0; k < count; ++k) mff_accumulate(id, samples[k].z, samples[k].phi, m, 1);
-    else
-        for (int k = 0; k < count; ++k)
-            mff_accumulate(id, samples[k].z, samples[k].phi, m, id->rows);
+    for (int k = 0; k < count; ++k) {
+        if (id->rows == 1) mff_accumulate(id, samples[k].z, samples[k].phi, m, 1);
+        else mff_accumulate(id, samples[k].z, samples[k].phi, m, id->rows);
+        if (++id->anchor_age >= id->anchor_interval) refresh_anchor(id);
+    }
 }
 
 void info_run(InformationIdentifier *id, const IdSample samples[], int count)
@@ -180,18 +189,34 @@ static void cholesky_solve(int m, double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS]
     }
 }
 
+/* Delta_hat = Theta P^-1 into estimate, with the Cholesky factor L of P. */
+static void solve_estimate(const InformationIdentifier *id, int n,
+                           double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS],
+                           double estimate[ID_MAX_ROWS][ID_MAX_REGRESSORS])
+{
+    for (int i = 0; i < id->rows; ++i) {
+        double x[ID_MAX_REGRESSORS];
+        memcpy(x, id->theta[i], sizeof x);
+        cholesky_solve(n, L, x);
+        memcpy(estimate[i], x, sizeof x);
+    }
+}
+
+static void refresh_anchor(InformationIdentifier *id)
+{
+    double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
+    const int n = dimension(id);
+    id->anchor_age = 0;
+    if (cholesky(id, n, L) == 0) solve_estimate(id, n, L, id->anchor); /* else keep it */
+}
+
 int info_solve(InformationIdentifier *id)
 {
     const int n = dimension(id), m = id->m;
     double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
     if (m == 0) return 0;
     if (cholesky(id, n, L) != 0) return -1;
-    for (int i = 0; i < id->rows; ++i) {
-        double x[ID_MAX_REGRESSORS];
-        memcpy(x, id->theta[i], sizeof x);
-        cholesky_solve(n, L, x);
-        memcpy(id->delta[i], x, sizeof x);
-    }
+    solve_estimate(id, n, L, id->delta);
     /* Trace of the current parameters' block of Gamma = P^-1.  Without the
      * drift model that is the whole trace, ||L^-1||_F^2, by forward
      * substitution of the columns of L^-1; with it, the first m diagonal

@@ -31,6 +31,8 @@
 
 #include "identifier.h"
 
+#define INFO_ANCHOR_MAX_INTERVAL 32
+
 typedef struct {
     int rows, m;          /* m: the identified regressors; the sums have 2m with drift */
     int drift;            /* drift model on (MFF only) */
@@ -42,6 +44,12 @@ typedef struct {
     double P[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];     /* information matrix, upper triangle kept */
     double theta[ID_MAX_ROWS][ID_MAX_REGRESSORS];       /* Theta = Delta P */
     double delta[ID_MAX_ROWS][ID_MAX_REGRESSORS];       /* last solved Delta_hat (first m: Delta0) */
+    /* MFF forgets toward this estimate, solved afresh every anchor_interval
+     * samples by the identifier itself, so that the sums never depend on
+     * when (at which communication points) Delta_hat is asked for.  The
+     * interval forgets at most 1 % (1 - lambda^interval), and is 1..32 samples. */
+    double anchor[ID_MAX_ROWS][ID_MAX_REGRESSORS];
+    int anchor_interval, anchor_age;
     double gamma_trace;   /* trace(P^-1), from the last solve */
     double excitation;    /* smallest eigenvalue of the information per unit time */
     double eigvec[ID_MAX_REGRESSORS]; /* inverse-iteration vector for that eigenvalue */
