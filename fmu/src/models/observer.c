@@ -355,7 +355,8 @@ static void hold_inputs(ObserverData *d, StoAcceleration acceleration[MAX_N])
         }
         memcpy(regressor, d->phi, sizeof regressor);
     }
-    for (int j = 0; j < d->m; ++j) d->phi_now[j] = regressor[d->selected[j]];
+    if (d->identifier != IDENTIFIER_OFF)
+        for (int j = 0; j < d->m; ++j) d->phi_now[j] = regressor[d->selected[j]];
 }
 
 /* The regressor of step k of a trace: the joint's velocity entries. */
