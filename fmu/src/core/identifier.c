@@ -48,14 +48,12 @@ KERNEL euler_step(Identifier *id, const double z[], const double phi[], const in
     }
 }
 
-KERNEL euler_step_m(Identifier *id, const double z[], const double phi[], const int m)
-{
-    euler_step(id, z, phi, m, id->rows);
-}
-
 void identifier_step(Identifier *id, const double z[], const double phi[])
 {
-    WITH_CONSTANT_M(id->m, euler_step_m, id, z, phi);
+    IdSample sample = {{0}, {0}};
+    memcpy(sample.z, z, (size_t)id->rows * sizeof z[0]);
+    memcpy(sample.phi, phi, (size_t)id->m * sizeof phi[0]);
+    identifier_run(id, &sample, 1);
 }
 
 /* One DOF (the built-in joint) is the common case: its copy has no loop over rows. */

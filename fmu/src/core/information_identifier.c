@@ -114,22 +114,12 @@ KERNEL mff_accumulate(InformationIdentifier *id, const double z[], const double 
     }
 }
 
-KERNEL lsm_step(InformationIdentifier *id, const double z[], const double phi[], const int m)
-{
-    lsm_accumulate(id, z, phi, m, id->rows);
-}
-
-KERNEL mff_step(InformationIdentifier *id, const double z[], const double phi[], const int m)
-{
-    mff_accumulate(id, z, phi, m, id->rows);
-    if (++id->anchor_age >= id->anchor_interval) refresh_anchor(id);
-}
-
 void info_step(InformationIdentifier *id, const double z[], const double phi[])
 {
-    if (id->lambda == 1.0) WITH_CONSTANT_M(id->m, lsm_step, id, z, phi);
-    else WITH_CONSTANT_M(id->m, mff_step, id, z, phi);
-    id->active_time += id->h;
+    IdSample sample = {{0}, {0}};
+    memcpy(sample.z, z, (size_t)id->rows * sizeof z[0]);
+    memcpy(sample.phi, phi, (size_t)id->m * sizeof phi[0]);
+    info_run(id, &sample, 1);
 }
 
 /* One DOF (the built-in joint) is the common case: its copies have no loop over rows. */

@@ -3,6 +3,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "implicit_twisting.h"
+
 void sto_init(SuperTwistingObserver *o, int n, double h, const double alpha1[],
               const double alpha2[], double tau, const double x1_hat0[], const double x2_hat0[])
 {
@@ -40,6 +42,10 @@ int sto_converged(const SuperTwistingObserver *o)
     return 1;
 }
 
+/* The paper's explicit Euler on (12), each DOF over the run. */
+static void sto_run_paper(SuperTwistingObserver *o, const double y[], const StoAcceleration a[],
+                          int count, StoTrace *trace);
+
 void sto_run(SuperTwistingObserver *o, const double y[], const StoAcceleration a[], int count,
              StoTrace *trace)
 {
@@ -50,8 +56,8 @@ void sto_run(SuperTwistingObserver *o, const double y[], const StoAcceleration a
     else sto_run_paper(o, y, a, count, trace);
 }
 
-void sto_run_paper(SuperTwistingObserver *o, const double y[], const StoAcceleration a[],
-                   int count, StoTrace *trace)
+static void sto_run_paper(SuperTwistingObserver *o, const double y[], const StoAcceleration a[],
+                          int count, StoTrace *trace)
 {
     const double h = o->h, g = o->filter_gain, rate_gain = o->rate_gain;
     for (int i = 0; i < o->n; ++i) {
@@ -79,4 +85,9 @@ void sto_run_paper(SuperTwistingObserver *o, const double y[], const StoAccelera
         o->switching_rate[i] = rate;
         o->previous_sign[i] = previous_sign;
     }
+}
+
+void sto_update_outputs(SuperTwistingObserver *o)
+{
+    if (o->scheme == STO_SCHEME_IMPLICIT) implicit_outputs(o);
 }

@@ -76,20 +76,9 @@ typedef struct {
 void sto_run(SuperTwistingObserver *o, const double y[], const StoAcceleration a[], int count,
              StoTrace *trace);
 
-/* The two schemes' runs (super_twisting.c: the paper's explicit Euler on (12);
- * implicit_twisting.c) and the implicit scheme's outputs. */
-void sto_run_paper(SuperTwistingObserver *o, const double y[], const StoAcceleration a[],
-                   int count, StoTrace *trace);
-void implicit_run(SuperTwistingObserver *o, const double y[], const StoAcceleration a[], int count,
-                  StoTrace *trace);
-void implicit_outputs(SuperTwistingObserver *o);
-
 /* x1_hat, x2_hat for the end of the last step (the implicit scheme computes
  * its prediction only when asked). */
-static inline void sto_update_outputs(SuperTwistingObserver *o)
-{
-    if (o->scheme == STO_SCHEME_IMPLICIT) implicit_outputs(o);
-}
+void sto_update_outputs(SuperTwistingObserver *o);
 
 /* All DOFs converged by the switching-rate test. */
 int sto_converged(const SuperTwistingObserver *o);
