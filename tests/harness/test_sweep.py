@@ -148,6 +148,28 @@ def test_reused_instances_give_the_results_of_fresh_ones(fmu_dir):
     assert score(scenario, fresh) == first["metrics"]
 
 
+def test_a_nan_metric_marks_the_run_failed(fmu_dir, monkeypatch):
+    """A run whose metrics come out NaN is recorded as failed, naming the metric, with
+    the other metrics kept."""
+    import harness.metrics
+
+    real_score = harness.metrics.score
+
+    def score_with_a_nan(scenario, records):
+        return {**real_score(scenario, records), "max_e2_after_1s": float("nan")}
+
+    monkeypatch.setattr(harness.metrics, "score", score_with_a_nan)
+    spec = sweep.parse_spec(SPEC, fmu_dir)
+    pool = sweep.SimulationPool(fmu_dir)
+    try:
+        result = sweep.simulate(pool, *sweep.prepare(spec, spec.runs()[0]))
+    finally:
+        pool.close()
+    assert result["status"] == "failed"
+    assert result["message"] == "NaN metric(s): max_e2_after_1s"
+    assert result["metrics"]["max_e1_after_1s"] < 1e-2
+
+
 # ---- sweeps on the cluster -------------------------------------------------------
 
 def test_sweep_on_a_local_cluster_records_failures_and_resumes(client, fmu_dir, tmp_path):
