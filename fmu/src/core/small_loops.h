@@ -21,19 +21,19 @@
 #define KERNEL static inline void
 #endif
 
-/* Calls KERNEL(args..., M) with the constant M equal to m; does nothing for
+/* Calls FUNCTION(args..., M) with the constant M equal to m; does nothing for
  * m outside 1..8 (the callers' counts are validated, this is the last guard). */
-#define WITH_CONSTANT_M(m, KERNEL, ...)              \
+#define WITH_CONSTANT_M(m, FUNCTION, ...)            \
     do {                                              \
         switch (m) {                                  \
-        case 1: KERNEL(__VA_ARGS__, 1); break;        \
-        case 2: KERNEL(__VA_ARGS__, 2); break;        \
-        case 3: KERNEL(__VA_ARGS__, 3); break;        \
-        case 4: KERNEL(__VA_ARGS__, 4); break;        \
-        case 5: KERNEL(__VA_ARGS__, 5); break;        \
-        case 6: KERNEL(__VA_ARGS__, 6); break;        \
-        case 7: KERNEL(__VA_ARGS__, 7); break;        \
-        case 8: KERNEL(__VA_ARGS__, 8); break;        \
+        case 1: FUNCTION(__VA_ARGS__, 1); break;      \
+        case 2: FUNCTION(__VA_ARGS__, 2); break;      \
+        case 3: FUNCTION(__VA_ARGS__, 3); break;      \
+        case 4: FUNCTION(__VA_ARGS__, 4); break;      \
+        case 5: FUNCTION(__VA_ARGS__, 5); break;      \
+        case 6: FUNCTION(__VA_ARGS__, 6); break;      \
+        case 7: FUNCTION(__VA_ARGS__, 7); break;      \
+        case 8: FUNCTION(__VA_ARGS__, 8); break;      \
         default: break;                               \
         }                                             \
     } while (0)
