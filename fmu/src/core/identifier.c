@@ -50,24 +50,19 @@ KERNEL euler_step(Identifier *id, const double z[], const double phi[], const in
 
 void identifier_step(Identifier *id, const double z[], const double phi[])
 {
-    IdSample sample = {{0}, {0}};
-    memcpy(sample.z, z, (size_t)id->rows * sizeof z[0]);
-    memcpy(sample.phi, phi, (size_t)id->m * sizeof phi[0]);
+    const IdSample sample = id_sample(id->rows, id->m, z, phi);
     identifier_run(id, &sample, 1);
 }
 
-/* One DOF (the built-in joint) is the common case: its copy has no loop over rows. */
-KERNEL euler_run(Identifier *id, const IdSample samples[], int count, const int m)
+KERNEL euler_run(Identifier *id, const IdSample samples[], int count, const int rows,
+                 const int m)
 {
-    if (id->rows == 1)
-        for (int k = 0; k < count; ++k) euler_step(id, samples[k].z, samples[k].phi, m, 1);
-    else
-        for (int k = 0; k < count; ++k) euler_step(id, samples[k].z, samples[k].phi, m, id->rows);
+    for (int k = 0; k < count; ++k) euler_step(id, samples[k].z, samples[k].phi, m, rows);
 }
 
 void identifier_run(Identifier *id, const IdSample samples[], int count)
 {
-    WITH_CONSTANT_M(id->m, euler_run, id, samples, count);
+    WITH_CONSTANT_SIZES(id->rows, id->m, euler_run, id, samples, count);
 }
 
 double identifier_gamma_trace(const Identifier *id)

@@ -31,6 +31,15 @@ typedef struct {
     double phi[ID_MAX_REGRESSORS];
 } IdSample;
 
+/* A sample from separate arrays (the one-sample steps). */
+static inline IdSample id_sample(int rows, int m, const double z[], const double phi[])
+{
+    IdSample sample = {{0}, {0}};
+    for (int i = 0; i < rows && i < ID_MAX_ROWS; ++i) sample.z[i] = z[i];
+    for (int k = 0; k < m && k < ID_MAX_REGRESSORS; ++k) sample.phi[k] = phi[k];
+    return sample;
+}
+
 /* One explicit Euler step of (18)/(37) and (19)/(36). */
 void identifier_step(Identifier *id, const double z[], const double phi[]);
 

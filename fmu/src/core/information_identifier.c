@@ -116,35 +116,29 @@ KERNEL mff_accumulate(InformationIdentifier *id, const double z[], const double 
 
 void info_step(InformationIdentifier *id, const double z[], const double phi[])
 {
-    IdSample sample = {{0}, {0}};
-    memcpy(sample.z, z, (size_t)id->rows * sizeof z[0]);
-    memcpy(sample.phi, phi, (size_t)id->m * sizeof phi[0]);
+    const IdSample sample = id_sample(id->rows, id->m, z, phi);
     info_run(id, &sample, 1);
 }
 
-/* One DOF (the built-in joint) is the common case: its copies have no loop over rows. */
-KERNEL lsm_run(InformationIdentifier *id, const IdSample samples[], int count, const int m)
+KERNEL lsm_run(InformationIdentifier *id, const IdSample samples[], int count, const int rows,
+               const int m)
 {
-    if (id->rows == 1)
-        for (int k = 0; k < count; ++k) lsm_accumulate(id, samples[k].z, samples[k].phi, m, 1);
-    else
-        for (int k = 0; k < count; ++k)
-            lsm_accumulate(id, samples[k].z, samples[k].phi, m, id->rows);
+    for (int k = 0; k < count; ++k) lsm_accumulate(id, samples[k].z, samples[k].phi, m, rows);
 }
 
-KERNEL mff_run(InformationIdentifier *id, const IdSample samples[], int count, const int m)
+KERNEL mff_run(InformationIdentifier *id, const IdSample samples[], int count, const int rows,
+               const int m)
 {
     for (int k = 0; k < count; ++k) {
-        if (id->rows == 1) mff_accumulate(id, samples[k].z, samples[k].phi, m, 1);
-        else mff_accumulate(id, samples[k].z, samples[k].phi, m, id->rows);
+        mff_accumulate(id, samples[k].z, samples[k].phi, m, rows);
         if (++id->anchor_age >= id->anchor_interval) refresh_anchor(id);
     }
 }
 
 void info_run(InformationIdentifier *id, const IdSample samples[], int count)
 {
-    if (id->lambda == 1.0) WITH_CONSTANT_M(id->m, lsm_run, id, samples, count);
-    else WITH_CONSTANT_M(id->m, mff_run, id, samples, count);
+    if (id->lambda == 1.0) WITH_CONSTANT_SIZES(id->rows, id->m, lsm_run, id, samples, count);
+    else WITH_CONSTANT_SIZES(id->rows, id->m, mff_run, id, samples, count);
     for (int k = 0; k < count; ++k) id->active_time += id->h; /* as count single steps */
 }
 

@@ -38,4 +38,13 @@
         }                                             \
     } while (0)
 
+/* FUNCTION(args..., ROWS, M): the same, with the number of rows of the
+ * regression (the DOFs) a constant too when it is 1, the built-in joint's
+ * case, so that the loops over rows go as well. */
+#define WITH_CONSTANT_SIZES(rows, m, FUNCTION, ...)                        \
+    do {                                                                    \
+        if ((rows) == 1) WITH_CONSTANT_M(m, FUNCTION, __VA_ARGS__, 1);     \
+        else WITH_CONSTANT_M(m, FUNCTION, __VA_ARGS__, (rows));            \
+    } while (0)
+
 #endif
