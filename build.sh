@@ -34,7 +34,7 @@ setup_venv() {
 # ---- FMUs --------------------------------------------------------------------
 # model identifier | model file | core files | committed modelDescription.xml
 MODELS=(
-    "SuperTwistingObserver|models/observer.c|core/super_twisting.c core/implicit_twisting.c core/identifier.c core/information_identifier.c core/gains.c|fmu/modelDescription.xml"
+    "SuperTwistingObserver|models/observer.c|core/super_twisting.c core/implicit_twisting.c core/noise_adaptive.c core/identifier.c core/information_identifier.c core/gains.c|fmu/modelDescription.xml"
     "Pendulum|models/pendulum.c||fmu/bench/Pendulum/modelDescription.xml"
     "TwistingController|models/twisting_controller.c||fmu/bench/TwistingController/modelDescription.xml"
 )

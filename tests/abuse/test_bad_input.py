@@ -171,7 +171,7 @@ bad_value(OBS, "n", 0, "fmi2SetInteger: n = 0 is out of range [1, 4]")
 bad_value(OBS, "n", 5, "n = 5 is out of range [1, 4]")
 bad_value(OBS, "n", -2**31, "n = -2147483648 is out of range [1, 4]")
 bad_value(OBS, "nominal_model", 3, "nominal_model = 3 is out of range [1, 2]")
-bad_value(OBS, "scheme", 0, "scheme = 0 is out of range [1, 2]")
+bad_value(OBS, "scheme", 0, "scheme = 0 is out of range [1, 3]")
 bad_value(OBS, "identifier", 3, "identifier = 3 is out of range [0, 2]")
 bad_value(OBS, "l", 9, "l = 9 is out of range [1, 8]")
 bad_value(OBS, "identifier_form", 0, "identifier_form = 0 is out of range")
@@ -235,13 +235,17 @@ def init_with(model, parameters, words, expect=ERROR, id=None):
 
 
 init_with(OBS, {"n": 2}, "n = 2: the built-in joint model (nominal_model = 1) has one degree")
-init_with(OBS, {"identifier": 1, **{f"identify[{k}]": False for k in (1, 2, 3)}},
+init_with(OBS, {"identifier": 1, "identify_b": False,
+                **{f"identify[{k}]": False for k in (1, 2, 3)}},
           "identifier = 1 but no regressor is selected", id="init-identifier-without-regressor")
 init_with(OBS, {"f_plus[1]": 0.0}, "a gain left at 0 needs f_plus[1] > 0")
 init_with(OBS, {"f_plus[1]": 1e308}, "a gain left at 0 needs f_plus[1] > 0")
 init_with(OBS, {"nominal_model": 2, "l": 8, "identifier": 2,
                 **{f"identify[{k}]": True for k in range(1, 9)}},
           "mff_drift needs 2 m <= 8 identified regressors, 8 are selected", id="init-mff-drift-m8")
+init_with(OBS, {"identifier": 2, "identify[4]": True},
+          "mff_drift needs 2 m <= 8 identified regressors, 5 are selected (the built-in joint's u",
+          id="init-mff-drift-with-b")
 init_with(OBS, {"alpha2[1]": 5.0}, "alpha2[1] = 5 violates (6)", expect=WARNING)
 
 

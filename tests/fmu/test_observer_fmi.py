@@ -291,7 +291,7 @@ def test_non_finite_inputs_are_rejected_and_leave_the_old_value(fmu, name, value
     ("n", 3, 0, "n = 0 is out of range [1, 4]"),
     ("l", 2, 9, "l = 9 is out of range [1, 8]"),
     ("identifier", 1, 3, "identifier = 3 is out of range [0, 2]"),
-    ("scheme", 1, 0, "scheme = 0 is out of range [1, 2]"),
+    ("scheme", 1, 0, "scheme = 0 is out of range [1, 3]"),
     ("nominal_model", 2, -1, "nominal_model = -1 is out of range [1, 2]"),
 ])
 def test_bad_integers_are_rejected_and_leave_the_old_value(fmu, name, good, bad, words):
@@ -313,7 +313,8 @@ def test_cross_parameter_problems_are_reported_at_initialization(fmu):
         in fmu.messages()
     assert fmu.call("fmi2Reset") == OK
     status = fmu.initialize(integers={"identifier": 1},
-                            booleans={f"identify[{k}]": False for k in range(1, 9)})
+                            booleans={**{f"identify[{k}]": False for k in range(1, 9)},
+                                      "identify_b": False})
     assert status == ERROR
     assert "no regressor is selected" in fmu.messages()
     assert fmu.call("fmi2Reset") == OK
@@ -422,8 +423,11 @@ def test_steps_that_are_not_multiples_of_h(observer_fmu, make):
 
 CONFIGURATIONS = [  # (nominal model, scheme, identifier, identifier_form, filter_regressor)
     (model, scheme, identifier, form, filtered)
-    for model in (1, 2) for scheme in (1, 2) for identifier in (1, 2) for form in (1, 2)
-    for filtered in (False, True)]
+    for model in (1, 2) for scheme in (1, 2, 3) for identifier in (1, 2) for form in (1, 2)
+    for filtered in (False, True)
+    # The paper's explicit Euler on Gamma needs h |Gamma| |phi|^2 < 2, which the
+    # adaptive scheme's fast members break on this staircase y (velocity spikes).
+    if not (scheme == 3 and form == 1 and not filtered)]
 
 
 @pytest.mark.parametrize("model,scheme,identifier,form,filtered", CONFIGURATIONS)
@@ -450,7 +454,9 @@ def test_a_long_communication_step_equals_its_internal_steps(make, model, scheme
                     "identifier_form": form}
         if model == 2:
             integers.update({"n": 2, "l": 3})
-        assert fmu.initialize(integers=integers, booleans={"filter_regressor": filtered},
+        # the paper's form keeps the paper's regressors (u would break its explicit Euler)
+        assert fmu.initialize(integers=integers, booleans={"filter_regressor": filtered,
+                                                           "identify_b": form == 2},
                               reals={"h": h, "t_id": 0.01}) <= WARNING, fmu.messages()
         H, out, active = internal_steps_per_call * h, [], []
         for j in range(macro_steps):
@@ -563,7 +569,7 @@ def test_reset_returns_to_the_freshly_instantiated_state(make):
     expected = _drive(fresh, 300)
     used = make("used")
     assert used.initialize(integers={"identifier": 2, "n": 1}, reals={"tau": 0.05, "h": 2e-4},
-                           booleans={"identify[4]": True}) == OK
+                           booleans={"identify[4]": True, "identify_b": False}) == OK
     _drive(used, 500, h=2e-4)
     assert used.call("fmi2Reset") == OK
     assert _serialize(used) == untouched  # byte for byte: clock, parameters, inputs, state
@@ -758,6 +764,7 @@ def test_builtin_joint_paper_lsm_identifies_the_pendulum(make):
     h, seconds, rho = 1e-3, 10.0, 1e-3
     fmu = make()
     assert fmu.initialize(integers={"identifier": 1, "identifier_form": 1, "identifier_start": 0},
+                          booleans={"identify_b": False},
                           reals={"h": h, "b": 1 / J, "c_nominal[1]": 2.0, "c_nominal[2]": 0.1,
                                  "c_nominal[3]": 0.1, "alpha1[1]": 15.0, "alpha2[1]": 30.0,
                                  "f_plus[1]": 5.0, "t_id": 1.0, "rho": rho}) == OK, fmu.messages()

@@ -7,11 +7,13 @@ typedef struct {
     double z1, mid, a_current, a_mean, v, z_filtered, rate, previous_sign, x2_now;
 } DofState;
 
-/* The corrector at sample y: completes the interval that ends there. */
-static inline void correct(DofState *s, double y, double h, double h2, double inverse_h2,
-                           double reach, double b, double alpha1, double rate_gain)
+/* The corrector at sample y: completes the interval that ends there.
+ * Returns the innovation against the prediction with the injection held,
+ * which the noise-adaptive scheme compares across its observers. */
+static inline double correct(DofState *s, double y, double h, double h2, double inverse_h2,
+                             double reach, double b, double alpha1, double rate_gain)
 {
-    const double w = y - s->z1 - h * s->mid - h2 * s->a_mean;
+    const double w = y - s->z1 - h * s->mid - h2 * s->a_mean, innovation = w - h2 * s->v;
     double e;
     if (fabs(w) <= reach) { /* sliding: the injection keeps x1_hat on y */
         e = 0.0;
@@ -27,6 +29,7 @@ static inline void correct(DofState *s, double y, double h, double h2, double in
     s->mid += h * (s->a_mean + s->v);
     s->z1 = y - e;
     s->x2_now = s->mid + 0.5 * h * (s->a_current + s->v);
+    return innovation;
 }
 
 /* The acceleration of the interval that starts at this sample, at the corrected velocity. */
@@ -59,10 +62,18 @@ void implicit_run(SuperTwistingObserver *o, const double y[], const StoAccelerat
             s.x2_now = o->x2_hat[i];
             s.a_current = sto_acceleration(ai, s.x2_now, sto_sign(s.x2_now));
             s.mid = s.x2_now - 0.5 * h * s.a_current;
+            trace->innovation[i][k] = 0.0;
+            trace->position[i][k] = s.z1;
+            trace->mid_velocity[i][k] = s.mid;
+            trace->switching_rate[i][k] = s.rate;
             record(&s, ai, g, trace, i, k++);
         }
         for (; k < count; ++k) {
-            correct(&s, y[i], h, h2, inverse_h2, reach, b, alpha1, rate_gain);
+            trace->innovation[i][k] = correct(&s, y[i], h, h2, inverse_h2, reach, b, alpha1,
+                                              rate_gain);
+            trace->position[i][k] = s.z1;
+            trace->mid_velocity[i][k] = s.mid;
+            trace->switching_rate[i][k] = s.rate;
             record(&s, ai, g, trace, i, k);
         }
         o->z1[i] = s.z1;

@@ -19,6 +19,9 @@
 #define JOINT_BASIS_SIZE 5
 enum { JOINT_SIN = 0, JOINT_VELOCITY = 1, JOINT_VELOCITY_SIGN = 2, JOINT_POSITION = 3,
        JOINT_CONSTANT = 4 };
+/* The input u as a regressor (identify_b), after the basis: x'' = b u - c psi
+ * enters the injection as + (b - bbar) u. */
+#define JOINT_INPUT JOINT_BASIS_SIZE
 
 /* The basis entries that depend on x1 only (the velocity entries are set to 0). */
 static inline void joint_position_basis(double x1, double psi[JOINT_BASIS_SIZE])

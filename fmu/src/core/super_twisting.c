@@ -52,7 +52,7 @@ void sto_run(SuperTwistingObserver *o, const double y[], const StoAcceleration a
     if (count < 1 || count > STO_RUN_MAX) return;
     StoTrace unused;
     if (!trace) trace = &unused;
-    if (o->scheme == STO_SCHEME_IMPLICIT) implicit_run(o, y, a, count, trace);
+    if (o->scheme != STO_SCHEME_PAPER) implicit_run(o, y, a, count, trace);
     else sto_run_paper(o, y, a, count, trace);
 }
 
@@ -89,5 +89,5 @@ static void sto_run_paper(SuperTwistingObserver *o, const double y[], const StoA
 
 void sto_update_outputs(SuperTwistingObserver *o)
 {
-    if (o->scheme == STO_SCHEME_IMPLICIT) implicit_outputs(o);
+    if (o->scheme != STO_SCHEME_PAPER) implicit_outputs(o);
 }

@@ -8,7 +8,8 @@
 
 typedef enum {
     STO_SCHEME_PAPER = 1,   /* explicit Euler on (12), exactly as the paper implies */
-    STO_SCHEME_IMPLICIT = 2 /* sampling-consistent implicit step, implicit_twisting.c */
+    STO_SCHEME_IMPLICIT = 2, /* sampling-consistent implicit step, implicit_twisting.c */
+    STO_SCHEME_ADAPTIVE = 3  /* implicit step beside linear observers, noise_adaptive.c */
 } StoScheme;
 
 typedef struct {
@@ -66,6 +67,14 @@ typedef struct {
     double velocity_sign[STO_MAX_DOF][STO_RUN_MAX]; /* its sign */
     double z_eq[STO_MAX_DOF][STO_RUN_MAX];          /* injection */
     double z_filtered[STO_MAX_DOF][STO_RUN_MAX];    /* filtered injection */
+    /* Implicit and adaptive schemes: the super-twisting corrector's innovation
+     * (measurement minus prediction with the injection held). */
+    double innovation[STO_MAX_DOF][STO_RUN_MAX];
+    double position[STO_MAX_DOF][STO_RUN_MAX];       /* corrected position at the sample */
+    double mid_velocity[STO_MAX_DOF][STO_RUN_MAX];   /* velocity of the interval just ended */
+    double switching_rate[STO_MAX_DOF][STO_RUN_MAX]; /* the convergence detector's rate */
+    /* Adaptive scheme: the injection of the observer the identifier follows. */
+    double z_identify[STO_MAX_DOF][STO_RUN_MAX];
 } StoTrace;
 
 /* Runs `count` (1..STO_RUN_MAX) steps of the selected scheme with the

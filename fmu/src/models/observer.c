@@ -12,6 +12,7 @@
 #include "../core/identifier.h"
 #include "../core/information_identifier.h"
 #include "../core/joint_model.h"
+#include "../core/noise_adaptive.h"
 #include "../core/small_loops.h"
 #include "../core/super_twisting.h"
 #include "../fmi2/model_interface.h"
@@ -35,7 +36,7 @@ typedef struct {
     int identify[MAX_L];
     int start_from_measurement;
     double x1_hat_start[MAX_N], x2_hat_start[MAX_N];
-    int identifier_form, identifier_start, filter_regressor, mff_drift;
+    int identifier_form, identifier_start, filter_regressor, mff_drift, identify_b;
     double convergence_window;
     /* calculated parameters */
     double alpha1_used[MAX_N], alpha2_used[MAX_N];
@@ -44,13 +45,16 @@ typedef struct {
     int identifier_reset;
     /* outputs not read straight from the algorithm state */
     double theta_hat[MAX_N][MAX_L];
-    double gamma_trace, excitation;
+    double gamma_trace, excitation, b_hat;
     int identifier_active, converged;
     /* derived at initialization */
     int m;                  /* number of identified regressors */
     int selected[MAX_L];    /* their indices in the full regressor */
     /* algorithm state */
     SuperTwistingObserver obs;
+    AdaptiveBank bank;          /* scheme 3: the linear observers beside obs */
+    double shadow[MAX_L][3];    /* scheme 3: the selected regressors through the followed
+                                 * member's filter G (adaptive_shadow_step) */
     Identifier id;              /* identifier_form = 1 (the paper's explicit Euler) */
     InformationIdentifier info; /* identifier_form = 2 */
     double phi_filtered[MAX_L]; /* selected regressors through the z_eq filter */
@@ -84,9 +88,10 @@ static const ModelVariable VARIABLES[] = {
      .description = "1: built-in joint x'' = b u - sum c_k psi_k (n = 1); 2: external, "
                     "nominal acceleration F and regressor phi come as inputs")},
     {.name = "scheme", .vr = 4, .type = TYPE_INTEGER, PARAM(.offset = OFF(scheme),
-     .start = STO_SCHEME_IMPLICIT, .min = 1, .max = 2,
+     .start = STO_SCHEME_ADAPTIVE, .min = 1, .max = 3,
      .description = "Discretization: 1 explicit Euler as in the paper; 2 sampling-consistent "
-                    "implicit (no chattering, no filter needed)")},
+                    "implicit (no chattering, no filter needed); 3 the implicit observer beside "
+                    "linear observers for noisy measurements, the best predictor published")},
     {.name = "identifier", .vr = 5, .type = TYPE_INTEGER, PARAM(.offset = OFF(identifier),
      .start = IDENTIFIER_OFF, .min = 0, .max = 2,
      .description = "Parameter identifier: 0 off, 1 least squares (18)-(19), 2 matrix "
@@ -152,6 +157,10 @@ static const ModelVariable VARIABLES[] = {
      PARAM(.offset = OFF(mff_drift), .start = 1, UNBOUNDED,
      .description = "MFF in information form: model each parameter as locally linear in "
                     "time, which removes the lag of forgetting (needs 2 m <= 8)")},
+    {.name = "identify_b", .vr = 115, .type = TYPE_BOOLEAN,
+     PARAM(.offset = OFF(identify_b), .start = 1, UNBOUNDED,
+     .description = "Built-in joint: identify the input gain b (u is a regressor); the "
+                    "estimate is the output b_hat")},
     {.name = "convergence_window", .vr = 113, .type = TYPE_REAL,
      PARAM(.offset = OFF(convergence_window), .start = 0.05, .min = 0.0, .max = NAN,
      .min_exclusive = true, .unit = "s",
@@ -203,6 +212,18 @@ static const ModelVariable VARIABLES[] = {
      OUTPUT(.offset = OFF(excitation),
      .description = "Smallest eigenvalue of the identifier's information per unit time "
                     "(identifier_form 2); near 0: theta_hat is not being learned")},
+    {.name = "b_hat", .vr = 364, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(b_hat),
+     .description = "Built-in joint: estimate of the input gain b [1/(kg.m2)] (b while not "
+                    "identified)")},
+    {.name = "noise_std", .vr = 370, .rows = MAX_N, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(bank.noise_std), .unit = "rad",
+     .description = "Scheme 3: estimated standard deviation of the measurement noise "
+                    "(quantization included) from the published observer's innovations")},
+    {.name = "observer_bandwidth", .vr = 374, .rows = MAX_N, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(bank.bandwidth), .unit = "rad/s",
+     .description = "Scheme 3: bandwidth of the published observer (1/h: the super-twisting "
+                    "observer)")},
 };
 
 /* theta_hat from the identified corrections.  Built-in joint: the injection
@@ -221,8 +242,13 @@ static void publish_estimates(ObserverData *d)
     const double (*delta)[MAX_L] = identified_delta(d);
     if (d->nominal_model == NOMINAL_JOINT) {
         for (int k = 0; k < JOINT_BASIS_SIZE; ++k) d->theta_hat[0][k] = d->c_nominal[k];
-        for (int j = 0; j < d->m; ++j)
-            d->theta_hat[0][d->selected[j]] = d->c_nominal[d->selected[j]] - delta[0][j];
+        d->b_hat = d->b;
+        for (int j = 0; j < d->m; ++j) {
+            const int k = d->selected[j];
+            /* u enters as + (b - bbar) u: Delta = b - bbar there */
+            if (k == JOINT_INPUT) d->b_hat = d->b + delta[0][j];
+            else d->theta_hat[0][k] = d->c_nominal[k] - delta[0][j];
+        }
     } else {
         for (int i = 0; i < d->n; ++i) {
             for (int k = 0; k < d->l; ++k) d->theta_hat[i][k] = d->theta_nominal[i][k];
@@ -285,6 +311,7 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     }
     const int regressors = d->nominal_model == NOMINAL_JOINT ? JOINT_BASIS_SIZE : d->l;
     d->m = 0;
+    d->b_hat = d->b;
     d->slot_velocity = d->slot_velocity_sign = MAX_L;
     for (int k = 0; k < regressors; ++k) {
         if (!d->identify[k]) continue;
@@ -293,6 +320,7 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
             d->slot_velocity_sign = d->m;
         d->selected[d->m++] = k;
     }
+    if (d->nominal_model == NOMINAL_JOINT && d->identify_b) d->selected[d->m++] = JOINT_INPUT;
     if (d->identifier != IDENTIFIER_OFF && d->m == 0) {
         log->log(log->context, MODEL_ERROR,
                  "identifier = %d but no regressor is selected (identify[1..%d] are all false)",
@@ -307,12 +335,15 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
         x1_hat0[i] = d->start_from_measurement ? d->y[i] : d->x1_hat_start[i];
     sto_init(&d->obs, d->n, d->h, d->alpha1_used, d->alpha2_used, d->tau, x1_hat0, d->x2_hat_start);
     sto_configure(&d->obs, (StoScheme)d->scheme, d->convergence_window);
+    adaptive_init(&d->bank, d->h);
+    memset(d->shadow, 0, sizeof d->shadow);
     identifier_init(&d->id, (IdentifierKind)d->identifier, d->n, d->m, d->h, d->rho, d->R);
     if (d->identifier == IDENTIFIER_MFF && d->identifier_form == FORM_INFORMATION && d->mff_drift &&
         2 * d->m > ID_MAX_REGRESSORS) {
         log->log(log->context, MODEL_ERROR,
-                 "mff_drift needs 2 m <= %d identified regressors, %d are selected; select fewer "
-                 "or set mff_drift = false", ID_MAX_REGRESSORS, d->m);
+                 "mff_drift needs 2 m <= %d identified regressors, %d are selected (the "
+                 "built-in joint's u counts when identify_b is true); select fewer or set "
+                 "mff_drift = false", ID_MAX_REGRESSORS, d->m);
         return MODEL_ERROR;
     }
     info_init(&d->info, (IdentifierKind)d->identifier, d->n, d->m, d->h, d->rho, d->R,
@@ -346,6 +377,7 @@ static void hold_inputs(ObserverData *d, StoAcceleration acceleration[MAX_N])
     double regressor[MAX_L] = {0};
     if (d->nominal_model == NOMINAL_JOINT) {
         joint_position_basis(d->y[0], regressor);
+        regressor[JOINT_INPUT] = d->u;
         acceleration[0] = joint_acceleration(d->b, d->c_nominal, d->u, regressor);
     } else {
         for (int i = 0; i < d->n; ++i) {
@@ -376,6 +408,8 @@ static int start_identifier(ObserverData *d, double t)
          * the filtered pair exactly, with no trace of the observer's transient. */
         memset(d->phi_filtered, 0, sizeof d->phi_filtered);
         memset(d->z_identifier, 0, sizeof d->z_identifier);
+        memset(d->shadow, 0, sizeof d->shadow);
+        if (d->scheme == STO_SCHEME_ADAPTIVE) adaptive_follow_selected(&d->bank);
     }
     return d->identifier_active;
 }
@@ -386,13 +420,20 @@ KERNEL identify_run(ObserverData *d, const StoTrace *trace, int count, const int
     /* The implicit scheme's injection belongs to the previous sample (its
      * corrector runs one sample behind), so its regressor is taken one sample
      * back as well. */
-    const double *sample = d->scheme == STO_SCHEME_IMPLICIT ? d->phi_previous : d->phi_now;
+    const double *sample = d->scheme == STO_SCHEME_PAPER ? d->phi_now : d->phi_previous;
     const double g = d->obs.filter_gain;
+    /* Scheme 3 following a linear member: its injection is the perturbation
+     * through the member's filter G, so the regressor passes G as well. */
+    const int adaptive = d->scheme == STO_SCHEME_ADAPTIVE;
+    const AdaptiveGains *G = adaptive && d->bank.follow != ADAPTIVE_SUPER_TWISTING
+                                 ? &d->bank.gains[d->bank.follow]
+                                 : NULL;
+    const double(*z_source)[STO_RUN_MAX] = adaptive ? trace->z_identify : trace->z_eq;
     IdSample samples[STO_RUN_MAX];
     for (int i = 0; i < d->n; ++i) { /* z side: DOF by DOF, each over the run */
         double z = d->z_identifier[i];
         if (d->filter_regressor) { /* the same filter on both sides of z = Delta phi */
-            for (int k = 0; k < count; ++k) samples[k].z[i] = z += g * (trace->z_eq[i][k] - z);
+            for (int k = 0; k < count; ++k) samples[k].z[i] = z += g * (z_source[i][k] - z);
         } else {
             for (int k = 0; k < count; ++k) samples[k].z[i] = trace->z_filtered[i][k];
         }
@@ -401,7 +442,15 @@ KERNEL identify_run(ObserverData *d, const StoTrace *trace, int count, const int
     for (int k = 0; k < count; ++k) { /* regressor side */
         double *phi = samples[k].phi;
         take_velocity(d, trace, k);
-        if (d->filter_regressor) {
+        if (G) {
+            UNROLL for (int j = 0; j < m; ++j) {
+                const double through_g = adaptive_shadow_step(G, d->h, d->shadow[j], sample[j]);
+                phi[j] = d->filter_regressor
+                             ? (d->phi_filtered[j] += g * (through_g - d->phi_filtered[j]))
+                             : through_g;
+                d->phi_previous[j] = d->phi_now[j];
+            }
+        } else if (d->filter_regressor) {
             UNROLL for (int j = 0; j < m; ++j) {
                 phi[j] = d->phi_filtered[j] += g * (sample[j] - d->phi_filtered[j]);
                 d->phi_previous[j] = d->phi_now[j];
@@ -435,7 +484,10 @@ static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
         const int count = identifying && !d->identifier_active ? 1
                           : left < STO_RUN_MAX             ? (int)left
                                                            : STO_RUN_MAX;
-        sto_run(&d->obs, d->y, acceleration, count, &trace);
+        if (d->scheme == STO_SCHEME_ADAPTIVE)
+            adaptive_run(&d->obs, &d->bank, d->y, acceleration, count, &trace);
+        else
+            sto_run(&d->obs, d->y, acceleration, count, &trace);
         if (identifying) {
             if (d->identifier_active || start_identifier(d, start_time + (double)k * d->h)) {
                 WITH_CONSTANT_M(d->m, identify_run, d, &trace, count);
@@ -451,7 +503,8 @@ static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
 static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
 {
     ObserverData *d = data;
-    sto_update_outputs(&d->obs);
+    if (d->scheme == STO_SCHEME_ADAPTIVE) adaptive_outputs(&d->obs, &d->bank);
+    else sto_update_outputs(&d->obs);
     publish_estimates(d);
     for (int i = 0; i < d->n; ++i) {
         if (!isfinite(d->obs.x1_hat[i]) || !isfinite(d->obs.x2_hat[i])) {
@@ -475,13 +528,13 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
 static ModelStatus check_restored(const void *data, const ModelLogger *log)
 {
     const ObserverData *d = data;
-    const int regressors = d->nominal_model == NOMINAL_JOINT ? JOINT_BASIS_SIZE : d->l;
+    const int regressors = d->nominal_model == NOMINAL_JOINT ? JOINT_BASIS_SIZE + 1 : d->l;
     int ok = d->obs.n >= 0 && d->obs.n <= MAX_N && d->m >= 0 && d->m <= regressors &&
              d->id.rows >= 0 && d->id.rows <= ID_MAX_ROWS && d->id.m >= 0 &&
              d->id.m <= ID_MAX_REGRESSORS && d->info.rows >= 0 && d->info.rows <= ID_MAX_ROWS &&
              d->info.m >= 0 && d->info.m <= ID_MAX_REGRESSORS &&
              (!d->info.drift || d->info.m <= ID_MAX_REGRESSORS / 2) &&
-             (d->obs.n == 0 || d->obs.n == d->n);
+             (d->obs.n == 0 || d->obs.n == d->n) && adaptive_valid(&d->bank, d->n);
     ok = ok && d->slot_velocity >= 0 && d->slot_velocity <= MAX_L && d->slot_velocity_sign >= 0 &&
          d->slot_velocity_sign <= MAX_L;
     for (int j = 0; ok && j < d->m; ++j) ok = d->selected[j] >= 0 && d->selected[j] < regressors;

@@ -1,0 +1,206 @@
+#include "noise_adaptive.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "implicit_twisting.h"
+
+/* Steady-state Kalman gain of x1^- = x1 + h m + h^2 xi, m^- = m + h xi,
+ * xi^- = xi + w (variance q), y = x1 + noise (variance 1), by iterating the
+ * Riccati recursion (at initialization only). */
+static AdaptiveGains steady_state_gains(double h, double omega)
+{
+    const double q = pow(omega, 6.0) * h * h;
+    double P[3][3] = {{1e6, 0, 0}, {0, 1e6 / (h * h), 0}, {0, 0, 1e6 / (h * h * h * h)}};
+    AdaptiveGains g = {.omega = omega};
+    for (int iteration = 0; iteration < 2000000; ++iteration) {
+        /* prediction: Pm = F P F^T + Q with F = [[1, h, h^2], [0, 1, h], [0, 0, 1]] */
+        const double F[3][3] = {{1.0, h, h * h}, {0.0, 1.0, h}, {0.0, 0.0, 1.0}};
+        double FP[3][3] = {{0}}, Pm[3][3] = {{0}};
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+                for (int k = 0; k < 3; ++k) FP[i][j] += F[i][k] * P[k][j];
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+                for (int k = 0; k < 3; ++k) Pm[i][j] += FP[i][k] * F[j][k];
+        Pm[2][2] += q;
+        const double S = Pm[0][0] + 1.0;
+        const double K[3] = {Pm[0][0] / S, Pm[1][0] / S, Pm[2][0] / S};
+        double change = 0.0;
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) {
+                const double updated = Pm[i][j] - K[i] * Pm[0][j];
+                const double scale = fabs(updated) > 1e-300 ? fabs(updated) : 1e-300;
+                const double relative = fabs(updated - P[i][j]) / scale;
+                if (relative > change) change = relative;
+                P[i][j] = updated;
+            }
+        g.k1 = K[0];
+        g.k2 = K[1];
+        g.k3 = K[2];
+        g.innovation_variance = S;
+        if (change < 1e-13 && iteration > 10) break;
+    }
+    return g;
+}
+
+void adaptive_init(AdaptiveBank *bank, double h)
+{
+    memset(bank, 0, sizeof *bank);
+    bank->gain = h < ADAPTIVE_WINDOW ? h / ADAPTIVE_WINDOW : 1.0;
+    for (double omega = 2.0; omega * h <= 0.5 && bank->count < ADAPTIVE_MAX_MEMBERS;
+         omega *= ADAPTIVE_RATIO)
+        bank->gains[bank->count++] = steady_state_gains(h, omega);
+    for (int i = 0; i < STO_MAX_DOF; ++i) bank->selected[i] = ADAPTIVE_SUPER_TWISTING;
+    bank->follow = ADAPTIVE_SUPER_TWISTING;
+}
+
+/* The super-twisting corrector's innovation variance per unit R on white
+ * noise: r = n_k - 3 n_(k-1) + 3 n_(k-2) - n_(k-3) in sliding. */
+#define STA_INNOVATION_VARIANCE 20.0
+
+/* A member starts from the super-twisting observer's state at step k of the
+ * trace, so that it has no transient of its own. */
+static void start_member(AdaptiveMember *m, const StoTrace *trace, int i, int k, StoAcceleration a)
+{
+    memset(m, 0, sizeof *m);
+    m->z1 = trace->position[i][k];
+    m->mid = trace->mid_velocity[i][k];
+    m->xi = 0.0; /* the saturated injection would be a transient of +-alpha1 */
+    m->x2_now = trace->velocity[i][k];
+    m->a_current = sto_acceleration(a, m->x2_now, trace->velocity_sign[i][k]);
+    m->a_mean = m->a_current;
+}
+
+/* One sample of a linear member: corrects the interval that ends at y and
+ * records the acceleration of the interval that starts.  Returns r. */
+static inline double member_step(AdaptiveMember *m, const AdaptiveGains *g, double y,
+                                 StoAcceleration a, double h, double h2)
+{
+    const double r = y - m->z1 - h * m->mid - h2 * (m->a_mean + m->xi);
+    m->mid += h * (m->a_mean + m->xi) + g->k2 * r;
+    m->xi += g->k3 * r;
+    m->z1 = y - (1.0 - g->k1) * r;
+    m->x2_now = m->mid + 0.5 * h * (m->a_current + m->xi);
+    const double acceleration = sto_acceleration(a, m->x2_now, sto_sign(m->x2_now));
+    m->a_mean = 0.5 * (m->a_current + acceleration);
+    m->a_current = acceleration;
+    return r;
+}
+
+/* Updates the innovation statistics with the innovation r. */
+static inline void track(AdaptiveStatistics *st, double r, double gain)
+{
+    /* a growing window first: no bias toward the zero start */
+    gain = st->samples * gain < 1.0 ? 1.0 / ++st->samples : gain;
+    st->mean_square += gain * (r * r - st->mean_square);
+    st->lag_product += gain * (r * st->previous - st->lag_product);
+    st->previous = r;
+}
+
+/* Lag-1 autocorrelation of the innovations: > 0 the member lags (too slow),
+ * < 0 it follows the noise (too fast), about 0 when its gains fit. */
+static inline double autocorrelation(const AdaptiveStatistics *st)
+{
+    return st->mean_square > 0.0 ? st->lag_product / st->mean_square : 0.0;
+}
+
+/* The selection after a step (see the header). */
+static int select_member(const AdaptiveBank *bank, int i, int selected)
+{
+    const AdaptiveMember *members = bank->member[i];
+    double smallest = members[0].stats.mean_square;
+    int candidate = bank->count - 1;
+    for (int j = 0; j < bank->count; ++j)
+        if (members[j].stats.mean_square < smallest) smallest = members[j].stats.mean_square;
+    if (bank->sta[i].mean_square < ADAPTIVE_EXACT_RATIO * smallest) return ADAPTIVE_SUPER_TWISTING;
+    for (int j = 0; j < bank->count; ++j)
+        if (autocorrelation(&members[j].stats) < 0.0) {
+            candidate = j;
+            break;
+        }
+    if (selected == ADAPTIVE_SUPER_TWISTING || candidate == selected) return candidate;
+    const double now = fabs(autocorrelation(&members[selected].stats));
+    return fabs(autocorrelation(&members[candidate].stats)) < now - ADAPTIVE_HYSTERESIS ? candidate
+                                                                                         : selected;
+}
+
+void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[],
+                  const StoAcceleration a[], int count, StoTrace *trace)
+{
+    const double h = o->h, h2 = o->h_squared, g = o->filter_gain, gain = bank->gain;
+    for (int i = 0; i < o->n; ++i) o->z_eq[i] = bank->sta_v[i];
+    implicit_run(o, y, a, count, trace);
+    for (int i = 0; i < o->n; ++i) {
+        bank->sta_v[i] = o->z_eq[i];
+        AdaptiveMember *members = bank->member[i];
+        int selected = bank->selected[i];
+        const int follow = bank->follow;
+        double zf = bank->z_filtered[i];
+        for (int k = 0; k < count; ++k) {
+            if (bank->started[i]) {
+                track(&bank->sta[i], trace->innovation[i][k], gain);
+                for (int j = 0; j < bank->count; ++j)
+                    track(&members[j].stats,
+                          member_step(&members[j], &bank->gains[j], y[i], a[i], h, h2), gain);
+                if (bank->sta[i].samples >= ADAPTIVE_MIN_SAMPLES)
+                    selected = select_member(bank, i, selected);
+            } else if (trace->switching_rate[i][k] >= STO_CONVERGED_RATE) {
+                /* The members start once the super-twisting observer has
+                 * converged: its finite-time, bounded reaching phase beats a
+                 * linear transient. */
+                for (int j = 0; j < bank->count; ++j) start_member(&members[j], trace, i, k, a[i]);
+                memset(&bank->sta[i], 0, sizeof bank->sta[i]);
+                bank->started[i] = 1;
+            }
+            trace->z_identify[i][k] =
+                follow == ADAPTIVE_SUPER_TWISTING ? trace->z_eq[i][k] : members[follow].xi;
+            if (selected != ADAPTIVE_SUPER_TWISTING) {
+                const AdaptiveMember *m = &members[selected];
+                trace->velocity[i][k] = m->x2_now;
+                trace->velocity_sign[i][k] = sto_sign(m->x2_now);
+                trace->z_eq[i][k] = m->xi;
+            }
+            zf += g * (trace->z_eq[i][k] - zf);
+            trace->z_filtered[i][k] = zf;
+        }
+        bank->selected[i] = selected;
+        bank->z_filtered[i] = zf;
+    }
+}
+
+void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank)
+{
+    for (int i = 0; i < o->n; ++i) o->z_eq[i] = bank->sta_v[i];
+    implicit_outputs(o);
+    const double h = o->h;
+    for (int i = 0; i < o->n; ++i) {
+        const int selected = bank->selected[i];
+        double mean_square = bank->sta[i].mean_square, variance = STA_INNOVATION_VARIANCE;
+        bank->bandwidth[i] = 1.0 / h;
+        if (selected != ADAPTIVE_SUPER_TWISTING && o->primed) {
+            const AdaptiveMember *m = &bank->member[i][selected];
+            const double mid_next = m->mid + h * (m->a_mean + m->xi);
+            o->x1_hat[i] = m->z1 + h * mid_next;
+            o->x2_hat[i] = mid_next + 0.5 * h * (m->a_current + m->xi);
+            o->z_eq[i] = m->xi;
+            mean_square = m->stats.mean_square;
+            variance = bank->gains[selected].innovation_variance;
+            bank->bandwidth[i] = bank->gains[selected].omega;
+        }
+        o->z_filtered[i] = bank->z_filtered[i];
+        bank->noise_std[i] = sqrt(mean_square / variance);
+    }
+}
+
+void adaptive_follow_selected(AdaptiveBank *bank) { bank->follow = bank->selected[0]; }
+
+int adaptive_valid(const AdaptiveBank *bank, int n)
+{
+    if (bank->count < 0 || bank->count > ADAPTIVE_MAX_MEMBERS) return 0;
+    if (bank->follow < ADAPTIVE_SUPER_TWISTING || bank->follow >= bank->count) return 0;
+    for (int i = 0; i < n && i < STO_MAX_DOF; ++i)
+        if (bank->selected[i] < ADAPTIVE_SUPER_TWISTING || bank->selected[i] >= bank->count)
+            return 0;
+    return 1;
+}

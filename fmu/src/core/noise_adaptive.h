@@ -1,0 +1,124 @@
+/* The noise-adaptive scheme (scheme 3, the default): the implicit
+ * super-twisting observer of implicit_twisting.c runs beside a bank of
+ * linear observers of the same sampled model, and each DOF publishes the one
+ * that predicts its measurements best.
+ *
+ * Why: on exact samples the implicit super-twisting corrector is deadbeat
+ * (x1_hat lands on y, the injection is the exact second-difference residual),
+ * which no linear filter beats.  On real measurements (noise, encoder
+ * quantization, a plant integrated differently from the observer's
+ * leapfrog model) its innovation leaves the sliding set h^2 alpha1 at once
+ * and the injection saturates to +-alpha1, noise of variance alpha1^2.
+ * A linear correction with Kalman gains for the measured noise level is the
+ * minimum-variance answer there, and with the nominal model inside it beats
+ * model-free differentiators (a constant-acceleration Kalman filter, a
+ * Savitzky-Golay filter), which must track the whole acceleration.
+ *
+ * Each linear member uses the implicit scheme's leapfrog prediction with the
+ * injection xi held, x1^- = x1 + h m + h^2 (a_mean + xi), and corrects with
+ * the steady-state Kalman gain K of the model [x1, m, xi] (xi a random walk)
+ * for one ratio of process to measurement noise, r = y - x1^-:
+ *     m  <- m + h (a_mean + xi) + K2 r,   xi <- xi + K3 r,   x1 <- y - (1 - K1) r.
+ * The super-twisting corrector in sliding is the member K = (1, 1/h, 1/h^2).
+ * The ratios are set by a bandwidth omega (q = omega^6 h^2 per step against
+ * R = 1), from 2 rad/s up to 0.5/h, a factor ADAPTIVE_RATIO apart.
+ *
+ * Selection, from exponentially weighted innovation statistics (window
+ * ADAPTIVE_WINDOW): while the super-twisting observer predicts far better
+ * than every member (mean square below ADAPTIVE_EXACT_RATIO times theirs:
+ * exact data) it is published.  Otherwise the innovations' whiteness decides
+ * (Mehra's test for a Kalman filter's tuning): a member too slow for the
+ * data leaves positively correlated innovations, one too fast negatively
+ * correlated ones, and the lag-1 autocorrelation falls with the bandwidth.
+ * The slowest member whose autocorrelation is negative is the candidate; it
+ * takes over when its |autocorrelation| is ADAPTIVE_HYSTERESIS below the
+ * selected one's.  (The smallest mean square, the maximum-likelihood choice,
+ * picks the same member on long records but is flat near the optimum, while
+ * the velocity error is not; the autocorrelation is sharp there.)
+ * The measurement noise estimate is the selected member's mean square
+ * innovation over its steady-state innovation variance (per unit R).
+ *
+ * Identification with a linear member: xi is the perturbation through the
+ * member's closed-loop filter G, so the regressor must pass the same G
+ * (adaptive_shadow_step) for xi = Delta (G phi) to hold; the identifier
+ * follows one member, fixed when it starts. */
+#ifndef NOISE_ADAPTIVE_H
+#define NOISE_ADAPTIVE_H
+
+#include "super_twisting.h"
+
+#define ADAPTIVE_MAX_MEMBERS 16
+#define ADAPTIVE_RATIO 1.8         /* between the bandwidths of neighbouring members */
+#define ADAPTIVE_WINDOW 1.0        /* [s] of the mean square innovations */
+#define ADAPTIVE_MIN_SAMPLES 50     /* before the first selection */
+#define ADAPTIVE_HYSTERESIS 0.02   /* in lag-1 autocorrelation */
+#define ADAPTIVE_EXACT_RATIO 0.25  /* super-twisting mean square below this times the
+                                    * members' best: exact data, deadbeat wins */
+#define ADAPTIVE_SUPER_TWISTING (-1) /* member index of the super-twisting observer */
+
+/* Gains of one linear member. */
+typedef struct {
+    double omega;     /* bandwidth [rad/s] */
+    double k1, k2, k3;
+    double innovation_variance; /* steady-state innovation variance per unit R */
+} AdaptiveGains;
+
+/* Exponentially weighted statistics of an observer's innovations r. */
+typedef struct {
+    double mean_square, lag_product, previous; /* E r^2, E r_k r_(k-1), r_(k-1) */
+    double samples;                            /* counted up to 1 / gain */
+} AdaptiveStatistics;
+
+/* One member's state for one DOF. */
+typedef struct {
+    double z1, mid, xi, a_current, a_mean, x2_now;
+    AdaptiveStatistics stats;
+} AdaptiveMember;
+
+typedef struct {
+    int count;                         /* linear members */
+    double gain;                       /* h / ADAPTIVE_WINDOW */
+    AdaptiveGains gains[ADAPTIVE_MAX_MEMBERS];
+    AdaptiveMember member[STO_MAX_DOF][ADAPTIVE_MAX_MEMBERS];
+    AdaptiveStatistics sta[STO_MAX_DOF]; /* the super-twisting observer's */
+    double sta_v[STO_MAX_DOF];           /* its injection (o->z_eq publishes the selected one's) */
+    int started[STO_MAX_DOF];            /* the members run (the observer has converged) */
+    int selected[STO_MAX_DOF];           /* member index or ADAPTIVE_SUPER_TWISTING */
+    int follow;                          /* the member the identifier follows */
+    double z_filtered[STO_MAX_DOF];      /* selected injection through the tau filter */
+    double noise_std[STO_MAX_DOF];       /* estimated measurement noise [rad] */
+    double bandwidth[STO_MAX_DOF];       /* omega of the selected member (1/h: super-twisting) */
+} AdaptiveBank;
+
+/* Gains of the members for step h (steady-state Riccati, at initialization). */
+void adaptive_init(AdaptiveBank *bank, double h);
+
+/* The scheme's run: the super-twisting observer and the members over `count`
+ * steps with y held; the trace gets the selected member's values. */
+void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[],
+                  const StoAcceleration a[], int count, StoTrace *trace);
+
+/* x1_hat, x2_hat, z_eq, z_filtered, noise_std and bandwidth of the selected members. */
+void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank);
+
+/* Fixes the member the identifier follows to the one selected now on DOF 1
+ * (one member for all DOFs: the rows of the regression share one regressor). */
+void adaptive_follow_selected(AdaptiveBank *bank);
+
+/* One step of G for a regressor entry: state s[3] = position error, velocity
+ * error, estimate; returns the estimate (G phi).  s starts at 0. */
+static inline double adaptive_shadow_step(const AdaptiveGains *g, double h, double s[3],
+                                          double phi)
+{
+    s[1] += h * (phi - s[2]);
+    const double r = s[0] + h * s[1];
+    s[1] -= g->k2 * r;
+    s[2] += g->k3 * r;
+    s[0] = (1.0 - g->k1) * r;
+    return s[2];
+}
+
+/* Whether a deserialized bank's counts and indices fit its arrays. */
+int adaptive_valid(const AdaptiveBank *bank, int n);
+
+#endif
