@@ -110,7 +110,8 @@ def cmd_identify(args) -> int:
         return 2
     parameters = {"identifier": {"off": 0, "lsm": 1, "mff": 2}[args.identifier],
                   **_parse_params(args.param)}
-    columns = identify(recording, _fmu_dir(args) / "SuperTwistingObserver.fmu", parameters)
+    columns = identify(recording, _fmu_dir(args) / "SuperTwistingObserver.fmu", parameters,
+                       input_hold=args.input_hold)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     write_csv(columns, out / "estimates.csv")
@@ -182,6 +183,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--identifier", choices=["off", "lsm", "mff"], default="lsm")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                    help="observer FMU parameter, e.g. --param b=1.12 --param 'c_nominal[1]=2'")
+    p.add_argument("--input-hold", choices=["zoh", "sampled"], default="zoh",
+                   help="zoh: u[k] was applied over the interval after t_k (a controller's "
+                        "command, the default); sampled: u[k] samples a continuous signal")
     p.set_defaults(func=cmd_identify)
 
     from .sweep import register as register_sweep

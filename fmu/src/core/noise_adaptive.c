@@ -39,6 +39,7 @@ static AdaptiveGains steady_state_gains(double h, double omega)
         g.k2 = K[1];
         g.k3 = K[2];
         g.innovation_variance = S;
+        g.velocity_std = sqrt(P[1][1]);
         if (change < 1e-13 && iteration > 10) break;
     }
     return g;
@@ -88,47 +89,69 @@ static inline double member_step(AdaptiveMember *m, const AdaptiveGains *g, doub
     return r;
 }
 
-/* Updates the innovation statistics with the innovation r. */
-static inline void track(AdaptiveStatistics *st, double r, double gain)
+/* Updates an observer's statistics after step `age` (since the start) with
+ * its innovation r, the measurement y and its prediction of y_(k+H). */
+static inline void track(AdaptiveStatistics *st, double r, double y, double prediction,
+                         unsigned age, double gain)
 {
-    /* a growing window first: no bias toward the zero start */
-    gain = st->samples * gain < 1.0 ? 1.0 / ++st->samples : gain;
-    st->mean_square += gain * (r * r - st->mean_square);
-    st->lag_product += gain * (r * st->previous - st->lag_product);
-    st->previous = r;
+    /* growing windows first: no bias toward the zero start */
+    const double g1 = st->samples * gain < 1.0 ? 1.0 / ++st->samples : gain;
+    st->mean_square += g1 * (r * r - st->mean_square);
+    double *slot = &st->ahead[age % ADAPTIVE_HORIZON];
+    if (age >= ADAPTIVE_HORIZON) {
+        const double e = y - *slot, gh = st->ahead_samples * gain < 1.0
+                                             ? 1.0 / ++st->ahead_samples
+                                             : gain;
+        st->mean_square_ahead += gh * (e * e - st->mean_square_ahead);
+    }
+    *slot = prediction;
 }
 
-/* Lag-1 autocorrelation of the innovations: > 0 the member lags (too slow),
- * < 0 it follows the noise (too fast), about 0 when its gains fit. */
-static inline double autocorrelation(const AdaptiveStatistics *st)
+/* E[sign(v) | v_hat] for a velocity error of standard deviation sigma:
+ * the Coulomb regressor without the errors-in-variables attenuation that
+ * sign(v_hat) has wherever |v| is within the velocity error (regression
+ * calibration). */
+static inline double expected_sign(double v_hat, double sigma)
 {
-    return st->mean_square > 0.0 ? st->lag_product / st->mean_square : 0.0;
+    return sigma > 0.0 ? erf(v_hat / (1.4142135623730951 * sigma)) : sto_sign(v_hat);
 }
 
-/* The selection after a step (see the header). */
+/* The prediction of the measurement ADAPTIVE_HORIZON samples ahead. */
+static inline double predict_ahead(double x1, double x2, double acceleration, double horizon)
+{
+    return x1 + horizon * (x2 + 0.5 * horizon * acceleration);
+}
+
+/* The selection after a step: the smallest mean square error of the
+ * predictions ADAPTIVE_HORIZON samples ahead wins if it is clearly below
+ * the selected one's. */
 static int select_member(const AdaptiveBank *bank, int i, int selected)
 {
-    const AdaptiveMember *members = bank->member[i];
-    double smallest = members[0].stats.mean_square;
-    int candidate = bank->count - 1;
-    for (int j = 0; j < bank->count; ++j)
-        if (members[j].stats.mean_square < smallest) smallest = members[j].stats.mean_square;
+    /* exact data: the deadbeat super-twisting corrector predicts the next
+     * sample far better than any linear member and is kept */
+    double smallest = bank->member[i][0].stats.mean_square;
+    for (int j = 1; j < bank->count; ++j)
+        if (bank->member[i][j].stats.mean_square < smallest)
+            smallest = bank->member[i][j].stats.mean_square;
     if (bank->sta[i].mean_square < ADAPTIVE_EXACT_RATIO * smallest) return ADAPTIVE_SUPER_TWISTING;
+    double best = bank->sta[i].mean_square_ahead;
+    int best_index = ADAPTIVE_SUPER_TWISTING;
     for (int j = 0; j < bank->count; ++j)
-        if (autocorrelation(&members[j].stats) < 0.0) {
-            candidate = j;
-            break;
+        if (bank->member[i][j].stats.mean_square_ahead < best) {
+            best = bank->member[i][j].stats.mean_square_ahead;
+            best_index = j;
         }
-    if (selected == ADAPTIVE_SUPER_TWISTING || candidate == selected) return candidate;
-    const double now = fabs(autocorrelation(&members[selected].stats));
-    return fabs(autocorrelation(&members[candidate].stats)) < now - ADAPTIVE_HYSTERESIS ? candidate
-                                                                                         : selected;
+    const double current = selected == ADAPTIVE_SUPER_TWISTING
+                               ? bank->sta[i].mean_square_ahead
+                               : bank->member[i][selected].stats.mean_square_ahead;
+    return best < ADAPTIVE_HYSTERESIS * current ? best_index : selected;
 }
 
 void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[],
                   const StoAcceleration a[], int count, StoTrace *trace)
 {
     const double h = o->h, h2 = o->h_squared, g = o->filter_gain, gain = bank->gain;
+    const double horizon = ADAPTIVE_HORIZON * h;
     for (int i = 0; i < o->n; ++i) o->z_eq[i] = bank->sta_v[i];
     implicit_run(o, y, a, count, trace);
     for (int i = 0; i < o->n; ++i) {
@@ -139,11 +162,19 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
         double zf = bank->z_filtered[i];
         for (int k = 0; k < count; ++k) {
             if (bank->started[i]) {
-                track(&bank->sta[i], trace->innovation[i][k], gain);
-                for (int j = 0; j < bank->count; ++j)
-                    track(&members[j].stats,
-                          member_step(&members[j], &bank->gains[j], y[i], a[i], h, h2), gain);
-                if (bank->sta[i].samples >= ADAPTIVE_MIN_SAMPLES)
+                const unsigned age = bank->age[i]++;
+                const double x2 = trace->velocity[i][k], v = trace->z_eq[i][k];
+                const double a_sta = sto_acceleration(a[i], x2, trace->velocity_sign[i][k]);
+                track(&bank->sta[i], trace->innovation[i][k], y[i],
+                      predict_ahead(trace->position[i][k], x2, a_sta + v, horizon), age, gain);
+                for (int j = 0; j < bank->count; ++j) {
+                    AdaptiveMember *m = &members[j];
+                    const double r = member_step(m, &bank->gains[j], y[i], a[i], h, h2);
+                    track(&m->stats, r, y[i],
+                          predict_ahead(m->z1, m->x2_now, m->a_current + m->xi, horizon), age,
+                          gain);
+                }
+                if (age >= ADAPTIVE_HORIZON + ADAPTIVE_MIN_SAMPLES)
                     selected = select_member(bank, i, selected);
             } else if (trace->switching_rate[i][k] >= STO_CONVERGED_RATE) {
                 /* The members start once the super-twisting observer has
@@ -157,8 +188,11 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                 follow == ADAPTIVE_SUPER_TWISTING ? trace->z_eq[i][k] : members[follow].xi;
             if (selected != ADAPTIVE_SUPER_TWISTING) {
                 const AdaptiveMember *m = &members[selected];
+                const AdaptiveGains *gs = &bank->gains[selected];
                 trace->velocity[i][k] = m->x2_now;
-                trace->velocity_sign[i][k] = sto_sign(m->x2_now);
+                trace->velocity_sign[i][k] =
+                    expected_sign(m->x2_now, gs->velocity_std * sqrt(m->stats.mean_square /
+                                                                     gs->innovation_variance));
                 trace->z_eq[i][k] = m->xi;
             }
             zf += g * (trace->z_eq[i][k] - zf);
@@ -191,6 +225,14 @@ void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank)
         o->z_filtered[i] = bank->z_filtered[i];
         bank->noise_std[i] = sqrt(mean_square / variance);
     }
+}
+
+int adaptive_settled(const AdaptiveBank *bank, int n)
+{
+    for (int i = 0; i < n; ++i)
+        if (!bank->started[i] || bank->sta[i].ahead_samples * bank->gain < ADAPTIVE_SETTLED)
+            return 0;
+    return 1;
 }
 
 void adaptive_follow_selected(AdaptiveBank *bank) { bank->follow = bank->selected[0]; }

@@ -402,7 +402,9 @@ static void take_velocity(ObserverData *d, const StoTrace *trace, int k)
 static int start_identifier(ObserverData *d, double t)
 {
     d->identifier_active = t >= d->t_id &&
-                           (d->identifier_start == START_AT_T_ID || sto_converged(&d->obs));
+                           (d->identifier_start == START_AT_T_ID ||
+                            (sto_converged(&d->obs) &&
+                             (d->scheme != STO_SCHEME_ADAPTIVE || adaptive_settled(&d->bank, d->n))));
     if (d->identifier_active) {
         /* Both filters start from zero together: z = Delta phi then holds for
          * the filtered pair exactly, with no trace of the observer's transient. */
