@@ -14,7 +14,8 @@ from .master import CoSimulation, Link, initialize, run
 REQUIRED = ("t", "y", "u")
 OUTPUTS = ["x1_hat[1]", "x2_hat[1]", "z_eq[1]", "z_eq_filtered[1]"] + \
           [f"theta_hat[1,{k}]" for k in range(1, 6)] + \
-          ["b_hat", "gamma_trace", "noise_std[1]", "observer_bandwidth[1]"]
+          [f"theta_std[1,{k}]" for k in range(1, 6)] + \
+          ["b_hat", "b_std", "gamma_trace", "noise_std[1]", "observer_bandwidth[1]"]
 
 
 class DataError(ValueError):

@@ -19,8 +19,12 @@ void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, 
     id->rho = rho;
     id->lambda = kind == IDENTIFIER_MFF ? pow(R, h) : 1.0;
     id->one_minus_lambda_rho = (1.0 - id->lambda) * rho;
+    id->batch_gain = -expm1(-h / INFO_BATCH_WINDOW);
+    id->power_gain = -expm1(-h / INFO_POWER_WINDOW);
     id->forgetting_rate = kind == IDENTIFIER_MFF ? -log(R) : 0.0;
-    const double interval = id->forgetting_rate > 0.0 ? 0.01 / (h * id->forgetting_rate) : 1.0;
+    /* LSM re-solves its anchor (used for the residuals) every 32 samples */
+    const double interval = id->forgetting_rate > 0.0 ? 0.01 / (h * id->forgetting_rate)
+                                                      : INFO_ANCHOR_MAX_INTERVAL;
     id->anchor_interval = interval >= INFO_ANCHOR_MAX_INTERVAL ? INFO_ANCHOR_MAX_INTERVAL
                           : interval >= 1.0                    ? (int)interval
                                                                : 1;
@@ -34,6 +38,10 @@ void info_reset(InformationIdentifier *id)
     memset(id->delta, 0, sizeof id->delta);
     memset(id->anchor, 0, sizeof id->anchor);
     id->anchor_age = 0;
+    memset(id->score_mean, 0, sizeof id->score_mean);
+    memset(id->score_power, 0, sizeof id->score_power);
+    memset(id->std_error, 0, sizeof id->std_error);
+    id->residual_samples = 0.0;
     const int n = dimension(id);
     for (int k = 0; k < n; ++k) {
         id->P[k][k] = id->rho;
@@ -120,17 +128,51 @@ void info_step(InformationIdentifier *id, const double z[], const double phi[])
     info_run(id, &sample, 1);
 }
 
+/* The score w = phi r of a sample (r = z - anchor phi, the residual)
+ * through the batch-mean filter (window INFO_BATCH_WINDOW), and the mean
+ * outer product of that mean (growing window first, then INFO_POWER_WINDOW):
+ * for scores correlated over less than the batch window,
+ * E[mean mean^T] = S_w / (2 T_b), S_w the scores' spectral density at zero
+ * frequency, whose integral over the data is the covariance of
+ * int phi r dt = P (Delta_hat - Delta). */
+KERNEL track_residual(InformationIdentifier *id, const double z[], const double phi[],
+                      const int m, const int rows)
+{
+    const double gb = id->batch_gain;
+    /* the first INFO_SCORE_DELAY seconds hold the estimate's own transient */
+    const int counting = id->active_time >= INFO_SCORE_DELAY;
+    const double gp = !counting ? 0.0
+                      : id->residual_samples * id->power_gain < 1.0 ? 1.0 / ++id->residual_samples
+                                                                    : id->power_gain;
+    for (int i = 0; i < rows; ++i) {
+        double r = z[i];
+        UNROLL for (int k = 0; k < m; ++k) r -= id->anchor[i][k] * phi[k];
+        double *mean = id->score_mean[i];
+        UNROLL for (int k = 0; k < m; ++k) mean[k] += gb * (phi[k] * r - mean[k]);
+        UNROLL for (int j = 0; j < m; ++j)
+            UNROLL for (int k = j; k < m; ++k)
+                id->score_power[i][j][k] += gp * (mean[j] * mean[k] - id->score_power[i][j][k]);
+    }
+}
+
 KERNEL lsm_run(InformationIdentifier *id, const IdSample samples[], int count, const int rows,
                const int m)
 {
-    for (int k = 0; k < count; ++k) lsm_accumulate(id, samples[k].z, samples[k].phi, m, rows);
+    for (int k = 0; k < count; ++k) {
+        id->active_time += id->h;
+        lsm_accumulate(id, samples[k].z, samples[k].phi, m, rows);
+        track_residual(id, samples[k].z, samples[k].phi, m, rows);
+        if (++id->anchor_age >= id->anchor_interval) refresh_anchor(id);
+    }
 }
 
 KERNEL mff_run(InformationIdentifier *id, const IdSample samples[], int count, const int rows,
                const int m)
 {
     for (int k = 0; k < count; ++k) {
+        id->active_time += id->h;
         mff_accumulate(id, samples[k].z, samples[k].phi, m, rows);
+        track_residual(id, samples[k].z, samples[k].phi, m, rows);
         if (++id->anchor_age >= id->anchor_interval) refresh_anchor(id);
     }
 }
@@ -139,7 +181,6 @@ void info_run(InformationIdentifier *id, const IdSample samples[], int count)
 {
     if (id->lambda == 1.0) WITH_CONSTANT_SIZES(id->rows, id->m, lsm_run, id, samples, count);
     else WITH_CONSTANT_SIZES(id->rows, id->m, mff_run, id, samples, count);
-    for (int k = 0; k < count; ++k) id->active_time += id->h; /* as count single steps */
 }
 
 /* Cholesky P = L L^T from the upper triangle; returns -1 if not positive definite. */
@@ -205,7 +246,7 @@ int info_solve(InformationIdentifier *id)
      * drift model that is the whole trace, ||L^-1||_F^2, by forward
      * substitution of the columns of L^-1; with it, the first m diagonal
      * entries of P^-1, one solve each. */
-    double trace = 0.0;
+    double trace = 0.0, gamma[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
     if (n == m) {
         for (int j = 0; j < m; ++j) {
             double col[ID_MAX_REGRESSORS];
@@ -216,15 +257,31 @@ int info_solve(InformationIdentifier *id)
                 trace += col[i] * col[i];
             }
         }
-    } else {
-        for (int j = 0; j < m; ++j) {
-            double e[ID_MAX_REGRESSORS] = {0};
-            e[j] = 1.0;
-            cholesky_solve(n, L, e); /* column j of P^-1 */
-            trace += e[j];
-        }
+    }
+    for (int j = 0; j < m; ++j) {
+        double e[ID_MAX_REGRESSORS] = {0};
+        e[j] = 1.0;
+        cholesky_solve(n, L, e); /* column j of P^-1 */
+        memcpy(gamma[j], e, sizeof e);
+        if (n != m) trace += e[j];
     }
     id->gamma_trace = trace;
+    /* Standard errors (sandwich): cov(Delta_i) = Gamma (T 2 T_b E[mean mean^T]) Gamma
+     * (track_residual), T the data's length: the active time for LSM, the
+     * memory of the squared weights 1/(2 |ln R|) for MFF. */
+    const double memory = id->lambda < 1.0 ? 0.5 / id->forgetting_rate : id->active_time;
+    const double scale = memory < id->active_time ? memory : id->active_time;
+    for (int i = 0; i < id->rows; ++i) {
+        for (int k = 0; k < m; ++k) {
+            double variance = 0.0;
+            for (int a = 0; a < m; ++a)
+                for (int b = 0; b < m; ++b) {
+                    const double s = a <= b ? id->score_power[i][a][b] : id->score_power[i][b][a];
+                    variance += gamma[k][a] * s * gamma[k][b];
+                }
+            id->std_error[i][k] = sqrt(fmax(0.0, 2.0 * INFO_BATCH_WINDOW * scale * variance));
+        }
+    }
     /* One inverse-iteration step toward the eigenvector of the smallest
      * eigenvalue of the current parameters' information P11 (the leading
      * block of L is its Cholesky factor); the Rayleigh quotient estimates it. */

@@ -16,6 +16,7 @@
  * - Delta_hat = Theta P^-1 is solved by Cholesky only when asked (at
  *   communication points), so the internal step costs O(m^2) multiply-adds.
  * - A reset restarts from the nominal parameters (Delta_hat = 0, P = rho I).
+ * - Standard errors by the sandwich formula from the scores' low-frequency power.
  * - Drift model (MFF, optional): forgetting makes the estimate lag a moving
  *   parameter by about the memory 1/|ln R| (0.43 s at R = 0.1).  With
  *   drift on, each parameter is modelled locally as Delta(s) = Delta0 +
@@ -32,6 +33,9 @@
 #include "identifier.h"
 
 #define INFO_ANCHOR_MAX_INTERVAL 32
+#define INFO_BATCH_WINDOW 3.0   /* [s] batch-mean filter of the residuals */
+#define INFO_POWER_WINDOW 30.0  /* [s] mean square of that mean (growing window first) */
+#define INFO_SCORE_DELAY 2.0    /* [s] of identification before the scores count */
 
 typedef struct {
     int rows, m;          /* m: the identified regressors; the sums have 2m with drift */
@@ -51,6 +55,13 @@ typedef struct {
     double anchor[ID_MAX_ROWS][ID_MAX_REGRESSORS];
     int anchor_interval, anchor_age;
     double gamma_trace;   /* trace(P^-1), from the last solve */
+    /* Standard errors of Delta_hat (sandwich form, correlated residuals
+     * included): the scores phi (z - anchor phi) through a batch-mean filter
+     * give their low-frequency spectral density (track_residual). */
+    double batch_gain, power_gain, residual_samples;
+    double score_mean[ID_MAX_ROWS][ID_MAX_REGRESSORS];
+    double score_power[ID_MAX_ROWS][ID_MAX_REGRESSORS][ID_MAX_REGRESSORS]; /* upper triangle */
+    double std_error[ID_MAX_ROWS][ID_MAX_REGRESSORS]; /* from the last solve */
     double excitation;    /* smallest eigenvalue of the information per unit time */
     double eigvec[ID_MAX_REGRESSORS]; /* inverse-iteration vector for that eigenvalue */
 } InformationIdentifier;

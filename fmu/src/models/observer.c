@@ -45,7 +45,8 @@ typedef struct {
     int identifier_reset;
     /* outputs not read straight from the algorithm state */
     double theta_hat[MAX_N][MAX_L];
-    double gamma_trace, excitation, b_hat;
+    double gamma_trace, excitation, b_hat, b_std;
+    double theta_std[MAX_N][MAX_L];
     int identifier_active, converged;
     /* derived at initialization */
     int m;                  /* number of identified regressors */
@@ -216,6 +217,12 @@ static const ModelVariable VARIABLES[] = {
      OUTPUT(.offset = OFF(b_hat),
      .description = "Built-in joint: estimate of the input gain b [1/(kg.m2)] (b while not "
                     "identified)")},
+    {.name = "theta_std", .vr = 380, .rows = MAX_N, .cols = MAX_L, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(theta_std),
+     .description = "Standard error of theta_hat (identifier_form 2; 0 where not identified): "
+                    "from the information matrix and the residuals' low-frequency power")},
+    {.name = "b_std", .vr = 412, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(b_std), .description = "Standard error of b_hat (identifier_form 2)")},
     {.name = "noise_std", .vr = 370, .rows = MAX_N, .type = TYPE_REAL,
      OUTPUT(.offset = OFF(bank.noise_std), .unit = "rad",
      .description = "Scheme 3: estimated standard deviation of the measurement noise "
@@ -240,19 +247,31 @@ static void publish_estimates(ObserverData *d)
     if (d->identifier != IDENTIFIER_OFF && d->identifier_form == FORM_INFORMATION)
         info_solve(&d->info); /* keeps the previous estimate if it cannot solve */
     const double (*delta)[MAX_L] = identified_delta(d);
+    const int with_std = d->identifier != IDENTIFIER_OFF && d->identifier_form == FORM_INFORMATION;
+    memset(d->theta_std, 0, sizeof d->theta_std);
+    d->b_std = 0.0;
     if (d->nominal_model == NOMINAL_JOINT) {
         for (int k = 0; k < JOINT_BASIS_SIZE; ++k) d->theta_hat[0][k] = d->c_nominal[k];
         d->b_hat = d->b;
         for (int j = 0; j < d->m; ++j) {
             const int k = d->selected[j];
+            const double std = with_std ? d->info.std_error[0][j] : 0.0;
             /* u enters as + (b - bbar) u: Delta = b - bbar there */
-            if (k == JOINT_INPUT) d->b_hat = d->b + delta[0][j];
-            else d->theta_hat[0][k] = d->c_nominal[k] - delta[0][j];
+            if (k == JOINT_INPUT) {
+                d->b_hat = d->b + delta[0][j];
+                d->b_std = std;
+            } else {
+                d->theta_hat[0][k] = d->c_nominal[k] - delta[0][j];
+                d->theta_std[0][k] = std;
+            }
         }
     } else {
         for (int i = 0; i < d->n; ++i) {
             for (int k = 0; k < d->l; ++k) d->theta_hat[i][k] = d->theta_nominal[i][k];
-            for (int j = 0; j < d->m; ++j) d->theta_hat[i][d->selected[j]] += delta[i][j];
+            for (int j = 0; j < d->m; ++j) {
+                d->theta_hat[i][d->selected[j]] += delta[i][j];
+                if (with_std) d->theta_std[i][d->selected[j]] = d->info.std_error[i][j];
+            }
         }
     }
     if (d->identifier_form == FORM_PAPER) {
