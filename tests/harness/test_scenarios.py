@@ -29,8 +29,10 @@ PAPER_BOUNDS = {
 }
 
 IMPROVED_BOUNDS = {
-    "6.1-sine": {"rms_perturbation": (0.0, 0.002),       # 4.8e-4 (goal 0.005)
-                 "delay": (0.0, 0.002),                  # 0.6 ms (goal 5 ms)
+    # The FMU's defaults, tau = 2 ms included (with tau = 0.5 ms: 4.8e-4 and 0.6 ms,
+    # test_a_shorter_filter_follows_the_perturbation_closer)
+    "6.1-sine": {"rms_perturbation": (0.0, 0.002),       # 1.5e-3 (goal 0.005)
+                 "delay": (0.0, 0.003),                  # 2.2 ms (goal 5 ms)
                  "max_e2_after_1s": (0.0, 1e-5)},        # 1.2e-7
     "6.1-square": {"rms_perturbation": (0.0, 0.002),     # 1.9e-4
                    "max_e2_after_1s": (0.0, 3e-4)},      # 1.2e-4
@@ -63,3 +65,12 @@ def test_improved_method_reaches_its_goals(fmu_dir, name):
     metrics = score(s, run_scenario(s, fmu_dir, observer_overrides=improved_overrides(s)))
     for metric, (low, high) in IMPROVED_BOUNDS[name].items():
         assert low <= metrics[metric] <= high, f"{name} {metric} = {metrics[metric]:.4g}"
+
+
+def test_a_shorter_filter_follows_the_perturbation_closer(fmu_dir):
+    """Noise-free, the implicit injection does not chatter: tau = 0.5 ms is enough."""
+    s = SCENARIOS["6.1-sine"]
+    metrics = score(s, run_scenario(s, fmu_dir,
+                                    observer_overrides={**improved_overrides(s), "tau": 5e-4}))
+    assert metrics["rms_perturbation"] < 0.001  # 4.8e-4
+    assert metrics["delay"] <= 0.001            # 0.6 ms

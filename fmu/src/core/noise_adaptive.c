@@ -51,7 +51,10 @@ void adaptive_init(AdaptiveBank *bank, double h)
     bank->gain = h < ADAPTIVE_WINDOW ? h / ADAPTIVE_WINDOW : 1.0;
     for (double omega = 2.0; omega * h <= 0.5 && bank->count < ADAPTIVE_MAX_MEMBERS;
          omega *= ADAPTIVE_RATIO)
-        bank->gains[bank->count++] = steady_state_gains(h, omega);
+    {
+        bank->gains[bank->count] = steady_state_gains(h, omega);
+        bank->gains[bank->count++].publish_gain = -expm1(-2.0 * h * omega / ADAPTIVE_AVERAGING);
+    }
     for (int i = 0; i < STO_MAX_DOF; ++i) bank->selected[i] = ADAPTIVE_SUPER_TWISTING;
     bank->follow = ADAPTIVE_SUPER_TWISTING;
 }
@@ -159,7 +162,7 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
         AdaptiveMember *members = bank->member[i];
         int selected = bank->selected[i];
         const int follow = bank->follow;
-        double zf = bank->z_filtered[i];
+        double zf = bank->z_filtered[i], zp = bank->z_prefiltered[i];
         for (int k = 0; k < count; ++k) {
             if (bank->started[i]) {
                 const unsigned age = bank->age[i]++;
@@ -195,11 +198,22 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                                                                      gs->innovation_variance));
                 trace->z_eq[i][k] = m->xi;
             }
-            zf += g * (trace->z_eq[i][k] - zf);
+            /* A linear member's xi is averaged over ADAPTIVE_AVERAGING of its
+             * time constants 1/omega (two first-order stages of half that:
+             * less noise for the same delay) before it is published. */
+            if (selected == ADAPTIVE_SUPER_TWISTING) {
+                zf += g * (trace->z_eq[i][k] - zf);
+                zp = zf;
+            } else {
+                const double gz = fmin(g, bank->gains[selected].publish_gain);
+                zp += gz * (trace->z_eq[i][k] - zp);
+                zf += gz * (zp - zf);
+            }
             trace->z_filtered[i][k] = zf;
         }
         bank->selected[i] = selected;
         bank->z_filtered[i] = zf;
+        bank->z_prefiltered[i] = zp;
     }
 }
 

@@ -64,6 +64,7 @@
 #define ADAPTIVE_HYSTERESIS 0.9     /* a smaller mean square by this factor takes over */
 #define ADAPTIVE_EXACT_RATIO 0.25   /* super-twisting one-step mean square below this times
                                      * the members' best: exact data, it stays published */
+#define ADAPTIVE_AVERAGING 10.0     /* z_eq_filtered: a member's xi averaged over this / omega */
 #define ADAPTIVE_SETTLED 0.25       /* windows of predictions before the identifier follows */
 #define ADAPTIVE_SUPER_TWISTING (-1) /* member index of the super-twisting observer */
 
@@ -73,6 +74,7 @@ typedef struct {
     double k1, k2, k3;
     double innovation_variance; /* steady-state innovation variance per unit R */
     double velocity_std;        /* steady-state velocity error per unit noise std */
+    double publish_gain;        /* of the filter that averages xi for z_eq_filtered */
 } AdaptiveGains;
 
 /* Exponentially weighted statistics of an observer's predictions. */
@@ -101,6 +103,7 @@ typedef struct {
     int selected[STO_MAX_DOF];           /* member index or ADAPTIVE_SUPER_TWISTING */
     int follow;                          /* the member the identifier follows */
     double z_filtered[STO_MAX_DOF];      /* selected injection through the tau filter */
+    double z_prefiltered[STO_MAX_DOF];   /* a member's xi after the first averaging stage */
     double noise_std[STO_MAX_DOF];       /* estimated measurement noise [rad] */
     double bandwidth[STO_MAX_DOF];       /* omega of the selected member (1/h: super-twisting) */
 } AdaptiveBank;
