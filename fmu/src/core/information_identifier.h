@@ -33,7 +33,7 @@
 #include "identifier.h"
 
 #define INFO_ANCHOR_MAX_INTERVAL 32
-#define INFO_BATCH_WINDOW 3.0   /* [s] batch-mean filter of the residuals */
+#define INFO_BATCH_WINDOW 1.0   /* [s] batch-mean filter of the residuals */
 #define INFO_POWER_WINDOW 30.0  /* [s] mean square of that mean (growing window first) */
 #define INFO_SCORE_DELAY 2.0    /* [s] of identification before the scores count */
 
