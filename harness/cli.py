@@ -100,7 +100,7 @@ def _parse_params(items: list[str]) -> dict[str, float | bool]:
 
 
 def cmd_identify(args) -> int:
-    from .identify import DataError, identify, read_recording, write_csv
+    from .identify import DataError, final_estimates, identify, read_recording, write_csv
     from .plots import plot_identification
 
     try:
@@ -116,12 +116,14 @@ def cmd_identify(args) -> int:
     out.mkdir(parents=True, exist_ok=True)
     write_csv(columns, out / "estimates.csv")
     plot = plot_identification(columns["t"], columns, out)
-    final = {k: float(v[-1]) for k, v in columns.items() if k.startswith("theta_hat")}
-    (out / "estimates.json").write_text(json.dumps({"final": final, "parameters": parameters},
+    summary = final_estimates(columns)
+    (out / "estimates.json").write_text(json.dumps({**summary, "parameters": parameters,
+                                                    "input_hold": args.input_hold},
                                                    indent=2) + "\n")
-    print(f"wrote {out / 'estimates.csv'}, {plot}")
-    for name, value in final.items():
-        print(f"  {name} = {value:.6g}")
+    print(f"wrote {out / 'estimates.csv'}, {out / 'estimates.json'}, {plot}")
+    for name, value in summary["final"].items():
+        print(f"  {name} = {value:.6g} +- {summary['standard_error'][name]:.2g} (1 sigma)")
+    print(f"  measurement noise (estimated) = {summary['noise_std']:.3g} rad")
     return 0
 
 

@@ -135,6 +135,16 @@ def identify(recording: Recording, observer_fmu: Path, parameters: dict[str, Val
     return out
 
 
+def final_estimates(columns: dict[str, np.ndarray]) -> dict[str, object]:
+    """The estimates at the end of the record with their standard errors (1 sigma) and
+    the estimated measurement noise: what ``identify`` writes to estimates.json."""
+    names = [f"theta_hat[1,{k}]" for k in range(1, 6)] + ["b_hat"]
+    errors = [f"theta_std[1,{k}]" for k in range(1, 6)] + ["b_std"]
+    return {"final": {n: float(columns[n][-1]) for n in names},
+            "standard_error": {n: float(columns[e][-1]) for n, e in zip(names, errors)},
+            "noise_std": float(columns["noise_std"][-1])}
+
+
 def write_csv(columns: dict[str, np.ndarray], path: Path) -> None:
     names = list(columns)
     np.savetxt(path, np.column_stack([columns[n] for n in names]), delimiter=",",

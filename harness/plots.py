@@ -107,9 +107,19 @@ def plot_identification(t: np.ndarray, columns: dict[str, np.ndarray], out: Path
     for k in range(1, 6):
         key = f"theta_hat[1,{k}]"
         if key in columns:
-            axes[2].plot(t, columns[key], lw=0.8, label=f"c_{k}")
-    axes[2].set_ylabel("coefficients")
-    axes[2].legend(fontsize=8, ncol=5)
+            line, = axes[2].plot(t, columns[key], lw=0.8, label=f"c_{k}")
+            std = columns.get(f"theta_std[1,{k}]")
+            if std is not None and np.any(std > 0):  # +-2 sigma band
+                axes[2].fill_between(t, columns[key] - 2 * std, columns[key] + 2 * std,
+                                     color=line.get_color(), alpha=0.2, lw=0)
+    if "b_hat" in columns:
+        line, = axes[2].plot(t, columns["b_hat"], lw=0.8, label="b")
+        if np.any(columns["b_std"] > 0):
+            axes[2].fill_between(t, columns["b_hat"] - 2 * columns["b_std"],
+                                 columns["b_hat"] + 2 * columns["b_std"],
+                                 color=line.get_color(), alpha=0.2, lw=0)
+    axes[2].set_ylabel("coefficients (+-2 sigma)")
+    axes[2].legend(fontsize=8, ncol=6)
     axes[2].set_xlabel("t [s]")
     axes[0].set_title("Offline identification of recorded data")
     return _save(fig, out / "identification.png")

@@ -78,3 +78,25 @@ def test_identify_recovers_the_coefficients_from_1khz_data(tmp_path, observer_fm
     # measured: 2e-4, 4.8e-3, 3.0e-3
     for k, tolerance in zip((1, 2, 3), (1e-3, 0.02, 0.02)):
         assert columns[f"theta_hat[1,{k}]"][-1] == pytest.approx(c[k - 1], rel=tolerance)
+
+
+def test_cli_writes_estimates_with_standard_errors_and_the_noise_level(tmp_path, capsys,
+                                                                       observer_fmu):
+    import json
+
+    t, y, u, c = _pendulum_recording(seconds=8.0)
+    y = y + np.random.default_rng(3).normal(0.0, 1e-4, y.size)
+    data = tmp_path / "rec.csv"
+    np.savetxt(data, np.column_stack([t, y, u]), delimiter=",", header="t,y,u", comments="")
+    code = main(["--fmu-dir", str(observer_fmu.parent), "identify", str(data), "--out",
+                 str(tmp_path / "out"), "--param", "b=1.01", "--param", "c_nominal[1]=2",
+                 "--param", "c_nominal[2]=0.1", "--param", "c_nominal[3]=0.1"])
+    assert code == 0
+    summary = json.loads((tmp_path / "out" / "estimates.json").read_text())
+    assert summary["noise_std"] == pytest.approx(1e-4, rel=0.15)
+    assert summary["final"]["b_hat"] == pytest.approx(1 / 0.891, rel=0.01)
+    for name in ("theta_hat[1,1]", "theta_hat[1,2]", "theta_hat[1,3]", "b_hat"):
+        assert 0.0 < summary["standard_error"][name] < 0.05
+    assert summary["standard_error"]["theta_hat[1,4]"] == 0.0  # not identified
+    assert "+-" in capsys.readouterr().out
+    assert (tmp_path / "out" / "identification.png").stat().st_size > 10000
