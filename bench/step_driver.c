@@ -9,8 +9,9 @@
  *                                               MFF with mff_drift = false: it needs 2 m <= 8)
  * SCHEME: 1  the paper: scheme 1, identifier_form 1, filter_regressor false,
  *            identifier_start 0 (at t_id = 0)
- *         2  the FMU's defaults: scheme 2, identifier_form 2, filter_regressor true,
- *            identifier_start 1 (once converged)
+ *         2  scheme 2, identifier_form 2, filter_regressor true, identifier_start 1
+ *            (once converged), identify_b false (the defaults before scheme 3)
+ *         3  the FMU's defaults: scheme 3 (noise-adaptive), identify_b true
  * STEPS:  internal steps per fmi2DoStep (default 10000): H = STEPS * h.
  * CALLS:  number of fmi2DoStep calls (default 1); CALLS = 10000 with STEPS = 1
  *         is the closed-loop harness's case H = h (a communication point per step).
@@ -32,7 +33,7 @@
 enum {
     VR_H = 1, VR_N = 2, VR_NOMINAL_MODEL = 3, VR_SCHEME = 4, VR_IDENTIFIER = 5, VR_L = 6,
     VR_THETA_NOMINAL = 40, VR_T_ID = 80, VR_IDENTIFY = 83, VR_IDENTIFIER_FORM = 110,
-    VR_IDENTIFIER_START = 111, VR_FILTER_REGRESSOR = 112, VR_MFF_DRIFT = 114,
+    VR_IDENTIFIER_START = 111, VR_FILTER_REGRESSOR = 112, VR_MFF_DRIFT = 114, VR_IDENTIFY_B = 115,
     VR_Y = 200, VR_U = 204, VR_F = 208, VR_PHI = 212,
     VR_X2_HAT = 304, VR_IDENTIFIER_ACTIVE = 361, VR_CONVERGED = 362
 };
@@ -87,7 +88,7 @@ int main(int argc, char **argv)
     const long calls = argc > 4 ? atol(argv[4]) : 1;
     const int external = strncmp(config, "ext-", 4) == 0;
     const char *kind = config + (external ? 4 : 6);
-    if ((!external && strncmp(config, "joint-", 6) != 0) || (scheme != 1 && scheme != 2) ||
+    if ((!external && strncmp(config, "joint-", 6) != 0) || (scheme < 1 || scheme > 3) ||
         steps < 1 || calls < 1)
         usage();
     const int identifier = strcmp(kind, "off") == 0 ? 0 : strcmp(kind, "lsm") == 0 ? 1
@@ -113,6 +114,7 @@ int main(int argc, char **argv)
         set_bool(VR_FILTER_REGRESSOR, 0);
         set_int(VR_IDENTIFIER_START, 0);
     }
+    if (scheme <= 2) set_bool(VR_IDENTIFY_B, 0); /* the joint's m = 3 of the earlier counts */
     int n = 1;
     if (external) {
         n = 4;
@@ -120,7 +122,7 @@ int main(int argc, char **argv)
         set_int(VR_N, n);
         set_int(VR_L, 8);
         for (int k = 0; k < 8; ++k) set_bool(VR_IDENTIFY + k, 1);
-        if (identifier == 2 && scheme == 2) set_bool(VR_MFF_DRIFT, 0); /* needs 2 m <= 8 */
+        if (identifier == 2 && scheme >= 2) set_bool(VR_MFF_DRIFT, 0); /* needs 2 m <= 8 */
         for (int i = 0; i < n; ++i)
             for (int k = 0; k < 8; ++k)
                 set_real(VR_THETA_NOMINAL + 8 * i + k, 0.01 * (i + 1) * (k + 1));

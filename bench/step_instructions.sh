@@ -48,6 +48,10 @@ CONFIGS=(
     "ext-lsm|2|n=4 external, LSM, l=m=8"
     "ext-mff|1|n=4 external, MFF, l=m=8"
     "ext-mff|2|n=4 external, MFF, l=m=8"
+    "joint-off|3|n=1 joint, identifier off"
+    "joint-lsm|3|n=1 joint, LSM, m=3 + b"
+    "joint-mff|3|n=1 joint, MFF, m=3 + b (drift)"
+    "ext-lsm|3|n=4 external, LSM, l=m=8"
 )
 
 # Instructions collected inside fmi2DoStep for one run of the driver.
@@ -74,7 +78,7 @@ for entry in "${CONFIGS[@]}"; do
     read -r total_h _ <<< "$(count "$config" "$scheme" 1 "$STEPS" "$file-H=h")"
     per_step=$(awk -v t="$total" -v s="$STEPS" 'BEGIN {printf "%.1f", t / s}')
     per_step_h=$(awk -v t="$total_h" -v s="$STEPS" 'BEGIN {printf "%.1f", t / s}')
-    if [ "$scheme" = 1 ]; then label="1 paper"; else label="2 default"; fi
+    case "$scheme" in 1) label="1 paper" ;; 2) label="2 implicit" ;; *) label="3 default" ;; esac
     printf '%-30s %-8s %13s %10s %12s  %s\n' "$description" "$label" "$total" "$per_step" \
         "$per_step_h" "$state"
 done
@@ -83,4 +87,5 @@ echo "Ir = instructions executed inside fmi2DoStep (callgrind).  'H=${STEPS}h': 
 echo "$STEPS internal steps (+ one communication point), divided by $STEPS.  'H=h': $STEPS doSteps"
 echo "of one internal step each, as in the closed-loop harness, divided by $STEPS: internal step"
 echo "+ communication point (outputs, identifier solve, checks) + the doStep entry checks."
-echo "Goal (issue 6): n=1 joint LSM <= 200 instructions per internal step."
+echo "Goal (issue 6): n=1 joint LSM <= 200 instructions per internal step (schemes 1 and 2;"
+echo "scheme 3 runs a bank of linear observers beside scheme 2, issue 10)."

@@ -20,7 +20,7 @@ void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, 
     id->lambda = kind == IDENTIFIER_MFF ? pow(R, h) : 1.0;
     id->one_minus_lambda_rho = (1.0 - id->lambda) * rho;
     id->batch_gain = -expm1(-h / INFO_BATCH_WINDOW);
-    id->power_gain = -expm1(-h / INFO_POWER_WINDOW);
+    id->power_gain = -expm1(-h * INFO_STD_INTERVAL / INFO_POWER_WINDOW);
     id->forgetting_rate = kind == IDENTIFIER_MFF ? -log(R) : 0.0;
     /* LSM re-solves its anchor (used for the residuals) every 32 samples */
     const double interval = id->forgetting_rate > 0.0 ? 0.01 / (h * id->forgetting_rate)
@@ -41,6 +41,7 @@ void info_reset(InformationIdentifier *id)
     memset(id->score_mean, 0, sizeof id->score_mean);
     memset(id->score_power, 0, sizeof id->score_power);
     memset(id->std_error, 0, sizeof id->std_error);
+    id->std_age = 0;
     id->residual_samples = 0.0;
     const int n = dimension(id);
     for (int k = 0; k < n; ++k) {
@@ -129,30 +130,26 @@ void info_step(InformationIdentifier *id, const double z[], const double phi[])
 }
 
 /* The score w = phi r of a sample (r = z - anchor phi, the residual)
- * through the batch-mean filter (window INFO_BATCH_WINDOW), and the mean
- * outer product of that mean (growing window first, then INFO_POWER_WINDOW):
- * for scores correlated over less than the batch window,
- * E[mean mean^T] = S_w / (2 T_b), S_w the scores' spectral density at zero
- * frequency, whose integral over the data is the covariance of
- * int phi r dt = P (Delta_hat - Delta). */
+ * through the batch-mean filter (window INFO_BATCH_WINDOW).  Every
+ * INFO_STD_INTERVAL samples the mean's outer product enters its running mean
+ * (growing window first, then INFO_POWER_WINDOW) and the standard errors are
+ * solved (update_standard_errors): for scores correlated over less than the
+ * batch window, E[mean mean^T] = S_w / (2 T_b), S_w the scores' spectral
+ * density at zero frequency, whose integral over the data is the covariance
+ * of int phi r dt = P (Delta_hat - Delta). */
+static void update_standard_errors(InformationIdentifier *id);
+
 KERNEL track_residual(InformationIdentifier *id, const double z[], const double phi[],
                       const int m, const int rows)
 {
     const double gb = id->batch_gain;
-    /* the first INFO_SCORE_DELAY seconds hold the estimate's own transient */
-    const int counting = id->active_time >= INFO_SCORE_DELAY;
-    const double gp = !counting ? 0.0
-                      : id->residual_samples * id->power_gain < 1.0 ? 1.0 / ++id->residual_samples
-                                                                    : id->power_gain;
     for (int i = 0; i < rows; ++i) {
         double r = z[i];
         UNROLL for (int k = 0; k < m; ++k) r -= id->anchor[i][k] * phi[k];
         double *mean = id->score_mean[i];
         UNROLL for (int k = 0; k < m; ++k) mean[k] += gb * (phi[k] * r - mean[k]);
-        UNROLL for (int j = 0; j < m; ++j)
-            UNROLL for (int k = j; k < m; ++k)
-                id->score_power[i][j][k] += gp * (mean[j] * mean[k] - id->score_power[i][j][k]);
     }
+    if (++id->std_age >= INFO_STD_INTERVAL) update_standard_errors(id);
 }
 
 KERNEL lsm_run(InformationIdentifier *id, const IdSample samples[], int count, const int rows,
@@ -235,40 +232,30 @@ static void refresh_anchor(InformationIdentifier *id)
     if (cholesky(id, n, L) == 0) solve_estimate(id, n, L, id->anchor); /* else keep it */
 }
 
-int info_solve(InformationIdentifier *id)
+static void update_standard_errors(InformationIdentifier *id)
 {
     const int n = dimension(id), m = id->m;
-    double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
-    if (m == 0) return 0;
-    if (cholesky(id, n, L) != 0) return -1;
-    solve_estimate(id, n, L, id->delta);
-    /* Trace of the current parameters' block of Gamma = P^-1.  Without the
-     * drift model that is the whole trace, ||L^-1||_F^2, by forward
-     * substitution of the columns of L^-1; with it, the first m diagonal
-     * entries of P^-1, one solve each. */
-    double trace = 0.0, gamma[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
-    if (n == m) {
-        for (int j = 0; j < m; ++j) {
-            double col[ID_MAX_REGRESSORS];
-            for (int i = j; i < m; ++i) {
-                double s = i == j ? 1.0 : 0.0;
-                for (int k = j; k < i; ++k) s -= L[i][k] * col[k];
-                col[i] = s / L[i][i];
-                trace += col[i] * col[i];
-            }
-        }
-    }
+    id->std_age = 0;
+    /* the first INFO_SCORE_DELAY seconds hold the estimate's own transient */
+    if (id->active_time < INFO_SCORE_DELAY) return;
+    const double gp = id->residual_samples * id->power_gain < 1.0 ? 1.0 / ++id->residual_samples
+                                                                   : id->power_gain;
+    for (int i = 0; i < id->rows; ++i)
+        for (int a = 0; a < m; ++a)
+            for (int b = a; b < m; ++b)
+                id->score_power[i][a][b] +=
+                    gp * (id->score_mean[i][a] * id->score_mean[i][b] - id->score_power[i][a][b]);
+    double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS], gamma[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
+    if (cholesky(id, n, L) != 0) return; /* keep the last ones */
     for (int j = 0; j < m; ++j) {
         double e[ID_MAX_REGRESSORS] = {0};
         e[j] = 1.0;
         cholesky_solve(n, L, e); /* column j of P^-1 */
         memcpy(gamma[j], e, sizeof e);
-        if (n != m) trace += e[j];
     }
-    id->gamma_trace = trace;
-    /* Standard errors (sandwich): cov(Delta_i) = Gamma (T 2 T_b E[mean mean^T]) Gamma
-     * (track_residual), T the data's length: the active time for LSM, the
-     * memory of the squared weights 1/(2 |ln R|) for MFF. */
+    /* Sandwich: cov(Delta_i) = Gamma (T 2 T_b E[mean mean^T]) Gamma, T the data's
+     * length: the active time for LSM, the memory of the squared weights
+     * 1/(2 |ln R|) for MFF. */
     const double memory = id->lambda < 1.0 ? 0.5 / id->forgetting_rate : id->active_time;
     const double scale = memory < id->active_time ? memory : id->active_time;
     for (int i = 0; i < id->rows; ++i) {
@@ -282,6 +269,39 @@ int info_solve(InformationIdentifier *id)
             id->std_error[i][k] = sqrt(fmax(0.0, 2.0 * INFO_BATCH_WINDOW * scale * variance));
         }
     }
+}
+
+int info_solve(InformationIdentifier *id)
+{
+    const int n = dimension(id), m = id->m;
+    double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
+    if (m == 0) return 0;
+    if (cholesky(id, n, L) != 0) return -1;
+    solve_estimate(id, n, L, id->delta);
+    /* Trace of the current parameters' block of Gamma = P^-1.  Without the
+     * drift model that is the whole trace, ||L^-1||_F^2, by forward
+     * substitution of the columns of L^-1; with it, the first m diagonal
+     * entries of P^-1, one solve each. */
+    double trace = 0.0;
+    if (n == m) {
+        for (int j = 0; j < m; ++j) {
+            double col[ID_MAX_REGRESSORS];
+            for (int i = j; i < m; ++i) {
+                double s = i == j ? 1.0 : 0.0;
+                for (int k = j; k < i; ++k) s -= L[i][k] * col[k];
+                col[i] = s / L[i][i];
+                trace += col[i] * col[i];
+            }
+        }
+    } else {
+        for (int j = 0; j < m; ++j) {
+            double e[ID_MAX_REGRESSORS] = {0};
+            e[j] = 1.0;
+            cholesky_solve(n, L, e); /* column j of P^-1 */
+            trace += e[j];
+        }
+    }
+    id->gamma_trace = trace;
     /* One inverse-iteration step toward the eigenvector of the smallest
      * eigenvalue of the current parameters' information P11 (the leading
      * block of L is its Cholesky factor); the Rayleigh quotient estimates it. */

@@ -36,6 +36,7 @@
 #define INFO_BATCH_WINDOW 1.0   /* [s] batch-mean filter of the residuals */
 #define INFO_POWER_WINDOW 30.0  /* [s] mean square of that mean (growing window first) */
 #define INFO_SCORE_DELAY 2.0    /* [s] of identification before the scores count */
+#define INFO_STD_INTERVAL 256   /* samples between updates of the standard errors */
 
 typedef struct {
     int rows, m;          /* m: the identified regressors; the sums have 2m with drift */
@@ -59,6 +60,7 @@ typedef struct {
      * included): the scores phi (z - anchor phi) through a batch-mean filter
      * give their low-frequency spectral density (track_residual). */
     double batch_gain, power_gain, residual_samples;
+    int std_age;          /* samples since the last update of the standard errors */
     double score_mean[ID_MAX_ROWS][ID_MAX_REGRESSORS];
     double score_power[ID_MAX_ROWS][ID_MAX_REGRESSORS][ID_MAX_REGRESSORS]; /* upper triangle */
     double std_error[ID_MAX_ROWS][ID_MAX_REGRESSORS]; /* from the last solve */
