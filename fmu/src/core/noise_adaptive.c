@@ -55,7 +55,8 @@ void adaptive_init(AdaptiveBank *bank, double h)
         bank->gains[bank->count] = steady_state_gains(h, omega);
         bank->gains[bank->count++].publish_gain = -expm1(-2.0 * h * omega / ADAPTIVE_AVERAGING);
     }
-    for (int i = 0; i < STO_MAX_DOF; ++i) bank->selected[i] = ADAPTIVE_SUPER_TWISTING;
+    for (int i = 0; i < STO_MAX_DOF; ++i)
+        bank->selected[i] = bank->perturbation[i] = ADAPTIVE_SUPER_TWISTING;
     bank->follow = ADAPTIVE_SUPER_TWISTING;
 }
 
@@ -136,7 +137,9 @@ static int select_member(const AdaptiveBank *bank, int i, int selected)
     for (int j = 1; j < bank->count; ++j)
         if (bank->member[i][j].stats.mean_square < smallest)
             smallest = bank->member[i][j].stats.mean_square;
-    if (bank->sta[i].mean_square < ADAPTIVE_EXACT_RATIO * smallest) return ADAPTIVE_SUPER_TWISTING;
+    if (bank->sta[i].mean_square < ADAPTIVE_EXACT_RATIO * smallest &&
+        bank->sta_saturation[i] < ADAPTIVE_SATURATION_LIMIT)
+        return ADAPTIVE_SUPER_TWISTING;
     double best = bank->sta[i].mean_square_ahead;
     int best_index = ADAPTIVE_SUPER_TWISTING;
     for (int j = 0; j < bank->count; ++j)
@@ -150,6 +153,23 @@ static int select_member(const AdaptiveBank *bank, int i, int selected)
     return best < ADAPTIVE_HYSTERESIS * current ? best_index : selected;
 }
 
+/* Whose injection is published as the perturbation: the selected observer's,
+ * except that a super-twisting observer whose injection saturates often
+ * (ADAPTIVE_SATURATION_LIMIT) gives way to the best-predicting member (its
+ * velocity stays published). */
+static int perturbation_member(const AdaptiveBank *bank, int i, int selected)
+{
+    if (selected != ADAPTIVE_SUPER_TWISTING ||
+        bank->sta_saturation[i] < ADAPTIVE_SATURATION_LIMIT)
+        return selected;
+    int best = 0;
+    for (int j = 1; j < bank->count; ++j)
+        if (bank->member[i][j].stats.mean_square_ahead <
+            bank->member[i][best].stats.mean_square_ahead)
+            best = j;
+    return best;
+}
+
 void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[],
                   const StoAcceleration a[], int count, StoTrace *trace)
 {
@@ -160,13 +180,16 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
     for (int i = 0; i < o->n; ++i) {
         bank->sta_v[i] = o->z_eq[i];
         AdaptiveMember *members = bank->member[i];
-        int selected = bank->selected[i];
+        int selected = bank->selected[i], source = bank->perturbation[i];
         const int follow = bank->follow;
         double zf = bank->z_filtered[i], zp = bank->z_prefiltered[i];
         for (int k = 0; k < count; ++k) {
             if (bank->started[i]) {
                 const unsigned age = bank->age[i]++;
                 const double x2 = trace->velocity[i][k], v = trace->z_eq[i][k];
+                /* saturated: the injection is +-alpha1, outside the sliding set */
+                bank->sta_saturation[i] +=
+                    gain * ((fabs(v) >= o->alpha1[i] ? 1.0 : 0.0) - bank->sta_saturation[i]);
                 const double a_sta = sto_acceleration(a[i], x2, trace->velocity_sign[i][k]);
                 track(&bank->sta[i], trace->innovation[i][k], y[i],
                       predict_ahead(trace->position[i][k], x2, a_sta + v, horizon), age, gain);
@@ -177,8 +200,10 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                           predict_ahead(m->z1, m->x2_now, m->a_current + m->xi, horizon), age,
                           gain);
                 }
-                if (age >= ADAPTIVE_HORIZON + ADAPTIVE_MIN_SAMPLES)
+                if (age >= ADAPTIVE_HORIZON + ADAPTIVE_MIN_SAMPLES) {
                     selected = select_member(bank, i, selected);
+                    source = perturbation_member(bank, i, selected);
+                }
             } else if (trace->switching_rate[i][k] >= STO_CONVERGED_RATE) {
                 /* The members start once the super-twisting observer has
                  * converged: its finite-time, bounded reaching phase beats a
@@ -196,22 +221,23 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                 trace->velocity_sign[i][k] =
                     expected_sign(m->x2_now, gs->velocity_std * sqrt(m->stats.mean_square /
                                                                      gs->innovation_variance));
-                trace->z_eq[i][k] = m->xi;
             }
+            if (source != ADAPTIVE_SUPER_TWISTING) trace->z_eq[i][k] = members[source].xi;
             /* A linear member's xi is averaged over ADAPTIVE_AVERAGING of its
              * time constants 1/omega (two first-order stages of half that:
              * less noise for the same delay) before it is published. */
-            if (selected == ADAPTIVE_SUPER_TWISTING) {
+            if (source == ADAPTIVE_SUPER_TWISTING) {
                 zf += g * (trace->z_eq[i][k] - zf);
                 zp = zf;
             } else {
-                const double gz = fmin(g, bank->gains[selected].publish_gain);
+                const double gz = fmin(g, bank->gains[source].publish_gain);
                 zp += gz * (trace->z_eq[i][k] - zp);
                 zf += gz * (zp - zf);
             }
             trace->z_filtered[i][k] = zf;
         }
         bank->selected[i] = selected;
+        bank->perturbation[i] = source;
         bank->z_filtered[i] = zf;
         bank->z_prefiltered[i] = zp;
     }
@@ -231,11 +257,12 @@ void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank)
             const double mid_next = m->mid + h * (m->a_mean + m->xi);
             o->x1_hat[i] = m->z1 + h * mid_next;
             o->x2_hat[i] = mid_next + 0.5 * h * (m->a_current + m->xi);
-            o->z_eq[i] = m->xi;
             mean_square = m->stats.mean_square;
             variance = bank->gains[selected].innovation_variance;
             bank->bandwidth[i] = bank->gains[selected].omega;
         }
+        if (bank->perturbation[i] != ADAPTIVE_SUPER_TWISTING && o->primed)
+            o->z_eq[i] = bank->member[i][bank->perturbation[i]].xi;
         o->z_filtered[i] = bank->z_filtered[i];
         /* A member faster than the data need sees mostly the noise in its
          * innovations, one slower sees its lag too: the smallest ratio of
@@ -258,14 +285,16 @@ int adaptive_settled(const AdaptiveBank *bank, int n)
     return 1;
 }
 
-void adaptive_follow_selected(AdaptiveBank *bank) { bank->follow = bank->selected[0]; }
+void adaptive_follow_selected(AdaptiveBank *bank) { bank->follow = bank->perturbation[0]; }
 
 int adaptive_valid(const AdaptiveBank *bank, int n)
 {
     if (bank->count < 0 || bank->count > ADAPTIVE_MAX_MEMBERS) return 0;
     if (bank->follow < ADAPTIVE_SUPER_TWISTING || bank->follow >= bank->count) return 0;
     for (int i = 0; i < n && i < STO_MAX_DOF; ++i)
-        if (bank->selected[i] < ADAPTIVE_SUPER_TWISTING || bank->selected[i] >= bank->count)
+        if (bank->selected[i] < ADAPTIVE_SUPER_TWISTING || bank->selected[i] >= bank->count ||
+            bank->perturbation[i] < ADAPTIVE_SUPER_TWISTING ||
+            bank->perturbation[i] >= bank->count)
             return 0;
     return 1;
 }

@@ -37,8 +37,13 @@
  * innovations' whiteness (Mehra) is fooled by the quantization error, which
  * is not white.  On exact data the super-twisting observer stays published
  * as long as its one-sample innovations are far below every member's
- * (ADAPTIVE_EXACT_RATIO): there it is deadbeat, and the members' small
+ * (ADAPTIVE_EXACT_RATIO) and its injection rarely saturates
+ * (ADAPTIVE_SATURATION_LIMIT): there it is deadbeat, and the members' small
  * lag shows over the horizon as little as its O(h^2) model mismatch does.
+ * A plant that does not move like the observer's sampled model (explicit
+ * Euler with a switching input: the second difference sees the input of one
+ * interval, the model the mean of two) keeps its innovations small but
+ * saturates its injection every step; a member averages that mismatch out.
  * The measurement noise estimate is the selected member's mean square
  * innovation over its steady-state innovation variance (per unit R).
  *
@@ -64,6 +69,7 @@
 #define ADAPTIVE_HYSTERESIS 0.9     /* a smaller mean square by this factor takes over */
 #define ADAPTIVE_EXACT_RATIO 0.25   /* super-twisting one-step mean square below this times
                                      * the members' best: exact data, it stays published */
+#define ADAPTIVE_SATURATION_LIMIT 0.1 /* ... and its injection saturated in fewer steps */
 #define ADAPTIVE_AVERAGING 10.0     /* z_eq_filtered: a member's xi averaged over this / omega */
 #define ADAPTIVE_SETTLED 0.25       /* windows of predictions before the identifier follows */
 #define ADAPTIVE_SUPER_TWISTING (-1) /* member index of the super-twisting observer */
@@ -97,10 +103,12 @@ typedef struct {
     AdaptiveGains gains[ADAPTIVE_MAX_MEMBERS];
     AdaptiveMember member[STO_MAX_DOF][ADAPTIVE_MAX_MEMBERS];
     AdaptiveStatistics sta[STO_MAX_DOF]; /* the super-twisting observer's */
+    double sta_saturation[STO_MAX_DOF];  /* its rate of saturated steps (window as sta) */
     double sta_v[STO_MAX_DOF];           /* its injection (o->z_eq publishes the selected one's) */
     int started[STO_MAX_DOF];            /* the members run (the observer has converged) */
     unsigned age[STO_MAX_DOF];           /* steps since they started */
     int selected[STO_MAX_DOF];           /* member index or ADAPTIVE_SUPER_TWISTING */
+    int perturbation[STO_MAX_DOF];       /* whose injection is published (perturbation_member) */
     int follow;                          /* the member the identifier follows */
     double z_filtered[STO_MAX_DOF];      /* selected injection through the tau filter */
     double z_prefiltered[STO_MAX_DOF];   /* a member's xi after the first averaging stage */
@@ -124,7 +132,8 @@ void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank);
  * it when it starts by itself). */
 int adaptive_settled(const AdaptiveBank *bank, int n);
 
-/* Fixes the member the identifier follows to the one selected now on DOF 1
+/* Fixes the member the identifier follows to the one whose injection is
+ * published now on DOF 1
  * (one member for all DOFs: the rows of the regression share one regressor). */
 void adaptive_follow_selected(AdaptiveBank *bank);
 
