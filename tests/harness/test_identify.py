@@ -100,3 +100,13 @@ def test_cli_writes_estimates_with_standard_errors_and_the_noise_level(tmp_path,
     assert summary["standard_error"]["theta_hat[1,4]"] == 0.0  # not identified
     assert "+-" in capsys.readouterr().out
     assert (tmp_path / "out" / "identification.png").stat().st_size > 10000
+
+
+def test_a_sampled_input_becomes_its_interval_means():
+    from harness.identify import held_input
+
+    u = np.array([0.0, 2.0, 4.0, 8.0])
+    assert held_input(u, "zoh") is u
+    np.testing.assert_array_equal(held_input(u, "sampled"), [1.0, 3.0, 6.0, 8.0])
+    with pytest.raises(ValueError, match="input_hold = 'linear': expected one of zoh, sampled"):
+        held_input(u, "linear")
