@@ -131,6 +131,7 @@ static inline double predict_ahead(double x1, double x2, double acceleration, do
  * the selected one's. */
 static int select_member(const AdaptiveBank *bank, int i, int selected)
 {
+    if (bank->count == 0) return ADAPTIVE_SUPER_TWISTING; /* h > 0.25 s: no member fits */
     /* exact data: the deadbeat super-twisting corrector predicts the next
      * sample far better than any linear member and is kept */
     double smallest = bank->member[i][0].stats.mean_square;
@@ -159,7 +160,7 @@ static int select_member(const AdaptiveBank *bank, int i, int selected)
  * velocity stays published). */
 static int perturbation_member(const AdaptiveBank *bank, int i, int selected)
 {
-    if (selected != ADAPTIVE_SUPER_TWISTING ||
+    if (selected != ADAPTIVE_SUPER_TWISTING || bank->count == 0 ||
         bank->sta_saturation[i] < ADAPTIVE_SATURATION_LIMIT)
         return selected;
     int best = 0;
