@@ -5,43 +5,83 @@
 
 #include "implicit_twisting.h"
 
+typedef double Matrix3[3][3];
+
+static void multiply(Matrix3 a, Matrix3 b, Matrix3 out)
+{
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            out[i][j] = a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j];
+}
+
+static void transpose(Matrix3 a, Matrix3 out)
+{
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) out[i][j] = a[j][i];
+}
+
+/* Inverse by cofactors; returns 0 if singular. */
+static int invert(Matrix3 a, Matrix3 out)
+{
+    const double c00 = a[1][1] * a[2][2] - a[1][2] * a[2][1];
+    const double c01 = a[1][2] * a[2][0] - a[1][0] * a[2][2];
+    const double c02 = a[1][0] * a[2][1] - a[1][1] * a[2][0];
+    const double det = a[0][0] * c00 + a[0][1] * c01 + a[0][2] * c02;
+    if (!(fabs(det) > 0.0) || !isfinite(det)) return 0;
+    out[0][0] = c00 / det;
+    out[1][0] = c01 / det;
+    out[2][0] = c02 / det;
+    out[0][1] = (a[0][2] * a[2][1] - a[0][1] * a[2][2]) / det;
+    out[1][1] = (a[0][0] * a[2][2] - a[0][2] * a[2][0]) / det;
+    out[2][1] = (a[0][1] * a[2][0] - a[0][0] * a[2][1]) / det;
+    out[0][2] = (a[0][1] * a[1][2] - a[0][2] * a[1][1]) / det;
+    out[1][2] = (a[0][2] * a[1][0] - a[0][0] * a[1][2]) / det;
+    out[2][2] = (a[0][0] * a[1][1] - a[0][1] * a[1][0]) / det;
+    return 1;
+}
+
 /* Steady-state Kalman gain of x1^- = x1 + h m + h^2 xi, m^- = m + h xi,
- * xi^- = xi + w (variance q), y = x1 + noise (variance 1), by iterating the
- * Riccati recursion (at initialization only). */
+ * xi^- = xi + w (variance q), y = x1 + noise (variance 1).  The a-priori
+ * covariance X solves the Riccati equation X = A^T X (I + G X)^-1 A + Q with
+ * A = F^T, G = H^T H; the structure-preserving doubling algorithm (Chu, Fan
+ * and Lin 2005) converges quadratically, in about log2(1/(omega h)) + 10
+ * steps, where the plain recursion needs some 30/(omega h): a bank at
+ * h = 1e-6 initializes in microseconds instead of seconds. */
 static AdaptiveGains steady_state_gains(double h, double omega)
 {
-    const double q = pow(omega, 6.0) * h * h;
-    double P[3][3] = {{1e6, 0, 0}, {0, 1e6 / (h * h), 0}, {0, 0, 1e6 / (h * h * h * h)}};
-    AdaptiveGains g = {.omega = omega};
-    for (int iteration = 0; iteration < 2000000; ++iteration) {
-        /* prediction: Pm = F P F^T + Q with F = [[1, h, h^2], [0, 1, h], [0, 0, 1]] */
-        const double F[3][3] = {{1.0, h, h * h}, {0.0, 1.0, h}, {0.0, 0.0, 1.0}};
-        double FP[3][3] = {{0}}, Pm[3][3] = {{0}};
+    Matrix3 A = {{1.0, 0.0, 0.0}, {h, 1.0, 0.0}, {h * h, h, 1.0}}; /* F^T */
+    Matrix3 G = {{1.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
+    Matrix3 X = {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, {0.0, 0.0, pow(omega, 6.0) * h * h}};
+    for (int iteration = 0; iteration < 200; ++iteration) {
+        Matrix3 GX, W, Winv, WinvA, AT, AWinvA, WinvG, GAT, AWinvGAT, XWinvA, ATXWinvA;
+        multiply(G, X, GX);
         for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j)
-                for (int k = 0; k < 3; ++k) FP[i][j] += F[i][k] * P[k][j];
-        for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j)
-                for (int k = 0; k < 3; ++k) Pm[i][j] += FP[i][k] * F[j][k];
-        Pm[2][2] += q;
-        const double S = Pm[0][0] + 1.0;
-        const double K[3] = {Pm[0][0] / S, Pm[1][0] / S, Pm[2][0] / S};
-        double change = 0.0;
+            for (int j = 0; j < 3; ++j) W[i][j] = (i == j) + GX[i][j];
+        if (!invert(W, Winv)) break;
+        transpose(A, AT);
+        multiply(Winv, A, WinvA);
+        multiply(A, WinvA, AWinvA);                /* A_(k+1) = A W^-1 A */
+        multiply(Winv, G, WinvG);
+        multiply(WinvG, AT, GAT);
+        multiply(A, GAT, AWinvGAT);                /* G_(k+1) = G + A W^-1 G A^T */
+        multiply(X, WinvA, XWinvA);
+        multiply(AT, XWinvA, ATXWinvA);            /* X_(k+1) = X + A^T X W^-1 A */
+        double change = 0.0, size = 0.0;
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) {
-                const double updated = Pm[i][j] - K[i] * Pm[0][j];
-                const double scale = fabs(updated) > 1e-300 ? fabs(updated) : 1e-300;
-                const double relative = fabs(updated - P[i][j]) / scale;
-                if (relative > change) change = relative;
-                P[i][j] = updated;
+                change = fmax(change, fabs(ATXWinvA[i][j]));
+                size = fmax(size, fabs(X[i][j]));
+                X[i][j] += ATXWinvA[i][j];
+                G[i][j] += AWinvGAT[i][j];
+                A[i][j] = AWinvA[i][j];
             }
-        g.k1 = K[0];
-        g.k2 = K[1];
-        g.k3 = K[2];
-        g.innovation_variance = S;
-        g.velocity_std = sqrt(P[1][1]);
-        if (change < 1e-13 && iteration > 10) break;
+        if (change <= 1e-15 * size) break;
     }
+    const double S = X[0][0] + 1.0;
+    AdaptiveGains g = {.omega = omega, .k1 = X[0][0] / S, .k2 = X[1][0] / S, .k3 = X[2][0] / S,
+                       .innovation_variance = S};
+    /* the a-posteriori velocity variance: X11 - X10^2 / S */
+    g.velocity_std = sqrt(fmax(0.0, X[1][1] - X[1][0] * X[1][0] / S));
     return g;
 }
 
