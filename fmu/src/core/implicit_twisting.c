@@ -94,9 +94,7 @@ void implicit_outputs(SuperTwistingObserver *o)
     if (!o->primed) return; /* still the initial estimates */
     const double h = o->h;
     for (int i = 0; i < o->n; ++i) {
-        const double v = o->z_eq[i];
-        const double mid_next = o->mid_velocity[i] + h * (o->a_mean[i] + v);
-        o->x1_hat[i] = o->z1[i] + h * mid_next;
-        o->x2_hat[i] = mid_next + 0.5 * h * (o->a_current[i] + v);
+        implicit_predict(o->z1[i], o->mid_velocity[i], o->a_mean[i], o->a_current[i], o->z_eq[i],
+                         h, &o->x1_hat[i], &o->x2_hat[i]);
     }
 }

@@ -35,6 +35,17 @@
 void implicit_run(SuperTwistingObserver *o, const double y[], const StoAcceleration a[], int count,
                   StoTrace *trace);
 
+/* The leapfrog prediction for the end of the next interval from the
+ * corrected position z1 and mid-interval velocity mid, with the injection v
+ * held (shared with the linear members of noise_adaptive.c). */
+static inline void implicit_predict(double z1, double mid, double a_mean, double a_current,
+                                    double v, double h, double *x1, double *x2)
+{
+    const double mid_next = mid + h * (a_mean + v);
+    *x1 = z1 + h * mid_next;
+    *x2 = mid_next + 0.5 * h * (a_current + v);
+}
+
 /* x1_hat, x2_hat: the prediction for the end of the last interval with the
  * injection held (only the outputs need it, so it is not made every step). */
 void implicit_outputs(SuperTwistingObserver *o);

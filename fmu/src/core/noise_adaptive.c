@@ -166,49 +166,46 @@ static inline double predict_ahead(double x1, double x2, double acceleration, do
     return x1 + horizon * (x2 + 0.5 * horizon * acceleration);
 }
 
-/* The selection after a step: the smallest mean square error of the
- * predictions ADAPTIVE_HORIZON samples ahead wins if it is clearly below
- * the selected one's. */
-static int select_member(const AdaptiveBank *bank, int i, int selected)
-{
-    if (bank->count == 0) return ADAPTIVE_SUPER_TWISTING; /* h > 0.25 s: no member fits */
-    /* exact data: the deadbeat super-twisting corrector predicts the next
-     * sample far better than any linear member and is kept */
-    double smallest = bank->member[i][0].stats.mean_square;
-    for (int j = 1; j < bank->count; ++j)
-        if (bank->member[i][j].stats.mean_square < smallest)
-            smallest = bank->member[i][j].stats.mean_square;
-    if (bank->sta[i].mean_square < ADAPTIVE_EXACT_RATIO * smallest &&
-        bank->sta_saturation[i] < ADAPTIVE_SATURATION_LIMIT)
-        return ADAPTIVE_SUPER_TWISTING;
-    double best = bank->sta[i].mean_square_ahead;
-    int best_index = ADAPTIVE_SUPER_TWISTING;
-    for (int j = 0; j < bank->count; ++j)
-        if (bank->member[i][j].stats.mean_square_ahead < best) {
-            best = bank->member[i][j].stats.mean_square_ahead;
-            best_index = j;
-        }
-    const double current = selected == ADAPTIVE_SUPER_TWISTING
-                               ? bank->sta[i].mean_square_ahead
-                               : bank->member[i][selected].stats.mean_square_ahead;
-    return best < ADAPTIVE_HYSTERESIS * current ? best_index : selected;
-}
+/* The selection after a step (see the header): which observer is published
+ * and whose injection is the published perturbation. */
+typedef struct {
+    int selected, source;
+} AdaptiveSelection;
 
-/* Whose injection is published as the perturbation: the selected observer's,
- * except that a super-twisting observer whose injection saturates often
- * (ADAPTIVE_SATURATION_LIMIT) gives way to the best-predicting member (its
- * velocity stays published). */
-static int perturbation_member(const AdaptiveBank *bank, int i, int selected)
+static inline AdaptiveSelection select_members(const AdaptiveBank *bank, int i, int selected)
 {
-    if (selected != ADAPTIVE_SUPER_TWISTING || bank->count == 0 ||
-        bank->sta_saturation[i] < ADAPTIVE_SATURATION_LIMIT)
-        return selected;
-    int best = 0;
+    const AdaptiveMember *members = bank->member[i];
+    const AdaptiveStatistics *sta = &bank->sta[i];
+    const AdaptiveSelection super_twisting = {ADAPTIVE_SUPER_TWISTING, ADAPTIVE_SUPER_TWISTING};
+    if (bank->count == 0) return super_twisting; /* h > 0.25 s: no member fits */
+    const int saturating = bank->sta_saturation[i] >= ADAPTIVE_SATURATION_LIMIT;
+    if (!saturating) {
+        /* exact data: the deadbeat super-twisting corrector predicts the next
+         * sample far better than any linear member and is kept */
+        double smallest = members[0].stats.mean_square;
+        for (int j = 1; j < bank->count; ++j)
+            if (members[j].stats.mean_square < smallest) smallest = members[j].stats.mean_square;
+        if (sta->mean_square < ADAPTIVE_EXACT_RATIO * smallest) return super_twisting;
+    }
+    int best = 0; /* the member of the smallest error of the predictions ahead */
+    double best_ahead = members[0].stats.mean_square_ahead;
     for (int j = 1; j < bank->count; ++j)
-        if (bank->member[i][j].stats.mean_square_ahead <
-            bank->member[i][best].stats.mean_square_ahead)
+        if (members[j].stats.mean_square_ahead < best_ahead) {
+            best_ahead = members[j].stats.mean_square_ahead;
             best = j;
-    return best;
+        }
+    const int member_wins = best_ahead < sta->mean_square_ahead;
+    const int candidate = member_wins ? best : ADAPTIVE_SUPER_TWISTING;
+    const double current = selected == ADAPTIVE_SUPER_TWISTING
+                               ? sta->mean_square_ahead
+                               : members[selected].stats.mean_square_ahead;
+    if ((member_wins ? best_ahead : sta->mean_square_ahead) < ADAPTIVE_HYSTERESIS * current)
+        selected = candidate;
+    /* a super-twisting observer whose injection saturates often publishes the
+     * best-predicting member's perturbation (its velocity stays published) */
+    const AdaptiveSelection choice = {
+        selected, selected == ADAPTIVE_SUPER_TWISTING && saturating ? best : selected};
+    return choice;
 }
 
 void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[],
@@ -242,8 +239,9 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                           gain);
                 }
                 if (age >= ADAPTIVE_HORIZON + ADAPTIVE_MIN_SAMPLES) {
-                    selected = select_member(bank, i, selected);
-                    source = perturbation_member(bank, i, selected);
+                    const AdaptiveSelection choice = select_members(bank, i, selected);
+                    selected = choice.selected;
+                    source = choice.source;
                 }
             } else if (trace->switching_rate[i][k] >= STO_CONVERGED_RATE) {
                 /* The members start once the super-twisting observer has
@@ -271,7 +269,7 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                 zf += g * (trace->z_eq[i][k] - zf);
                 zp = zf;
             } else {
-                const double gz = fmin(g, bank->gains[source].publish_gain);
+                const double slow = bank->gains[source].publish_gain, gz = slow < g ? slow : g;
                 zp += gz * (trace->z_eq[i][k] - zp);
                 zf += gz * (zp - zf);
             }
@@ -295,9 +293,8 @@ void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank)
         bank->bandwidth[i] = 1.0 / h;
         if (selected != ADAPTIVE_SUPER_TWISTING && o->primed) {
             const AdaptiveMember *m = &bank->member[i][selected];
-            const double mid_next = m->mid + h * (m->a_mean + m->xi);
-            o->x1_hat[i] = m->z1 + h * mid_next;
-            o->x2_hat[i] = mid_next + 0.5 * h * (m->a_current + m->xi);
+            implicit_predict(m->z1, m->mid, m->a_mean, m->a_current, m->xi, h, &o->x1_hat[i],
+                             &o->x2_hat[i]);
             mean_square = m->stats.mean_square;
             variance = bank->gains[selected].innovation_variance;
             bank->bandwidth[i] = bank->gains[selected].omega;
@@ -326,7 +323,7 @@ int adaptive_settled(const AdaptiveBank *bank, int n)
     return 1;
 }
 
-void adaptive_follow_selected(AdaptiveBank *bank) { bank->follow = bank->perturbation[0]; }
+void adaptive_follow_published(AdaptiveBank *bank) { bank->follow = bank->perturbation[0]; }
 
 int adaptive_valid(const AdaptiveBank *bank, int n)
 {

@@ -108,7 +108,7 @@ typedef struct {
     int started[STO_MAX_DOF];            /* the members run (the observer has converged) */
     unsigned age[STO_MAX_DOF];           /* steps since they started */
     int selected[STO_MAX_DOF];           /* member index or ADAPTIVE_SUPER_TWISTING */
-    int perturbation[STO_MAX_DOF];       /* whose injection is published (perturbation_member) */
+    int perturbation[STO_MAX_DOF];       /* whose injection is published (select_members) */
     int follow;                          /* the member the identifier follows */
     double z_filtered[STO_MAX_DOF];      /* selected injection through the tau filter */
     double z_prefiltered[STO_MAX_DOF];   /* a member's xi after the first averaging stage */
@@ -135,7 +135,7 @@ int adaptive_settled(const AdaptiveBank *bank, int n);
 /* Fixes the member the identifier follows to the one whose injection is
  * published now on DOF 1
  * (one member for all DOFs: the rows of the regression share one regressor). */
-void adaptive_follow_selected(AdaptiveBank *bank);
+void adaptive_follow_published(AdaptiveBank *bank);
 
 /* One step of G for a regressor entry: state s[3] = position error, velocity
  * error, estimate; returns the estimate (G phi).  s starts at 0. */

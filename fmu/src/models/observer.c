@@ -430,7 +430,7 @@ static int start_identifier(ObserverData *d, double t)
         memset(d->phi_filtered, 0, sizeof d->phi_filtered);
         memset(d->z_identifier, 0, sizeof d->z_identifier);
         memset(d->shadow, 0, sizeof d->shadow);
-        if (d->scheme == STO_SCHEME_ADAPTIVE) adaptive_follow_selected(&d->bank);
+        if (d->scheme == STO_SCHEME_ADAPTIVE) adaptive_follow_published(&d->bank);
     }
     return d->identifier_active;
 }
