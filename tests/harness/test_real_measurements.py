@@ -99,15 +99,16 @@ def test_the_velocity_beats_the_paper_scheme_on_a_12_bit_encoder(observer_fmu, s
 
 
 def test_standard_errors_match_the_spread_over_noise_seeds(observer_fmu, swing):
-    """The reported standard error against the spread of the estimates over 12 noise
+    """The reported standard error against the spread of the estimates over 32 noise
     seeds (noise 1e-3 rad, where the noise dominates the error): within a factor 1.5
-    for viscous, Coulomb and b (measured over 24 seeds: 1.25, 1.19, 1.15).  The
-    gravity term's is 3.2 times its spread (conservative: the residual of the
-    sampled model, the same for every seed, counts as noise there), and it must
-    never be below the spread."""
+    for viscous, Coulomb and b (measured over 48 seeds: 0.98, 0.97, 1.24; the spread
+    of 12 seeds is itself uncertain by 20 %, too much for the factor).  The gravity
+    term's is 3 times its spread (conservative: the residual of the sampled model,
+    the same for every seed, counts as noise there), and it must never be below the
+    spread."""
     t, theta, _, u = swing
     estimates, reported = [], []
-    for seed in range(12):
+    for seed in range(32):
         y = theta + np.random.default_rng(seed).normal(0.0, 1e-3, theta.size)
         out = _identify(observer_fmu, t, y, u)
         estimates.append([out[f"theta_hat[1,{k}]"][-1] for k in (1, 2, 3)] + [out["b_hat"][-1]])

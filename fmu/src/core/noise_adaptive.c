@@ -1,6 +1,7 @@
 #include "noise_adaptive.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
 #include "implicit_twisting.h"
@@ -89,6 +90,12 @@ void adaptive_init(AdaptiveBank *bank, double h)
 {
     memset(bank, 0, sizeof *bank);
     bank->gain = h < ADAPTIVE_WINDOW ? h / ADAPTIVE_WINDOW : 1.0;
+    const double stride = ceil(ADAPTIVE_SECANT_TIME / (ADAPTIVE_SLOTS * h));
+    bank->stride = stride > ADAPTIVE_MAX_STRIDE ? ADAPTIVE_MAX_STRIDE : stride < 1.0 ? 1 : (int)stride;
+    bank->span = bank->stride * ADAPTIVE_SLOTS * h;
+    bank->velocity_gain = fmin(1.0, bank->gain * bank->stride);
+    const double start = ceil(ADAPTIVE_START_TIME / h);
+    bank->start_limit = start > 4e9 ? 4000000000u : start < 1.0 ? 1u : (unsigned)start;
     for (double omega = 2.0; omega * h <= 0.5 && bank->count < ADAPTIVE_MAX_MEMBERS;
          omega *= ADAPTIVE_RATIO)
     {
@@ -133,22 +140,76 @@ static inline double member_step(AdaptiveMember *m, const AdaptiveGains *g, doub
     return r;
 }
 
+/* An exponentially weighted mean square, growing windows first (no bias
+ * toward the zero start). */
+static inline void weigh(double *mean_square, double *samples, double value, double gain)
+{
+    const double g = *samples * gain < 1.0 ? 1.0 / ++*samples : gain;
+    *mean_square += g * (value - *mean_square);
+}
+
 /* Updates an observer's statistics after step `age` (since the start) with
  * its innovation r, the measurement y and its prediction of y_(k+H). */
 static inline void track(AdaptiveStatistics *st, double r, double y, double prediction,
                          unsigned age, double gain)
 {
-    /* growing windows first: no bias toward the zero start */
-    const double g1 = st->samples * gain < 1.0 ? 1.0 / ++st->samples : gain;
-    st->mean_square += g1 * (r * r - st->mean_square);
+    weigh(&st->mean_square, &st->samples, r * r, gain);
     double *slot = &st->ahead[age % ADAPTIVE_HORIZON];
     if (age >= ADAPTIVE_HORIZON) {
-        const double e = y - *slot, gh = st->ahead_samples * gain < 1.0
-                                             ? 1.0 / ++st->ahead_samples
-                                             : gain;
-        st->mean_square_ahead += gh * (e * e - st->mean_square_ahead);
+        const double e = y - *slot;
+        weigh(&st->mean_square_ahead, &st->ahead_samples, e * e, gain);
     }
     *slot = prediction;
+}
+
+/* At a stride's start (`tick` strides since the start): compares the velocity
+ * of ADAPTIVE_SLOTS / 2 strides ago with the secant (if there is one yet) and
+ * keeps the velocity now. */
+static inline void track_velocity(AdaptiveStatistics *st, const AdaptiveBank *bank,
+                                  unsigned tick, double secant, double velocity)
+{
+    if (tick >= ADAPTIVE_SLOTS) {
+        const double e = secant - st->velocity[(tick + ADAPTIVE_SLOTS / 2) % ADAPTIVE_SLOTS];
+        weigh(&st->mean_square_velocity, &st->velocity_samples, e * e, bank->velocity_gain);
+    }
+    st->velocity[tick % ADAPTIVE_SLOTS] = velocity;
+}
+
+/* At a stride's start: closes the stride that ended and returns the secant
+ * velocity over the last ADAPTIVE_SLOTS strides minus the nominal model's
+ * (mean velocity - velocity at the middle) over them, which is what an
+ * observer's velocity at the middle is compared with.  0 before the first
+ * full span. */
+static double corrected_secant(AdaptiveSecant *sc, const AdaptiveBank *bank, unsigned tick,
+                               double y, double h)
+{
+    const unsigned slot = tick % ADAPTIVE_SLOTS; /* also the oldest, tick - ADAPTIVE_SLOTS */
+    double secant = 0.0;
+    if (tick > 0) {
+        const unsigned last = (tick - 1) % ADAPTIVE_SLOTS;
+        sc->dv[last] = sc->v;
+        sc->dw[last] = sc->w;
+    }
+    if (tick >= ADAPTIVE_SLOTS) {
+        double v = 0.0, w = 0.0, v_middle = 0.0; /* from the span's start */
+        for (unsigned t = 0; t < ADAPTIVE_SLOTS; ++t) {
+            const unsigned s = (slot + t) % ADAPTIVE_SLOTS;
+            w += v * bank->stride * h + sc->dw[s];
+            v += sc->dv[s];
+            if (t == ADAPTIVE_SLOTS / 2 - 1) v_middle = v;
+        }
+        secant = (y - sc->y[slot]) / bank->span - (w / bank->span - v_middle);
+    }
+    sc->y[slot] = y;
+    sc->v = sc->w = 0.0;
+    return secant;
+}
+
+/* Integrates the nominal acceleration over one step into the running stride. */
+static inline void integrate_nominal(AdaptiveSecant *sc, double acceleration, double h, double h2)
+{
+    sc->w += sc->v * h + 0.5 * acceleration * h2;
+    sc->v += acceleration * h;
 }
 
 /* E[sign(v) | v_hat] for a velocity error of standard deviation sigma:
@@ -166,16 +227,34 @@ static inline double predict_ahead(double x1, double x2, double acceleration, do
     return x1 + horizon * (x2 + 0.5 * horizon * acceleration);
 }
 
-/* The selection after a step (see the header): which observer is published
+/* The selection after a step (see the header): whose velocity is published
  * and whose injection is the published perturbation. */
 typedef struct {
     int selected, source;
 } AdaptiveSelection;
 
-static inline AdaptiveSelection select_members(const AdaptiveBank *bank, int i, int selected)
+/* The observer of the smallest statistic (offset of the double in
+ * AdaptiveStatistics), or the current one unless the best is smaller by
+ * ADAPTIVE_HYSTERESIS.  *best gets the best member. */
+static inline int choose(const AdaptiveBank *bank, int i, int current, size_t offset, int *best)
 {
     const AdaptiveMember *members = bank->member[i];
-    const AdaptiveStatistics *sta = &bank->sta[i];
+#define STATISTIC(st) (*(const double *)((const char *)(st) + offset))
+    *best = 0;
+    for (int j = 1; j < bank->count; ++j)
+        if (STATISTIC(&members[j].stats) < STATISTIC(&members[*best].stats)) *best = j;
+    const double sta = STATISTIC(&bank->sta[i]), member = STATISTIC(&members[*best].stats);
+    const double now = current == ADAPTIVE_SUPER_TWISTING ? sta
+                                                          : STATISTIC(&members[current].stats);
+#undef STATISTIC
+    const int candidate = member < sta ? *best : ADAPTIVE_SUPER_TWISTING;
+    return (member < sta ? member : sta) < ADAPTIVE_HYSTERESIS * now ? candidate : current;
+}
+
+static inline AdaptiveSelection select_members(const AdaptiveBank *bank, int i, int selected,
+                                               int source)
+{
+    const AdaptiveMember *members = bank->member[i];
     const AdaptiveSelection super_twisting = {ADAPTIVE_SUPER_TWISTING, ADAPTIVE_SUPER_TWISTING};
     if (bank->count == 0) return super_twisting; /* h > 0.25 s: no member fits */
     const int saturating = bank->sta_saturation[i] >= ADAPTIVE_SATURATION_LIMIT;
@@ -185,26 +264,19 @@ static inline AdaptiveSelection select_members(const AdaptiveBank *bank, int i, 
         double smallest = members[0].stats.mean_square;
         for (int j = 1; j < bank->count; ++j)
             if (members[j].stats.mean_square < smallest) smallest = members[j].stats.mean_square;
-        if (sta->mean_square < ADAPTIVE_EXACT_RATIO * smallest) return super_twisting;
+        if (bank->sta[i].mean_square < ADAPTIVE_EXACT_RATIO * smallest) return super_twisting;
     }
-    int best = 0; /* the member of the smallest error of the predictions ahead */
-    double best_ahead = members[0].stats.mean_square_ahead;
-    for (int j = 1; j < bank->count; ++j)
-        if (members[j].stats.mean_square_ahead < best_ahead) {
-            best_ahead = members[j].stats.mean_square_ahead;
-            best = j;
-        }
-    const int member_wins = best_ahead < sta->mean_square_ahead;
-    const int candidate = member_wins ? best : ADAPTIVE_SUPER_TWISTING;
-    const double current = selected == ADAPTIVE_SUPER_TWISTING
-                               ? sta->mean_square_ahead
-                               : members[selected].stats.mean_square_ahead;
-    if ((member_wins ? best_ahead : sta->mean_square_ahead) < ADAPTIVE_HYSTERESIS * current)
-        selected = candidate;
-    /* a super-twisting observer whose injection saturates often publishes the
-     * best-predicting member's perturbation (its velocity stays published) */
-    const AdaptiveSelection choice = {
-        selected, selected == ADAPTIVE_SUPER_TWISTING && saturating ? best : selected};
+    int best_velocity, best_prediction;
+    AdaptiveSelection choice = {
+        bank->sta[i].velocity_samples > 0.0
+            ? choose(bank, i, selected, offsetof(AdaptiveStatistics, mean_square_velocity),
+                     &best_velocity)
+            : selected,
+        choose(bank, i, source, offsetof(AdaptiveStatistics, mean_square_ahead),
+               &best_prediction)};
+    /* a super-twisting observer whose injection saturates often: the
+     * best-predicting member's perturbation */
+    if (choice.source == ADAPTIVE_SUPER_TWISTING && saturating) choice.source = best_prediction;
     return choice;
 }
 
@@ -231,22 +303,34 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                 const double a_sta = sto_acceleration(a[i], x2, trace->velocity_sign[i][k]);
                 track(&bank->sta[i], trace->innovation[i][k], y[i],
                       predict_ahead(trace->position[i][k], x2, a_sta + v, horizon), age, gain);
+                const int stride_start = age % (unsigned)bank->stride == 0;
+                const unsigned tick = age / (unsigned)bank->stride;
+                double secant = 0.0;
+                if (stride_start) {
+                    secant = corrected_secant(&bank->secant[i], bank, tick, y[i], h);
+                    track_velocity(&bank->sta[i], bank, tick, secant, x2);
+                }
+                integrate_nominal(&bank->secant[i], a_sta, h, h2);
                 for (int j = 0; j < bank->count; ++j) {
                     AdaptiveMember *m = &members[j];
                     const double r = member_step(m, &bank->gains[j], y[i], a[i], h, h2);
                     track(&m->stats, r, y[i],
                           predict_ahead(m->z1, m->x2_now, m->a_current + m->xi, horizon), age,
                           gain);
+                    if (stride_start) track_velocity(&m->stats, bank, tick, secant, m->x2_now);
                 }
                 if (age >= ADAPTIVE_HORIZON + ADAPTIVE_MIN_SAMPLES) {
-                    const AdaptiveSelection choice = select_members(bank, i, selected);
+                    const AdaptiveSelection choice = select_members(bank, i, selected, source);
                     selected = choice.selected;
                     source = choice.source;
                 }
-            } else if (trace->switching_rate[i][k] >= STO_CONVERGED_RATE) {
+            } else if (trace->switching_rate[i][k] >= STO_CONVERGED_RATE ||
+                       ++bank->waited[i] >= bank->start_limit) {
                 /* The members start once the super-twisting observer has
                  * converged: its finite-time, bounded reaching phase beats a
-                 * linear transient. */
+                 * linear transient.  On quantized data it may not converge
+                 * for seconds (12-bit, 10 kHz: 1.3 s, velocity error 0.2): the
+                 * members start after ADAPTIVE_START_TIME then. */
                 for (int j = 0; j < bank->count; ++j) start_member(&members[j], trace, i, k, a[i]);
                 memset(&bank->sta[i], 0, sizeof bank->sta[i]);
                 bank->started[i] = 1;
@@ -318,16 +402,19 @@ void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank)
 int adaptive_settled(const AdaptiveBank *bank, int n)
 {
     for (int i = 0; i < n; ++i)
-        if (!bank->started[i] || bank->sta[i].ahead_samples * bank->gain < ADAPTIVE_SETTLED)
+        if (!bank->started[i] || bank->sta[i].ahead_samples * bank->gain < ADAPTIVE_SETTLED ||
+            bank->sta[i].velocity_samples * bank->velocity_gain < ADAPTIVE_SETTLED)
             return 0;
     return 1;
 }
 
-void adaptive_follow_published(AdaptiveBank *bank) { bank->follow = bank->perturbation[0]; }
+void adaptive_follow_published(AdaptiveBank *bank) { bank->follow = bank->selected[0]; }
 
 int adaptive_valid(const AdaptiveBank *bank, int n)
 {
     if (bank->count < 0 || bank->count > ADAPTIVE_MAX_MEMBERS) return 0;
+    if (bank->stride < 1 || bank->stride > ADAPTIVE_MAX_STRIDE || !(bank->span > 0.0))
+        return 0;
     if (bank->follow < ADAPTIVE_SUPER_TWISTING || bank->follow >= bank->count) return 0;
     for (int i = 0; i < n && i < STO_MAX_DOF; ++i)
         if (bank->selected[i] < ADAPTIVE_SUPER_TWISTING || bank->selected[i] >= bank->count ||

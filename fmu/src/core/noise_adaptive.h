@@ -23,19 +23,28 @@
  * The ratios are set by a bandwidth omega (q = omega^6 h^2 per step against
  * R = 1), from 2 rad/s up to 0.5/h, a factor ADAPTIVE_RATIO apart.
  *
- * Selection: every observer (the members and the super-twisting one)
- * predicts the measurement ADAPTIVE_HORIZON samples ahead from its state,
- * x1 + T x2 + T^2 (a + xi)/2; the one with the smallest exponentially
- * weighted mean square error of these predictions (window ADAPTIVE_WINDOW)
- * is published, and another takes over when its mean square is below
- * ADAPTIVE_HYSTERESIS times the published one's.  The velocity error enters
- * that prediction error T times, the unpredictable noise once, so the
- * criterion ranks the observers by their state error.  Measured on the
- * pendulum (1 kHz, multi-sine torque): it picks the member of the smallest
- * velocity error, or its neighbour, on Gaussian noise and on 12- and 16-bit
- * encoders, where the one-step innovation is flat near the optimum and the
- * innovations' whiteness (Mehra) is fooled by the quantization error, which
- * is not white.  On exact data the super-twisting observer stays published
+ * Selection of the published velocity: every stride (ADAPTIVE_SECANT_TIME /
+ * ADAPTIVE_SLOTS, at least one step), each observer's velocity is compared
+ * with the secant of the measurements over the ADAPTIVE_SLOTS strides around
+ * it, (y_k - y_(k-2D)) / 2D, corrected by the nominal model's curvature over
+ * the same span (its mean velocity minus its velocity at the middle, from the
+ * nominal acceleration integrated once and twice): without the correction the
+ * secant misses the sample-rate ripple that a switching controller puts on
+ * the velocity, which every model-based observer follows, and it ranked the
+ * observers that miss the ripple first.  The noise of the secant and the
+ * perturbation's curvature are common to all observers, so the smallest
+ * exponentially weighted mean square (window ADAPTIVE_WINDOW) ranks their
+ * velocity errors; another observer takes over when its mean square is
+ * below ADAPTIVE_HYSTERESIS times the published one's.  The span is a time:
+ * a horizon of 16 samples at 10 kHz made the velocity error's share of the
+ * criterion 1e-3 of the noise's and picked members 6x too fast.
+ *
+ * Selection of the published perturbation: every observer predicts the
+ * measurement ADAPTIVE_HORIZON samples ahead, x1 + T x2 + T^2 (a + xi)/2; the
+ * smallest mean square error of these predictions (same window, same
+ * hysteresis) publishes its xi.  Its acceleration enters that error, so the
+ * criterion weighs the perturbation's noise against its lag. The identifier
+ * follows that member.  On exact data the super-twisting observer stays published
  * as long as its one-sample innovations are far below every member's
  * (ADAPTIVE_EXACT_RATIO) and its injection rarely saturates
  * (ADAPTIVE_SATURATION_LIMIT): there it is deadbeat, and the members' small
@@ -64,7 +73,13 @@
 #define ADAPTIVE_MAX_MEMBERS 16
 #define ADAPTIVE_RATIO 1.8         /* between the bandwidths of neighbouring members */
 #define ADAPTIVE_WINDOW 1.0        /* [s] of the mean square innovations */
-#define ADAPTIVE_HORIZON 16         /* samples ahead of the compared predictions */
+#define ADAPTIVE_HORIZON 16         /* samples ahead of the predictions that rank perturbations */
+#define ADAPTIVE_SECANT_TIME 0.04   /* [s] span of the secants that rank velocities ... */
+#define ADAPTIVE_SLOTS 16           /* ... at least this many strides (the slots in flight) */
+#define ADAPTIVE_MAX_STRIDE 100000000
+#define ADAPTIVE_START_TIME 0.3     /* [s]: the members start then if the super-twisting
+                                     * observer has not converged (quantized data); 0.1 s cut
+                                     * the reaching phase of the 6.1 loop */
 #define ADAPTIVE_MIN_SAMPLES 50     /* before the first selection */
 #define ADAPTIVE_HYSTERESIS 0.9     /* a smaller mean square by this factor takes over */
 #define ADAPTIVE_EXACT_RATIO 0.25   /* super-twisting one-step mean square below this times
@@ -87,9 +102,21 @@ typedef struct {
 typedef struct {
     double mean_square;       /* of the innovations r (one sample ahead) */
     double mean_square_ahead; /* of the errors of the predictions ADAPTIVE_HORIZON ahead */
-    double samples, ahead_samples;     /* counted up to 1 / gain: growing windows first */
+    double mean_square_velocity; /* of the velocities against the corrected secants */
+    double samples, ahead_samples, velocity_samples; /* counted up to 1 / gain: growing
+                                                      * windows first */
     double ahead[ADAPTIVE_HORIZON];    /* the predictions in flight, by step modulo horizon */
+    double velocity[ADAPTIVE_SLOTS];   /* the velocities of the last strides */
 } AdaptiveStatistics;
+
+/* The measured secant velocity over the last ADAPTIVE_SLOTS strides of one
+ * DOF, corrected by the nominal model's own curvature over them (see the header). */
+typedef struct {
+    double y[ADAPTIVE_SLOTS];           /* the measurement at each stride's start */
+    double dv[ADAPTIVE_SLOTS], dw[ADAPTIVE_SLOTS]; /* integrals of the nominal acceleration
+                                                   * over each stride: once, twice */
+    double v, w;                        /* the same over the running stride */
+} AdaptiveSecant;
 
 /* One member's state for one DOF. */
 typedef struct {
@@ -100,14 +127,21 @@ typedef struct {
 typedef struct {
     int count;                         /* linear members */
     double gain;                       /* h / ADAPTIVE_WINDOW */
+    int stride;                        /* steps between the velocity comparisons */
+    double span;                       /* [s] of a secant: ADAPTIVE_SLOTS strides */
+    double velocity_gain;              /* the window's gain per comparison */
+    unsigned start_limit;              /* ADAPTIVE_START_TIME in steps */
     AdaptiveGains gains[ADAPTIVE_MAX_MEMBERS];
     AdaptiveMember member[STO_MAX_DOF][ADAPTIVE_MAX_MEMBERS];
     AdaptiveStatistics sta[STO_MAX_DOF]; /* the super-twisting observer's */
     double sta_saturation[STO_MAX_DOF];  /* its rate of saturated steps (window as sta) */
     double sta_v[STO_MAX_DOF];           /* its injection (o->z_eq publishes the selected one's) */
+    AdaptiveSecant secant[STO_MAX_DOF];
     int started[STO_MAX_DOF];            /* the members run (the observer has converged) */
+    unsigned waited[STO_MAX_DOF];        /* steps before they started */
     unsigned age[STO_MAX_DOF];           /* steps since they started */
-    int selected[STO_MAX_DOF];           /* member index or ADAPTIVE_SUPER_TWISTING */
+    int selected[STO_MAX_DOF];           /* whose velocity is published: a member index or
+                                          * ADAPTIVE_SUPER_TWISTING */
     int perturbation[STO_MAX_DOF];       /* whose injection is published (select_members) */
     int follow;                          /* the member the identifier follows */
     double z_filtered[STO_MAX_DOF];      /* selected injection through the tau filter */
