@@ -43,8 +43,10 @@
  * measurement ADAPTIVE_HORIZON samples ahead, x1 + T x2 + T^2 (a + xi)/2; the
  * smallest mean square error of these predictions (same window, same
  * hysteresis) publishes its xi.  Its acceleration enters that error, so the
- * criterion weighs the perturbation's noise against its lag. The identifier
- * follows that member.  On exact data the super-twisting observer stays published
+ * criterion weighs the perturbation's noise against its lag (ranking the
+ * perturbations by the secant picked members too slow for the 6.1 sine).
+ *
+ * On exact data the super-twisting observer stays published
  * as long as its one-sample innovations are far below every member's
  * (ADAPTIVE_EXACT_RATIO) and its injection rarely saturates
  * (ADAPTIVE_SATURATION_LIMIT): there it is deadbeat, and the members' small
@@ -64,7 +66,9 @@
  * Identification with a linear member: xi is the perturbation through the
  * member's closed-loop filter G, so the regressor must pass the same G
  * (adaptive_shadow_step) for xi = Delta (G phi) to hold; the identifier
- * follows one member, fixed when it starts. */
+ * follows one member, fixed when it starts: the one whose velocity is
+ * published then (its velocity enters the regressors; following the
+ * perturbation's member instead left 10 kHz 16-bit data at 1.8 % for 0.37 %). */
 #ifndef NOISE_ADAPTIVE_H
 #define NOISE_ADAPTIVE_H
 
@@ -166,7 +170,7 @@ void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank);
  * it when it starts by itself). */
 int adaptive_settled(const AdaptiveBank *bank, int n);
 
-/* Fixes the member the identifier follows to the one whose injection is
+/* Fixes the member the identifier follows to the one whose velocity is
  * published now on DOF 1
  * (one member for all DOFs: the rows of the regression share one regressor). */
 void adaptive_follow_published(AdaptiveBank *bank);
