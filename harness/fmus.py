@@ -80,8 +80,9 @@ def check_parameters(fmu: str | Path, values: Mapping[str, object]) -> dict[str,
             raise FMUError(f"{Path(fmu).name} has no variable named {name!r}")
         variable = variables[name]
         if variable.causality not in ("parameter", "input"):
-            raise FMUError(f"{name} is {'an' if variable.causality[0] in 'aeiou' else 'a'} "
-                           f"{variable.causality} of {Path(fmu).name}: it cannot be set")
+            kind = {"calculatedParameter": "a calculated parameter", "output": "an output",
+                    "local": "a local variable"}.get(variable.causality, variable.causality)
+            raise FMUError(f"{name} is {kind} of {Path(fmu).name}: it cannot be set")
         out[name] = check_value(variable, value)
     return out
 

@@ -159,7 +159,8 @@ def identify(recording: Recording, observer_fmu: Path, parameters: dict[str, Val
                       recording.step, [f"observer.{o}" for o in OUTPUTS], signals=signals)
     finally:
         sim.close()
-    out = {"t": records.time, "y": recording.y[: len(records.time)],
+    # the recording's own time stamps (the master's t0 + k H may differ in the last bit)
+    out = {"t": recording.t[: len(records.time)], "y": recording.y[: len(records.time)],
            "u": recording.u[: len(records.time)]}
     for name in OUTPUTS:
         out[name.replace("[1]", "")] = records[f"observer.{name}"]

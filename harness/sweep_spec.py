@@ -101,8 +101,15 @@ def mapping(value: Any, where: str) -> Mapping[str, Any]:
     return value
 
 
+def _json_number(value: Any, where: str) -> None:
+    """A number of the spec itself (JSON/TOML), not text that looks like one."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise SpecError(f"{where} = {value!r} is not a number")
+
+
 def positive(value: Any, where: str, most: float | None = None) -> float:
     """A finite number > 0 (and <= most)."""
+    _json_number(value, where)
     try:
         number = real(where, value, 0.0, most, low_open=True)
     except BadValue as error:
@@ -112,6 +119,7 @@ def positive(value: Any, where: str, most: float | None = None) -> float:
 
 def transient(value: Any) -> float:
     """The metrics' transient: a finite number >= 0."""
+    _json_number(value, "transient")
     try:
         return real("transient", value, 0.0)
     except BadValue as error:
@@ -150,6 +158,8 @@ def value_range(name: str, spec: Any, type_: str, low_bound: float | None = None
     else:
         raise SpecError(f"random.ranges.{name}: give [low, high] or "
                         f"{{\"low\": .., \"high\": .., \"scale\": \"log\"}}")
+    _json_number(low, f"random.ranges.{name}: low")
+    _json_number(high, f"random.ranges.{name}: high")
     try:
         low = real(f"random.ranges.{name}: low", low)
         high = real(f"random.ranges.{name}: high", high)
