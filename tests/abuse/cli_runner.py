@@ -11,10 +11,10 @@ import contextlib
 import io
 import subprocess
 import sys
-from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[2]
-FMU_DIR = REPO / "build" / "fmus"
+from abuse_fmi import REPO, fmu_dir
+
+FMU_DIR = fmu_dir()  # $STO_FMU_DIR (the sanitized build under sanitize.sh) or build/fmus
 
 
 def cli(args: list[str]) -> tuple[int, str]:
