@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 
 from .fmus import FMUError
+from .values import INT32_MAX, BadValue, argparse_type, integer, real
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_FMU_DIR = REPO / "build" / "fmus"
@@ -39,7 +40,7 @@ def cmd_reproduce(args) -> int:
 
     names = list(SCENARIOS) if args.scenario == "all" else [args.scenario]
     fmu_dir = _fmu_dir(args)
-    out = Path(args.out)
+    out = _output_folder(args.out, "reproduce")
     summary = {}
     for name in names:
         scenario = SCENARIOS[name]
@@ -50,7 +51,7 @@ def cmd_reproduce(args) -> int:
         metrics = score(scenario, records)
         folder = out / name
         folder.mkdir(parents=True, exist_ok=True)
-        decimation = max(1, args.csv_decimation)
+        decimation = args.csv_decimation
         from .master import Records
         Records(records.time[::decimation],
                 {k: v[::decimation] for k, v in records.signals.items()}).to_csv(
@@ -82,42 +83,73 @@ def summary_table(summary: dict[str, dict[str, float]]) -> str:
     return "\n".join(lines)
 
 
-def _parse_params(items: list[str]) -> dict[str, float | bool]:
-    params: dict[str, float | bool] = {}
+def _parse_params(items: list[str]) -> dict[str, int | float | bool]:
+    """NAME=VALUE items: true/false, an integer, or a number (typed and range-checked
+    against the FMU by fmus.check_parameters)."""
+    params: dict[str, int | float | bool] = {}
     for item in items:
         name, sep, text = item.partition("=")
-        if not sep or not name:
+        if not sep or not name.strip():
             raise SystemExit(f"harness: --param {item!r}: expected NAME=VALUE")
         lowered = text.strip().lower()
         if lowered in ("true", "false"):
             params[name.strip()] = lowered == "true"
             continue
         try:
-            params[name.strip()] = float(text)
+            params[name.strip()] = int(text)
         except ValueError:
-            raise SystemExit(f"harness: --param {item!r}: {text!r} is not a number") from None
+            try:
+                params[name.strip()] = float(text)
+            except ValueError:
+                raise SystemExit(f"harness: --param {item!r}: {text!r} is not a number") from None
     return params
 
 
+def _output_folder(path: str, command: str) -> Path:
+    """The --out folder, created now (before any computation): SystemExit with a
+    message if it cannot be (a file of that name, no permission, ...)."""
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise SystemExit(f"harness {command}: --out {out} exists and is not a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise SystemExit(f"harness {command}: cannot create --out {out}: "
+                         f"{error.strerror or error}") from None
+    return out
+
+
 def cmd_identify(args) -> int:
-    from .identify import DataError, final_estimates, identify, read_recording, write_csv
+    from .fmus import check_parameters
+    from .identify import (DataError, default_internal_step, final_estimates, identify,
+                           largest_internal_step, read_recording, write_csv)
     from .plots import plot_identification
 
+    fmu = _fmu_dir(args) / "SuperTwistingObserver.fmu"
+    parameters = check_parameters(fmu, {
+        "identifier": {"off": 0, "lsm": 1, "mff": 2}[args.identifier],
+        **_parse_params(args.param)})
+    out = _output_folder(args.out, "identify")
     try:
         recording = read_recording(args.data)
     except DataError as error:
         print(f"harness identify: {error}", file=sys.stderr)
         return 2
-    parameters = {"identifier": {"off": 0, "lsm": 1, "mff": 2}[args.identifier],
-                  **_parse_params(args.param)}
-    columns = identify(recording, _fmu_dir(args) / "SuperTwistingObserver.fmu", parameters,
-                       input_hold=args.input_hold)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    h = parameters.get("h")
+    if h is None:
+        h_max = largest_internal_step(fmu)
+        h = default_internal_step(recording.step, h_max)
+        if h != recording.step:
+            print(f"note: samples {recording.step:g} s apart are more than the observer's "
+                  f"largest internal step ({h_max:g} s): h = {h:g} s "
+                  f"({round(recording.step / h)} internal steps per sample); set it with "
+                  f"--param h=...")
+    columns = identify(recording, fmu, parameters, input_hold=args.input_hold)
     write_csv(columns, out / "estimates.csv")
     plot = plot_identification(columns["t"], columns, out)
     summary = final_estimates(columns)
     (out / "estimates.json").write_text(json.dumps({**summary, "parameters": parameters,
+                                                    "h": h,
                                                     "input_hold": args.input_hold},
                                                    indent=2) + "\n")
     print(f"wrote {out / 'estimates.csv'}, {out / 'estimates.json'}, {plot}")
@@ -134,19 +166,34 @@ def cmd_demo(args) -> int:
     args.python_loop = False
     cmd_reproduce(args)
     print("\npaper method vs the FMU's defaults (noise-free):")
-    args.out, args.noise = str(out / "compare"), "0"
+    args.out, args.noise = str(out / "compare"), (0.0,)
     return cmd_compare(args)
 
 
 def cmd_compare(args) -> int:
     from .compare import markdown_table, run_comparison
 
-    noise = tuple(float(n) for n in args.noise.split(","))
-    rows = run_comparison(_fmu_dir(args), Path(args.out),
+    noise = args.noise if isinstance(args.noise, tuple) else _noise_list(args.noise)
+    rows = run_comparison(_fmu_dir(args), _output_folder(args.out, "compare"),
                           None if args.scenario == "all" else [args.scenario], noise)
     print(markdown_table(rows))
     print(f"\nwrote {Path(args.out) / 'compare.md'}, compare.csv and figures")
     return 0
+
+
+def _noise_list(text: str) -> tuple[float, ...]:
+    """compare --noise: comma-separated noise levels, each finite and >= 0."""
+    try:
+        levels = tuple(real("--noise", item, 0.0) for item in text.split(","))
+    except BadValue as error:
+        raise argparse.ArgumentTypeError(f"{error} (give comma-separated standard deviations "
+                                         f">= 0, e.g. 0,1e-5,1e-4)") from None
+    return levels
+
+
+NOISE = argparse_type(real, "--noise", low=0.0)
+SEED = argparse_type(integer, "--seed", low=0, high=2**63 - 1)
+DECIMATION = argparse_type(integer, "--csv-decimation", low=1, high=INT32_MAX)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -161,10 +208,10 @@ def main(argv: list[str] | None = None) -> int:
     p = sub.add_parser("reproduce", help="run the paper's section 6 examples")
     p.add_argument("--scenario", default="all", choices=["all", *SCENARIOS])
     p.add_argument("--out", required=True)
-    p.add_argument("--noise", type=float, default=0.0, help="std of noise on theta [rad]")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--csv-decimation", type=int, default=10,
-                   help="write every Nth step to signals.csv (default 10)")
+    p.add_argument("--noise", type=NOISE, default=0.0, help="std of noise on theta [rad], >= 0")
+    p.add_argument("--seed", type=SEED, default=0, help="noise seed, >= 0")
+    p.add_argument("--csv-decimation", type=DECIMATION, default=10,
+                   help="write every Nth step to signals.csv (default 10, >= 1)")
     p.add_argument("--python-loop", action="store_true", help="use the plain-Python master loop")
     p.set_defaults(func=cmd_reproduce)
 
@@ -175,7 +222,8 @@ def main(argv: list[str] | None = None) -> int:
 
     p = sub.add_parser("compare", help="paper method vs the improved defaults, with noise")
     p.add_argument("--scenario", default="all", choices=["all", *SCENARIOS])
-    p.add_argument("--noise", default="0,1e-5,1e-4", help="comma-separated noise std [rad]")
+    p.add_argument("--noise", type=_noise_list, default=(0.0, 1e-5, 1e-4),
+                   help="comma-separated noise std [rad], each >= 0 (default 0,1e-5,1e-4)")
     p.add_argument("--out", required=True)
     p.set_defaults(func=cmd_compare)
 

@@ -112,7 +112,7 @@ def write_tables(rows: list[Row], out: Path) -> None:
     with (out / "compare.csv").open("w") as f:
         f.write("scenario,noise_std,metric,paper,improved\n")
         for r in rows:
-            f.write(f"{r.scenario},{r.noise:g},{r.metric},{r.paper:.6g},{r.improved:.6g}\n")
+            f.write(f"{r.scenario},{r.noise!r},{r.metric},{r.paper!r},{r.improved!r}\n")
     (out / "compare.json").write_text(json.dumps([r.__dict__ for r in rows], indent=1) + "\n")
     (out / "compare.md").write_text(markdown_table(rows) + "\n")
 

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import ctypes
 import shutil
-import tempfile
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,6 +22,9 @@ from fmpy.fmi2 import (
     fmi2CallbackLoggerTYPE,
 )
 from fmpy import calloc, free
+
+from .tempdirs import owned_temp_dir
+from .values import BadValue, fmi_value
 
 Value = float | int | bool
 
@@ -39,6 +41,50 @@ class Variable:
     value_reference: int
     type: str  # "Real", "Integer" or "Boolean"
     causality: str
+    min: float | None = None  # the declared range (None: unbounded)
+    max: float | None = None
+
+
+def _bound(text: str | None) -> float | None:
+    return None if text in (None, "") else float(text)
+
+
+def variables_of(model_description) -> dict[str, Variable]:
+    """name -> Variable of an fmpy model description."""
+    return {v.name: Variable(v.name, v.valueReference, v.type, v.causality, _bound(v.min),
+                             _bound(v.max))
+            for v in model_description.modelVariables}
+
+
+def check_value(variable: Variable, value: object, where: str = "") -> Value:
+    """``value`` converted to ``variable``'s type; FMUError (prefixed by ``where``)
+    if it is not one: an Integer must be integral and in its declared range (never
+    wrapped to 32 bits or truncated), a Boolean true/false or 1/0, a Real finite
+    (the FMU checks a Real's range itself, open ends included)."""
+    try:
+        if variable.type == "Integer":
+            return fmi_value(variable.name, "Integer", value, variable.min, variable.max)
+        return fmi_value(variable.name, variable.type, value)
+    except BadValue as error:
+        raise FMUError(f"{where}{error}") from None
+
+
+def check_parameters(fmu: str | Path, values: Mapping[str, object]) -> dict[str, Value]:
+    """Checks values for an FMU's parameters and inputs before it is instantiated:
+    each name must be a variable that can be set, each value fit its type and
+    range (check_value).  Returns the typed values; FMUError names the problem."""
+    variables = variables_of(read_model_description(str(fmu)))
+    out: dict[str, Value] = {}
+    for name, value in values.items():
+        if name not in variables:
+            raise FMUError(f"{Path(fmu).name} has no variable named {name!r}")
+        variable = variables[name]
+        if variable.causality not in ("parameter", "input"):
+            kind = {"calculatedParameter": "a calculated parameter", "output": "an output",
+                    "local": "a local variable"}.get(variable.causality, variable.causality)
+            raise FMUError(f"{name} is {kind} of {Path(fmu).name}: it cannot be set")
+        out[name] = check_value(variable, value)
+    return out
 
 
 class FMUInstance:
@@ -54,11 +100,9 @@ class FMUInstance:
         self.model_description = read_model_description(str(self.path))
         if self.model_description.coSimulation is None:
             raise FMUError(f"{self.path}: not a co-simulation FMU")
-        self._unzip_dir = extract(str(self.path), unzipdir=tempfile.mkdtemp(prefix="sto-fmu-"))
-        self.variables = {
-            v.name: Variable(v.name, v.valueReference, v.type, v.causality)
-            for v in self.model_description.modelVariables
-        }
+        # named after this process: tempdirs.remove_stale clears it if the process is killed
+        self._unzip_dir = extract(str(self.path), unzipdir=str(owned_temp_dir("fmu")))
+        self.variables = variables_of(self.model_description)
         self.messages: list[str] = []
         self._callbacks = self._make_callbacks()
         self.slave = FMU2Slave(
@@ -77,7 +121,9 @@ class FMUInstance:
     # -- logging -------------------------------------------------------------
     def _make_callbacks(self) -> fmi2CallbackFunctions:
         def log(_env, instance_name, status, category, message):
-            text = message.decode(errors="replace") if message else ""
+            # the FMU escapes '%' and '#' for printf-style loggers: show the text
+            text = (message.decode(errors="replace") if message else "") \
+                .replace("%%", "%").replace("##", "#")
             label = STATUS_NAMES[status] if 0 <= status < len(STATUS_NAMES) else str(status)
             self.messages.append(f"[{label}] {text}")
 
@@ -111,20 +157,15 @@ class FMUInstance:
         return self.variable(name).value_reference
 
     def set(self, values: Mapping[str, Value]) -> None:
-        """Set variables by name, converting each value to the variable's type."""
+        """Set variables by name, converting each value to the variable's type
+        (checked first: see :func:`check_value`)."""
         for name, value in values.items():
             var = self.variable(name)
-            if var.type == "Real":
-                self._call(lambda: self.slave.setReal([var.value_reference], [float(value)]),
-                           f"setting {name} = {value!r}")
-            elif var.type == "Integer":
-                self._call(lambda: self.slave.setInteger([var.value_reference], [int(value)]),
-                           f"setting {name} = {value!r}")
-            elif var.type == "Boolean":
-                self._call(lambda: self.slave.setBoolean([var.value_reference], [bool(value)]),
-                           f"setting {name} = {value!r}")
-            else:
-                raise FMUError(f"{self.name}: cannot set {name} of type {var.type}")
+            typed = check_value(var, value, f"{self.name}: ")
+            setter = {"Real": self.slave.setReal, "Integer": self.slave.setInteger,
+                      "Boolean": self.slave.setBoolean}[var.type]
+            self._call(lambda: setter([var.value_reference], [typed]),
+                       f"setting {name} = {value!r}")
 
     def get(self, names: Iterable[str]) -> list[Value]:
         """Get variables by name (any type)."""

@@ -34,44 +34,76 @@ class Recording:
 
 
 def read_recording(path: str | Path, relative_tolerance: float = 1e-6) -> Recording:
-    """Read columns t, y, u (header row, any order, extra columns ignored) with clear errors."""
+    """Read columns t, y, u (header row, any order, extra columns ignored) with clear errors.
+
+    The file is UTF-8 text (a byte-order mark, as spreadsheets write for "CSV UTF-8",
+    is skipped); anything else -- another encoding, a binary file, a field too long
+    for a CSV reader -- is a DataError that names the file and line, never a
+    traceback."""
     path = Path(path)
     try:
-        handle = path.open(newline="")
+        handle = path.open(newline="", encoding="utf-8-sig")
     except OSError as error:
         raise DataError(f"{path}: cannot open ({error.strerror})") from None
-    with handle:
-        reader = csv.reader(handle)
-        header = next(reader, None)
-        if header is None:
-            raise DataError(f"{path}: the file is empty")
-        names = [h.strip().lower() for h in header]
-        missing = [c for c in REQUIRED if c not in names]
-        if missing:
-            raise DataError(f"{path} line 1: missing column(s) {', '.join(missing)}; the header "
-                            f"must name t, y and u (found: {', '.join(header) or 'nothing'})")
-        columns = {c: names.index(c) for c in REQUIRED}
-        rows: list[tuple[float, float, float]] = []
-        for line, row in enumerate(reader, start=2):
-            if not row or all(not cell.strip() for cell in row):
-                continue
-            values = []
-            for name in REQUIRED:
-                index = columns[name]
-                if index >= len(row):
-                    raise DataError(f"{path} line {line}: column {name!r} is missing "
-                                    f"({len(row)} fields)")
-                text = row[index].strip()
-                try:
-                    value = float(text)
-                except ValueError:
-                    raise DataError(f"{path} line {line}: {name} = {text!r} is not a number") \
-                        from None
-                if not math.isfinite(value):
-                    raise DataError(f"{path} line {line}: {name} = {text} is not finite "
-                                    f"(NaN or Inf rows must be removed or interpolated first)")
-                values.append(value)
-            rows.append((values[0], values[1], values[2]))
+    reader = None
+    try:
+        with handle:
+            reader = csv.reader(handle)
+            return _parse_recording(path, reader, relative_tolerance)
+    except UnicodeDecodeError:
+        raise DataError(f"{path}: {_not_utf8(path)}; identify reads UTF-8 text (save the file "
+                        f"as CSV UTF-8)") from None
+    except csv.Error as error:
+        line = reader.line_num if reader is not None else 0
+        raise DataError(f"{path} line {line}: not a readable CSV file ({error}); identify needs "
+                        f"a text CSV with a header t, y, u") from None
+    except OSError as error:
+        raise DataError(f"{path}: cannot read ({error.strerror or error})") from None
+
+
+def _not_utf8(path: Path) -> str:
+    """Where the file stops being UTF-8: its first bad byte, with line and offset."""
+    data = path.read_bytes()
+    try:
+        data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        line = data.count(b"\n", 0, error.start) + 1
+        return (f"line {line}: byte 0x{data[error.start]:02x} at offset {error.start} is not "
+                f"UTF-8")
+    return "not UTF-8"
+
+
+def _parse_recording(path: Path, reader, relative_tolerance: float) -> Recording:
+    header = next(reader, None)
+    if header is None:
+        raise DataError(f"{path}: the file is empty")
+    names = [h.strip().lower() for h in header]
+    missing = [c for c in REQUIRED if c not in names]
+    if missing:
+        raise DataError(f"{path} line 1: missing column(s) {', '.join(missing)}; the header "
+                        f"must name t, y and u (found: {', '.join(header) or 'nothing'})")
+    columns = {c: names.index(c) for c in REQUIRED}
+    rows: list[tuple[float, float, float]] = []
+    for line, row in enumerate(reader, start=2):
+        if not row or all(not cell.strip() for cell in row):
+            continue
+        values = []
+        for name in REQUIRED:
+            index = columns[name]
+            if index >= len(row):
+                raise DataError(f"{path} line {line}: column {name!r} is missing "
+                                f"({len(row)} fields)")
+            text = row[index].strip()
+            try:
+                value = float(text)
+            except ValueError:
+                raise DataError(f"{path} line {line}: {name} = {text!r} is not a number") \
+                    from None
+            if not math.isfinite(value):
+                raise DataError(f"{path} line {line}: {name} = {text} is not finite "
+                                f"(NaN or Inf rows must be removed or interpolated first)")
+            values.append(value)
+        rows.append((values[0], values[1], values[2]))
     if len(rows) < 3:
         raise DataError(f"{path}: {len(rows)} data row(s); at least 3 are needed")
     data = np.array(rows)
@@ -117,9 +149,8 @@ def identify(recording: Recording, observer_fmu: Path, parameters: dict[str, Val
     observer = FMUInstance(observer_fmu, "observer")
     sim = CoSimulation({"observer": observer},
                        [Link("signal:y", "observer.y[1]"), Link("signal:u", "observer.u")])
-    # h = the sample step by default: sub-stepping would hold y constant over a
-    # sample, a staircase the observer then tracks.
-    parameters = {"h": recording.step, **parameters}
+    parameters = {"h": default_internal_step(recording.step, observer.variable("h").max),
+                  **parameters}
     n = len(recording.t) - 1
     signals = {"y": recording.y[:n], "u": held_input(recording.u, input_hold)[:n]}
     try:
@@ -128,11 +159,32 @@ def identify(recording: Recording, observer_fmu: Path, parameters: dict[str, Val
                       recording.step, [f"observer.{o}" for o in OUTPUTS], signals=signals)
     finally:
         sim.close()
-    out = {"t": records.time, "y": recording.y[: len(records.time)],
+    # the recording's own time stamps (the master's t0 + k H may differ in the last bit)
+    out = {"t": recording.t[: len(records.time)], "y": recording.y[: len(records.time)],
            "u": recording.u[: len(records.time)]}
     for name in OUTPUTS:
         out[name.replace("[1]", "")] = records[f"observer.{name}"]
     return out
+
+
+def largest_internal_step(observer_fmu: Path) -> float | None:
+    """The largest h the observer FMU declares (its variable h's max)."""
+    from fmpy import read_model_description
+
+    from .fmus import variables_of
+
+    return variables_of(read_model_description(str(observer_fmu)))["h"].max
+
+
+def default_internal_step(step: float, h_max: float | None) -> float:
+    """The observer's h when the user gives none: the sample step itself
+    (sub-stepping would hold y constant over a sample, a staircase the observer
+    then tracks), or, for samples further apart than the largest h the FMU
+    accepts (``h_max``, 1 s), the sample step split into the fewest equal
+    internal steps that fit."""
+    if h_max is None or step <= h_max:
+        return step
+    return step / math.ceil(step / h_max)
 
 
 def final_estimates(columns: dict[str, np.ndarray]) -> dict[str, object]:
@@ -146,6 +198,8 @@ def final_estimates(columns: dict[str, np.ndarray]) -> dict[str, object]:
 
 
 def write_csv(columns: dict[str, np.ndarray], path: Path) -> None:
+    """The columns as CSV, every number at full precision (%.17g round-trips a
+    double: epoch timestamps at 1 kHz stay distinct)."""
     names = list(columns)
     np.savetxt(path, np.column_stack([columns[n] for n in names]), delimiter=",",
-               header=",".join(names), comments="", fmt="%.10g")
+               header=",".join(names), comments="", fmt="%.17g")

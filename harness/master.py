@@ -59,7 +59,7 @@ class Records:
         names = list(self.signals)
         table = np.column_stack([self.time] + [self.signals[n] for n in names])
         np.savetxt(path, table, delimiter=",", header=",".join(["time"] + names), comments="",
-                   fmt="%.10g")
+                   fmt="%.17g")  # full precision: %.17g round-trips a double
 
 
 @dataclass

@@ -60,6 +60,13 @@ every run whose key is already in results.csv (``--retry-failed`` redoes the
 failed ones).  A run that fails (an FMU error, a rejected parameter value, a
 NaN metric) is recorded as failed with its message; the sweep goes on.
 If the FMUs are rebuilt with different behaviour, sweep into a new DIR.
+
+Limits (harness.sweep_spec): at most 100000 runs per spec (counted from its
+sizes before anything is built), stop_time at most 10^4 s; every value is
+checked first (finite, Integers integral and in range, never wrapped).  One
+sweep at a time writes DIR (a lock, harness.sweep_lock); a second one is
+refused.  Exit status: 0 every run of the spec ok, 1 some failed (see
+results.csv), 2 a bad spec or no cluster, 3 DIR is locked by another sweep.
 """
 from __future__ import annotations
 
@@ -86,55 +93,27 @@ from typing import Any
 
 import numpy as np
 
-from .fmus import FMUError, Value
+from .fmus import FMUError, Value, Variable, variables_of
+from .sweep_lock import OutputLocked, locked_output
+from .tempdirs import owned_temp_dir, remove_stale
+from .values import argparse_type, integer, real
+from .sweep_spec import (MAX_STOP_TIME, PSEUDO, RandomSampling, Range, SpecError,
+                         check_run_count, convert_value, count, mapping, positive, pseudo_value,
+                         run_count_bound, sampling_seed, value_range)
+from .sweep_spec import transient as check_transient
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_FMU_DIR = REPO / "build" / "fmus"
 FMU_FILES = {"plant": "Pendulum.fmu", "controller": "TwistingController.fmu",
              "observer": "SuperTwistingObserver.fmu"}
-PSEUDO = ("noise_std", "seed")
 METHODS = ("paper", "improved")
+MAX_WORKERS = 1024  # --workers: LocalCluster processes on this machine
+CONNECT_TIMEOUT = 30.0  # s: to reach a scheduler, and for its first worker
 TABLE = "results.csv"
 METRICS_WINDOW = 1.0  # harness.metrics.score: max_e2_after_1s etc. use t >= 1 s
 
 
-class SpecError(ValueError):
-    """The sweep specification is invalid (says where and why)."""
-
-
 # ---- the specification ---------------------------------------------------------
-
-@dataclass(frozen=True)
-class Range:
-    low: float
-    high: float
-    log: bool = False
-
-
-@dataclass
-class RandomSampling:
-    method: str  # "lhs" or "uniform"
-    n: int
-    seed: int
-    ranges: dict[str, Range]
-
-    def sample(self) -> np.ndarray:
-        """(n, len(ranges)) samples in [0, 1), then mapped to the ranges."""
-        rng = np.random.default_rng(self.seed)
-        d = len(self.ranges)
-        if self.method == "lhs":  # one sample in each of n strata, per dimension
-            u = (np.argsort(rng.random((d, self.n)), axis=1).T + rng.random((self.n, d))) / self.n
-        else:
-            u = rng.random((self.n, d))
-        out = np.empty_like(u)
-        for j, r in enumerate(self.ranges.values()):
-            if r.log:
-                out[:, j] = 10.0 ** (math.log10(r.low) + u[:, j] * (math.log10(r.high) -
-                                                                     math.log10(r.low)))
-            else:
-                out[:, j] = r.low + u[:, j] * (r.high - r.low)
-        return out
-
 
 @dataclass(frozen=True)
 class Run:
@@ -176,7 +155,7 @@ class SweepSpec:
                 for values in itertools.product(*(self.grid[n] for n in grid_names))]
         if self.random:
             names = list(self.random.ranges)
-            samples = [{n: self._convert(n, float(x)) for n, x in zip(names, row)}
+            samples = [{n: self._sampled(n, float(x)) for n, x in zip(names, row)}
                        for row in self.random.sample()]
             combos = [{**g, **s} for g in grid for s in samples]
         elif self.grid or not self.points:
@@ -198,8 +177,9 @@ class SweepSpec:
                     runs.append(Run(key, params))
         return runs
 
-    def _convert(self, name: str, value: Any) -> Value:
-        return convert_value(name, self.types[name], value)
+    def _sampled(self, name: str, value: float) -> Value:
+        """A sample of a random range as the parameter's type (Integers rounded)."""
+        return convert_value(name, self.types[name], value, sampled=True)
 
 
 def run_key(scenario: str, stop_time: float, transient: float, method: str,
@@ -212,64 +192,39 @@ def run_key(scenario: str, stop_time: float, transient: float, method: str,
     return hashlib.sha256(canonical.encode()).hexdigest()[:16]
 
 
-def convert_value(name: str, type_: str, value: Any) -> Value:
-    """A spec value as the parameter's type; SpecError if it cannot be one."""
-    if type_ == "Boolean":
-        if isinstance(value, bool):
-            return value
-        if isinstance(value, (int, float)) and value in (0, 1):
-            return bool(value)
-        raise SpecError(f"{name}: {value!r} is not a Boolean (true/false)")
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise SpecError(f"{name}: {value!r} is not a number")
-    if type_ == "Integer":
-        if isinstance(value, float) and not value.is_integer():
-            value = round(value)  # sampled from a range
-        return int(value)
-    return float(value)
-
-
-def parameter_types(fmu_dir: Path) -> dict[str, dict[str, tuple[str, str]]]:
-    """fmu -> variable -> (type, causality), read from the FMUs' model descriptions."""
+def parameter_types(fmu_dir: Path) -> dict[str, dict[str, Variable]]:
+    """fmu -> variable name -> Variable (type, causality, declared range), read from
+    the FMUs' model descriptions."""
     from fmpy import read_model_description
 
-    out: dict[str, dict[str, tuple[str, str]]] = {}
+    out: dict[str, dict[str, Variable]] = {}
     for fmu, filename in FMU_FILES.items():
         path = fmu_dir / filename
         if not path.exists():
             raise SpecError(f"{path} is missing: run ./build.sh fmus first (or pass --fmu-dir)")
-        md = read_model_description(str(path))
-        out[fmu] = {v.name: (v.type, v.causality) for v in md.modelVariables}
+        out[fmu] = variables_of(read_model_description(str(path)))
     return out
 
 
-def _parameter_type(name: str, variables: Mapping[str, Mapping[str, tuple[str, str]]]) -> str:
-    if name == "noise_std":
-        return "Real"
-    if name == "seed":
-        return "Integer"
+def _parameter(name: str, variables: Mapping[str, Mapping[str, Variable]]) -> Variable:
+    if name in PSEUDO:
+        return Variable(name, -1, "Real" if name == "noise_std" else "Integer", "parameter")
     fmu, _, variable = name.partition(".")
     if fmu not in variables or not variable:
         raise SpecError(f"{name!r}: a parameter is 'fmu.variable' with fmu one of "
                         f"{', '.join(FMU_FILES)} (or one of {', '.join(PSEUDO)})")
     if variable not in variables[fmu]:
         raise SpecError(f"{name!r}: {FMU_FILES[fmu]} has no variable {variable!r}")
-    type_, causality = variables[fmu][variable]
+    causality = variables[fmu][variable].causality
     if causality != "parameter":
         raise SpecError(f"{name!r} is {'an' if causality[0] in 'aeiou' else 'a'} {causality}, "
                         f"not a parameter")
-    return type_
-
-
-def _check_pseudo(name: str, value: Value) -> None:
-    if name == "noise_std" and not value >= 0.0:
-        raise SpecError(f"noise_std = {value!r} must be >= 0")
-    if name == "seed" and not value >= 0:
-        raise SpecError(f"seed = {value!r} must be >= 0")
+    return variables[fmu][variable]
 
 
 def parse_spec(data: Mapping[str, Any], fmu_dir: Path = DEFAULT_FMU_DIR) -> SweepSpec:
-    """Validates a spec (a dict as read from JSON/TOML) against the scenarios and FMUs."""
+    """Validates a spec (a dict as read from JSON/TOML) against the scenarios and FMUs
+    (every value, and the number of runs: harness.sweep_spec)."""
     from .scenarios import SCENARIOS
 
     known = {"scenario", "stop_time", "transient", "method", "fixed", "grid", "random", "points",
@@ -278,123 +233,90 @@ def parse_spec(data: Mapping[str, Any], fmu_dir: Path = DEFAULT_FMU_DIR) -> Swee
     if unknown:
         raise SpecError(f"unknown spec keys {sorted(unknown)}; known: {sorted(known)}")
     name = data.get("scenario")
-    if name not in SCENARIOS:
+    if not isinstance(name, str) or name not in SCENARIOS:
         raise SpecError(f"scenario {name!r} is not one of {', '.join(SCENARIOS)}")
     scenario = SCENARIOS[name]
-    stop_time = _positive(data.get("stop_time", scenario.stop_time), "stop_time")
-    transient = data.get("transient", scenario.transient)
-    if isinstance(transient, bool) or not isinstance(transient, (int, float)) or transient < 0:
-        raise SpecError(f"transient = {transient!r} must be a number >= 0")
-    transient = float(transient)
+    stop_time = positive(data.get("stop_time", scenario.stop_time), "stop_time", MAX_STOP_TIME)
+    transient = check_transient(data.get("transient", scenario.transient))
     # harness.metrics.score looks at t >= 1 s and t >= transient: both must hold data.
     if not stop_time > max(METRICS_WINDOW, transient):
         raise SpecError(f"stop_time = {stop_time:g} s: the metrics need a run longer than "
                         f"{METRICS_WINDOW:g} s (their fixed window t >= 1 s) and than the "
                         f"transient ({transient:g} s; override it with \"transient\")")
     method = data.get("method", "paper")
-    if method not in METHODS:
+    if not isinstance(method, str) or method not in METHODS:
         raise SpecError(f"method {method!r} is not one of {', '.join(METHODS)}")
 
     variables = parameter_types(fmu_dir)
-    types: dict[str, str] = {}
+    declared: dict[str, Variable] = {}
 
     def typed(name: str, value: Any, where: str) -> Value:
-        if name not in types:
-            types[name] = _parameter_type(name, variables)
+        if name not in declared:
+            declared[name] = _parameter(name, variables)
+        var = declared[name]
         try:
-            converted = convert_value(name, types[name], value)
+            if name in PSEUDO:
+                return pseudo_value(name, value)
+            return convert_value(name, var.type, value, low=var.min, high=var.max)
         except SpecError as error:
             raise SpecError(f"{where}: {error}") from None
-        _check_pseudo(name, converted)
-        return converted
 
-    fixed = {k: typed(k, v, "fixed") for k, v in _mapping(data.get("fixed", {}), "fixed").items()}
+    fixed = {k: typed(k, v, "fixed") for k, v in mapping(data.get("fixed", {}), "fixed").items()}
     grid: dict[str, list[Value]] = {}
-    for k, values in _mapping(data.get("grid", {}), "grid").items():
+    for k, values in mapping(data.get("grid", {}), "grid").items():
         if not isinstance(values, list) or not values:
             raise SpecError(f"grid: {k!r} needs a non-empty list of values")
         grid[k] = [typed(k, v, "grid") for v in values]
 
     random = None
     if "random" in data:
-        r = _mapping(data["random"], "random")
+        r = mapping(data["random"], "random")
         extra = set(r) - {"method", "n", "seed", "ranges"}
         if extra:
             raise SpecError(f"random: unknown keys {sorted(extra)}")
         sampling = r.get("method", "lhs")
         if sampling not in ("lhs", "uniform"):
             raise SpecError(f"random: method {sampling!r} is not 'lhs' or 'uniform'")
-        n = r.get("n")
-        if not isinstance(n, int) or isinstance(n, bool) or n < 1:
-            raise SpecError(f"random: n = {n!r} must be an integer >= 1")
+        n = count(r.get("n"), "random: n")
         ranges: dict[str, Range] = {}
-        for k, spec in _mapping(r.get("ranges", {}), "random.ranges").items():
-            ranges[k] = _range(k, spec)
-            types.setdefault(k, _parameter_type(k, variables))
-            if types[k] == "Boolean":
+        for k, spec in mapping(r.get("ranges", {}), "random.ranges").items():
+            var = declared.setdefault(k, _parameter(k, variables))
+            if var.type == "Boolean":
                 raise SpecError(f"random.ranges: {k!r} is a Boolean; put it in the grid")
             if k in grid:
                 raise SpecError(f"{k!r} is both in the grid and in random.ranges")
+            ranges[k] = value_range(k, spec, var.type, var.min, var.max)
         if not ranges:
             raise SpecError("random: ranges is empty")
-        random = RandomSampling(sampling, n, int(r.get("seed", 0)), ranges)
+        random = RandomSampling(sampling, n, sampling_seed(r.get("seed", 0)), ranges)
 
+    raw_points = data.get("points", []) or []
+    if not isinstance(raw_points, list):
+        raise SpecError("points: give a list of tables/objects")
     points = []
-    for i, point in enumerate(data.get("points", []) or []):
-        point = _mapping(point, f"points[{i}]")
+    for i, point in enumerate(raw_points):
+        point = mapping(point, f"points[{i}]")
         points.append({k: typed(k, v, f"points[{i}]") for k, v in point.items()})
 
     seeds = None
     if "seeds" in data:
         raw = data["seeds"]
         if isinstance(raw, int) and not isinstance(raw, bool):
-            if raw < 1:
-                raise SpecError(f"seeds = {raw}: give a count >= 1 or a list")
-            raw = list(range(raw))
+            raw = list(range(count(raw, "seeds")))  # a count: checked before the list is made
         if not isinstance(raw, list) or not raw:
             raise SpecError("seeds: give a non-empty list of integers or a count")
         seeds = [int(typed("seed", s, "seeds")) for s in raw]
         if "seed" in grid or (random and "seed" in random.ranges):
             raise SpecError("give the noise seeds either as 'seeds' or as a 'seed' parameter")
+    check_run_count(run_count_bound([len(v) for v in grid.values()],
+                                    random.n if random else None, len(points),
+                                    len(seeds) if seeds is not None else 1))
+    types = {k: v.type for k, v in declared.items()}
     spec = SweepSpec(name, stop_time, transient, method, fixed, grid, random, points, seeds,
                      types, dict(data))
     if not spec.runs():
         raise SpecError("the spec describes no run")
     return spec
-
-
-def _mapping(value: Any, where: str) -> Mapping[str, Any]:
-    if not isinstance(value, Mapping):
-        raise SpecError(f"{where}: expected a table/object, got {type(value).__name__}")
-    return value
-
-
-def _positive(value: Any, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
-        raise SpecError(f"{where} = {value!r} must be a number > 0")
-    return float(value)
-
-
-def _range(name: str, spec: Any) -> Range:
-    if isinstance(spec, list) and len(spec) == 2:
-        low, high, scale = spec[0], spec[1], "linear"
-    elif isinstance(spec, Mapping):
-        extra = set(spec) - {"low", "high", "scale"}
-        if extra:
-            raise SpecError(f"random.ranges.{name}: unknown keys {sorted(extra)}")
-        low, high, scale = spec.get("low"), spec.get("high"), spec.get("scale", "linear")
-    else:
-        raise SpecError(f"random.ranges.{name}: give [low, high] or "
-                        f"{{\"low\": .., \"high\": .., \"scale\": \"log\"}}")
-    if any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in (low, high)):
-        raise SpecError(f"random.ranges.{name}: low and high must be numbers")
-    if not low < high:
-        raise SpecError(f"random.ranges.{name}: low = {low} must be < high = {high}")
-    if scale not in ("linear", "log"):
-        raise SpecError(f"random.ranges.{name}: scale {scale!r} is not 'linear' or 'log'")
-    if scale == "log" and not low > 0:
-        raise SpecError(f"random.ranges.{name}: a log scale needs low > 0")
-    return Range(float(low), float(high), scale == "log")
 
 
 def load_spec(path: str | Path, fmu_dir: Path = DEFAULT_FMU_DIR) -> SweepSpec:
@@ -415,7 +337,7 @@ def load_spec(path: str | Path, fmu_dir: Path = DEFAULT_FMU_DIR) -> SweepSpec:
     except ValueError as error:  # JSONDecodeError, TOMLDecodeError
         raise SpecError(f"{path}: {error}") from None
     try:
-        return parse_spec(_mapping(data, str(path)), fmu_dir)
+        return parse_spec(mapping(data, str(path)), fmu_dir)
     except SpecError as error:
         raise SpecError(f"{path}: {error}") from None
 
@@ -574,8 +496,10 @@ class FMUWorkerPlugin(_WorkerPlugin):
         self.pool, self.directory = None, None
 
     def setup(self, worker=None):
+        remove_stale()  # FMUs extracted by killed processes on this machine
         base = getattr(worker, "local_directory", None) or tempfile.gettempdir()
-        self.directory = tempfile.mkdtemp(prefix="sto-sweep-fmus-", dir=base)
+        remove_stale(base)
+        self.directory = str(owned_temp_dir("sweepfmus", base))
         for filename, data in self.payload.items():
             Path(self.directory, filename).write_bytes(data)
         self.pool = SimulationPool(Path(self.directory))
@@ -715,34 +639,69 @@ class SweepResult:
     table: Path
     plots: list[Path]
     failures: list[tuple[str, str]]  # (key, message) of the executed runs that failed
+    failed_in_table: int = 0  # runs of the spec recorded failed, earlier ones included
 
     @property
     def runs_per_second(self) -> float:
         return self.executed / self.wall_time if self.wall_time > 0 else 0.0
 
 
-def start_client(scheduler: str | None, n_workers: int | None):
-    """(client, cluster or None): the given scheduler, or a LocalCluster on loopback."""
+class ClusterError(RuntimeError):
+    """No Dask cluster to run on: the scheduler cannot be reached or has no workers."""
+
+
+def start_client(scheduler: str | None, n_workers: int | None,
+                 connect_timeout: float = CONNECT_TIMEOUT):
+    """(client, cluster or None): the given scheduler, or a LocalCluster on loopback;
+    ClusterError if the scheduler cannot be reached or no worker comes up within
+    ``connect_timeout`` seconds (a sweep never waits forever for workers)."""
     from distributed import Client, LocalCluster
 
-    if scheduler:
-        return Client(scheduler, timeout="30s"), None
-    cluster = LocalCluster(n_workers=n_workers or os.cpu_count() or 1, threads_per_worker=1,
-                           processes=True, host="127.0.0.1", dashboard_address=None)
-    return Client(cluster), cluster
+    if n_workers is not None and not 1 <= n_workers <= MAX_WORKERS:
+        raise ClusterError(f"--workers {n_workers}: give 1 .. {MAX_WORKERS} worker processes")
+    cluster = None
+    try:
+        if scheduler:
+            client = Client(scheduler, timeout=f"{connect_timeout}s")
+        else:
+            cluster = LocalCluster(n_workers=n_workers or os.cpu_count() or 1,
+                                   threads_per_worker=1, processes=True, host="127.0.0.1",
+                                   dashboard_address=None)
+            client = Client(cluster)
+    except (OSError, ValueError, TypeError) as error:  # TimeoutError is an OSError
+        where = f"the Dask scheduler at {scheduler}" if scheduler else "a local Dask cluster"
+        raise ClusterError(f"cannot connect to {where} within {connect_timeout:g} s: "
+                           f"{type(error).__name__}: {error}") from None
+    try:
+        client.wait_for_workers(1, timeout=connect_timeout)
+    except (TimeoutError, OSError):
+        client.close()
+        if cluster is not None:
+            cluster.close()
+        where = f"the scheduler at {scheduler}" if scheduler else "the local cluster"
+        raise ClusterError(f"{where} has no workers (none came up within "
+                           f"{connect_timeout:g} s)") from None
+    return client, cluster
 
 
 def run_sweep(spec: SweepSpec, out: str | Path, fmu_dir: Path = DEFAULT_FMU_DIR, *,
               scheduler: str | None = None, client=None, n_workers: int | None = None,
               retry_failed: bool = False, plots: bool = True, progress: bool = True,
-              stream=None) -> SweepResult:
+              stream=None, connect_timeout: float = CONNECT_TIMEOUT) -> SweepResult:
     """Runs the spec's missing runs on Dask and appends them to DIR/results.csv.
 
     ``client``: an existing dask.distributed Client (else ``scheduler`` or a
     LocalCluster with ``n_workers`` workers is used and closed afterwards)."""
+    with locked_output(Path(out)):  # one writer per folder: OutputLocked otherwise
+        remove_stale()  # FMUs extracted by earlier, killed sweeps
+        return _run_sweep(spec, Path(out), fmu_dir, scheduler=scheduler, client=client,
+                          n_workers=n_workers, retry_failed=retry_failed, plots=plots,
+                          progress=progress, stream=stream, connect_timeout=connect_timeout)
+
+
+def _run_sweep(spec: SweepSpec, out: Path, fmu_dir: Path, *, scheduler, client, n_workers,
+               retry_failed, plots, progress, stream, connect_timeout) -> SweepResult:
     stream = stream or sys.stderr
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     table = ResultsTable(out / TABLE)
     (out / "spec.json").write_text(json.dumps(spec.source, indent=2, default=str) + "\n")
     runs = spec.runs()
@@ -757,7 +716,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, fmu_dir: Path = DEFAULT_FMU_DIR,
         own = client is None
         cluster = None
         if own:
-            client, cluster = start_client(scheduler, n_workers)
+            client, cluster = start_client(scheduler, n_workers, connect_timeout)
         plugin_name = None
         try:
             payload, digest = _fmu_payload(Path(fmu_dir))
@@ -790,7 +749,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, fmu_dir: Path = DEFAULT_FMU_DIR,
     _write_summary(spec, rows, out, resumed=resumed, executed=len(todo), wall=wall,
                    workers=workers)
     return SweepResult(len(runs), resumed, len(todo), ok, failed, wall, workers, table.path,
-                       written, failures)
+                       written, failures, sum(r.get("status") != "ok" for r in rows))
 
 
 def _execute(client, plugin_name: str, spec: SweepSpec, todo: list[Run], table: ResultsTable,
@@ -989,8 +948,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", required=True, help="output folder (re-use it to resume)")
     p.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                    help="a running Dask scheduler (default: a LocalCluster on this machine)")
-    p.add_argument("--workers", type=int, default=None,
-                   help="LocalCluster worker processes (default: one per core)")
+    p.add_argument("--workers", default=None,
+                   type=argparse_type(integer, "--workers", low=1, high=MAX_WORKERS),
+                   help=f"LocalCluster worker processes, 1..{MAX_WORKERS} (default: one per core)")
+    p.add_argument("--connect-timeout", default=CONNECT_TIMEOUT, metavar="SECONDS",
+                   type=argparse_type(real, "--connect-timeout", low=0.0, low_open=True),
+                   help="give up if the scheduler cannot be reached, or has no worker, within "
+                        f"this time (default {CONNECT_TIMEOUT:g} s)")
     p.add_argument("--retry-failed", action="store_true",
                    help="run again the runs that the table records as failed")
     p.add_argument("--no-plots", action="store_true", help="write the table and summary only")
@@ -1019,9 +983,16 @@ def cmd_sweep(args) -> int:
         print(f"harness sweep: {error}", file=sys.stderr)
         return 2
     out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        print(f"harness sweep: --out {out} exists and is not a folder", file=sys.stderr)
+        return 2
     runs = spec.runs()
     if args.dry_run:
-        done = ResultsTable(out / TABLE).status() if (out / TABLE).exists() else {}
+        try:
+            done = ResultsTable(out / TABLE).status() if (out / TABLE).exists() else {}
+        except SpecError as error:
+            print(f"harness sweep: {error}", file=sys.stderr)
+            return 2
         swept = spec.swept
         print(f"{len(runs)} runs of {spec.scenario} ({spec.stop_time:g} s, {spec.method}); "
               f"swept: {', '.join(swept) or '(nothing)'}")
@@ -1032,7 +1003,14 @@ def cmd_sweep(args) -> int:
         return 0
     try:
         result = run_sweep(spec, out, fmu_dir, scheduler=args.scheduler, n_workers=args.workers,
-                           retry_failed=args.retry_failed, plots=not args.no_plots)
+                           retry_failed=args.retry_failed, plots=not args.no_plots,
+                           connect_timeout=args.connect_timeout)
+    except (SpecError, ClusterError, OutputLocked) as error:
+        print(f"harness sweep: {error}", file=sys.stderr)
+        return 3 if isinstance(error, OutputLocked) else 2
+    except OSError as error:
+        print(f"harness sweep: {out}: {error.strerror or error}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print(f"\nharness sweep: interrupted; the finished runs are in {out / TABLE}: run the "
               f"same command again to resume", file=sys.stderr)
@@ -1048,6 +1026,10 @@ def cmd_sweep(args) -> int:
         print(f"  failed {key}: {message}")
     if len(result.failures) > 10:
         print(f"  ... and {len(result.failures) - 10} more failed runs (see {TABLE})")
+    if result.failed_in_table:  # exit status 1: not every run of the spec succeeded
+        print(f"harness sweep: {result.failed_in_table} of {result.total} runs failed (see "
+              f"{result.table}; --retry-failed runs them again)", file=sys.stderr)
+        return 1
     return 0
 
 

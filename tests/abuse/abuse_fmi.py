@@ -56,11 +56,34 @@ def unzipped(model: str) -> tuple[object, str]:
     return _descriptions[path], _extracted[path]
 
 
+def fmi_unescape(message: str) -> tuple[str, str | None]:
+    """The text an FMI 2 logger shows for ``message``, which it reads as a printf
+    format in which "#<type><vr>#" names a variable (FMI 2.0 section 2.1.5):
+    "%%" is "%", "##" is "#".  Returns (text, problem): problem says where the
+    message has a lone '%' (a conversion: a printf-style logger reads arguments
+    that are not there, and crashes) or a lone '#' (a variable reference, which
+    this project's FMUs never write), else None."""
+    out, i = [], 0
+    while i < len(message):
+        c = message[i]
+        if c in "%#":
+            if message[i + 1:i + 2] != c:
+                return "".join(out), f"lone {c!r} at {i} in {message!r}"
+            i += 1
+        out.append(c)
+        i += 1
+    return "".join(out), None
+
+
 class Callbacks:
-    """An fmi2CallbackFunctions whose logger records (status, category, message)."""
+    """An fmi2CallbackFunctions whose logger records (status, category, text).
+
+    The text is the message as an FMI logger shows it (fmi_unescape); a
+    message that is not escaped for the logger goes to ``escaping_errors``."""
 
     def __init__(self, logger=True, memory=True):
         self.log: list[tuple[int, str, str]] = []
+        self.escaping_errors: list[str] = []
         self.struct = fmi2CallbackFunctions()
         # keep the thunks alive as long as this object
         self._logger = fmi2CallbackLoggerTYPE(self._record) if logger else None
@@ -73,7 +96,10 @@ class Callbacks:
             self.struct.freeMemory = self._free
 
     def _record(self, env, instance, status, category, message):
-        self.log.append((status, (category or b"").decode(), (message or b"").decode()))
+        text, problem = fmi_unescape((message or b"").decode("utf-8", errors="replace"))
+        if problem:
+            self.escaping_errors.append(problem)
+        self.log.append((status, (category or b"").decode(), text))
 
 
 class Raw:
@@ -122,6 +148,10 @@ class Raw:
 
     def clear_log(self):
         self.cb.log.clear()
+
+    def assert_escaped(self):
+        """Every message logged so far was escaped for the FMI logger."""
+        assert not self.cb.escaping_errors, self.cb.escaping_errors[:3]
 
     # -- typed access ----------------------------------------------------------------------
     def vrs(self, names) -> ctypes.Array:

@@ -70,10 +70,12 @@ def run_case(case: Case):
     if case.words is not None:
         log = fmu.errors() if case.expect >= ERROR else fmu.messages()
         assert case.words in log, f"{case.words!r} not logged; the log: {fmu.messages()!r}"
+    fmu.assert_escaped()  # every message, of every case (issue 13)
     if fmu.saved is not None:  # back to the saved state, then one step from it
         assert fmu.call("fmi2SetFMUstate", fmu.saved) == OK, fmu.messages()
         assert fmu.do_step(0.0, NORMAL_STEP) == OK, fmu.messages()
     assert_usable_after_reset(fmu)
+    fmu.assert_escaped()
     fmu.free()
 
 
@@ -239,7 +241,8 @@ init_with(OBS, {"identifier": 1, "identify_b": False,
                 **{f"identify[{k}]": False for k in (1, 2, 3)}},
           "identifier = 1 but no regressor is selected", id="init-identifier-without-regressor")
 init_with(OBS, {"f_plus[1]": 0.0}, "a gain left at 0 needs f_plus[1] > 0")
-init_with(OBS, {"f_plus[1]": 1e308}, "a gain left at 0 needs f_plus[1] > 0")
+init_with(OBS, {"f_plus[1]": 1e308}, "f_plus[1] = 1e+308 is too large: alpha1[1] = 2 f_plus[1] "
+          "of Theorem 3.1 overflows")
 init_with(OBS, {"nominal_model": 2, "l": 8, "identifier": 2,
                 **{f"identify[{k}]": True for k in range(1, 9)}},
           "mff_drift needs 2 m <= 8 identified regressors, 8 are selected", id="init-mff-drift-m8")
@@ -251,26 +254,68 @@ init_with(OBS, {"alpha2[1]": 5.0}, "alpha2[1] = 5 violates (6)", expect=WARNING)
 
 # ---- diverging models: fmi2DoStep says so ------------------------------------------------------
 
-def diverge(model, parameters, inputs, words, id):
+def diverge(model, parameters, inputs, words, id, steps=1):
     """Parameters (and inputs) that make the model's state or outputs non-finite:
-    refused at fmi2ExitInitializationMode or by the first fmi2DoStep."""
+    refused at fmi2ExitInitializationMode or by an fmi2DoStep within ``steps``
+    steps, with a message that names the cause (issue 13: not the integrator
+    for an overflowing term, not "f_plus > 0" for a huge f_plus)."""
     def action(f: Raw) -> int:
         status = f.initialize(parameters)
         if status >= ERROR:
             return status
         assert f.set(inputs) == OK
-        return f.do_step(0.0, NORMAL_STEP)
+        for k in range(steps):
+            status = f.do_step(k * NORMAL_STEP, NORMAL_STEP)
+            if status != OK:
+                return status
+        return status
     case(id, model, action, words)
 
 
-diverge(OBS, {"b": 1e300}, {"u": 1e300}, "observer diverged at t = 0.001: x1_hat[1] = ",
+# the input or the nominal model overflows: named, not "reduce h or the gains"
+diverge(OBS, {"b": 1e300}, {"u": 1e300}, "observer: the nominal acceleration b u - c psi(y) = inf "
+        "at t = 0.001 is out of floating-point range (b = 1e+300, u = 1e+300",
         "diverge-huge-input")
+diverge(OBS, {"nominal_model": 2}, {"F[1]": 1e308}, "the nominal acceleration F[1] + "
+        "theta_nominal phi = 1e+308 at t = 0.001 is out of floating-point range",
+        "diverge-huge-F")
+diverge(OBS, {"nominal_model": 2, "n": 2, "theta_nominal[2,3]": 1e300}, {"phi[3]": -1e300},
+        "the nominal acceleration F[2] + theta_nominal phi = -inf", "diverge-huge-theta-phi")
+diverge(OBS, {}, {"y[1]": 1e308}, "the measurement y[1] = 1e+308 at t = 0.001 is too large",
+        "diverge-huge-measurement")
+# the discretization itself: then h and the gains are the cause
+diverge(OBS, {"scheme": 1, "alpha1[1]": 1e300, "alpha2[1]": 1e300}, {"y[1]": 1.0},
+        "observer diverged at t = 0.001: x1_hat[1] = ", "diverge-huge-gains")
 diverge(OBS, {"rho": 5e-324, "identifier": 1, "identifier_start": 0}, {},
         "gamma_trace = inf is not finite", "diverge-rho-denormal")
-diverge(PEN, {}, {"u": 1e308}, "pendulum diverged at t = 0.001: theta is not finite",
+# the Pendulum: a term of the model that overflows is named, RK4 only when it is the cause
+diverge(PEN, {}, {"u": 1e308}, "pendulum: the input torque u = 1e+308 gives u / J = ",
         "diverge-huge-torque")
+diverge(PEN, {}, {"u": -1e308}, "the input torque u = -1e+308", "diverge-huge-negative-torque")
+for d_period, steps in ((5e-324, 1), (1e-310, 40)):
+    diverge(PEN, {"damping": 1, "d_period": d_period}, {},
+            "pendulum: the damping d(t) = d_mean + d_amplitude sin(t / d_period) is ",
+            f"diverge-d_period={d_period}", steps=steps)
+diverge(PEN, {"disturbance": 2, "v_amplitude": 1e308}, {},
+        "pendulum: the disturbance v(t) is 1e+308 at t = 0.001", "diverge-square-disturbance")
+diverge(PEN, {"disturbance": 1, "v_amplitude": 1e308}, {}, "pendulum: the disturbance v(t) is ",
+        "diverge-sine-disturbance", steps=400)
+diverge(PEN, {"disturbance": 1, "v_frequency": 1e308}, {}, "pendulum: the disturbance v(t) is "
+        "-nan", "diverge-disturbance-frequency", steps=2000)
+diverge(PEN, {"h": 1.0, "Vs": 1e3}, {}, "RK4 needs h (a_viscous + |d|) below about 2.78, here "
+        "h = 1, a_viscous = 1122.33", "diverge-rk4-unstable", steps=40000)
+diverge(PEN, {"damping": 1, "d_amplitude": 1e300}, {}, "|d| <= 1e+300: reduce h below "
+        "2.78e-300 or the damping", "diverge-huge-damping")
 diverge(PEN, {"M": 1e-200, "L": 1e-100}, {}, "a_gravity = inf is not finite",
         "diverge-J-underflows")
+# gains that cannot be computed: the reason, not always "needs f_plus > 0"
+init_with(OBS, {"f_plus[1]": 10.0, "alpha1[1]": 5.0},
+          "alpha2[1] = 0 is computed by Theorem 3.1 only when alpha1[1] exceeds f_plus[1]: "
+          "alpha1[1] = 5, f_plus[1] = 10")
+init_with(OBS, {"f_plus[1]": 1e308, "alpha1[1]": 1.7e308},
+          "f_plus[1] = 1e+308, alpha1[1] = 1.7e+308: the alpha2 bound of (6) overflows")
+init_with(OBS, {"nominal_model": 2, "n": 3, "f_plus[3]": 1.5e308},
+          "f_plus[3] = 1.5e+308 is too large")
 
 
 # ---- NULL pointers, unknown value references, wrong types ---------------------------------------
@@ -669,9 +714,10 @@ def test_zero_length_arrays_are_accepted(model):
 
 # Parameters whose forged value lies outside their declared range, and the size of the field.
 FORGED = {
-    OBS: [("n", 1, 3, 4, 1 << 20), ("h", 1e-4, 2e-4, 8, -1.0)],
-    PEN: [("h", 1e-5, 2e-5, 8, 0.0), ("M", 1.0, 2.0, 8, NAN)],
-    CTL: [("h", 1e-4, 2e-4, 8, -1e-4)],
+    OBS: [("n", 1, 3, 4, 1 << 20), ("h", 1e-4, 2e-4, 8, -1.0),
+          ("max_internal_steps", 5, 6, 4, 0)],
+    PEN: [("h", 1e-5, 2e-5, 8, 0.0), ("M", 1.0, 2.0, 8, NAN), ("max_internal_steps", 5, 6, 4, -1)],
+    CTL: [("h", 1e-4, 2e-4, 8, -1e-4), ("max_internal_steps", 5, 6, 4, -2**31)],
 }
 FORGED_CASES = [(m, *spec) for m, specs in FORGED.items() for spec in specs]
 

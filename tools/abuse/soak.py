@@ -34,6 +34,7 @@ REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO))
 from harness.master import initialize, run  # noqa: E402
 from harness.scenarios import COMMUNICATION_STEP, PROBES, SCENARIOS, build  # noqa: E402
+from harness.values import BadValue, argparse_type, real  # noqa: E402
 
 
 # The first chunks settle the allocator (glibc raises its mmap threshold after the
@@ -49,13 +50,27 @@ def rss_mb() -> float:
     return float("nan")
 
 
+def _chunk(text: str) -> float:
+    """--chunk: a whole number (>= 1) of communication steps H."""
+    chunk = real("--chunk", text, 0.0, low_open=True)
+    steps = chunk / COMMUNICATION_STEP
+    if steps < 1 or abs(steps - round(steps)) > 1e-6 * steps:
+        raise BadValue(f"--chunk {text}: give a whole number of communication steps of "
+                       f"{COMMUNICATION_STEP:g} s (at least one)")
+    return chunk
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--scenario", default="6.2")
-    p.add_argument("--seconds", type=float, default=1e4, help="model time (default 1e4 s)")
-    p.add_argument("--chunk", type=float, default=100.0, help="model time per chunk [s]")
-    p.add_argument("--noise", type=float, default=0.0, help="measurement noise std [rad]")
-    p.add_argument("--rss-slack", type=float, default=8.0, help="allowed RSS growth [MB]")
+    p.add_argument("--scenario", default="6.2", choices=list(SCENARIOS))
+    p.add_argument("--seconds", type=argparse_type(real, "--seconds", low=0.0, low_open=True),
+                   default=1e4, help="model time, > 0 (default 1e4 s)")
+    p.add_argument("--chunk", type=argparse_type(lambda _name, text: _chunk(text), "--chunk"),
+                   default=100.0, help="model time per chunk [s], a multiple of H = 1e-4 s")
+    p.add_argument("--noise", type=argparse_type(real, "--noise", low=0.0), default=0.0,
+                   help="measurement noise std [rad], >= 0")
+    p.add_argument("--rss-slack", type=argparse_type(real, "--rss-slack", low=0.0), default=8.0,
+                   help="allowed RSS growth [MB], >= 0")
     p.add_argument("--fmu-dir", default=os.environ.get("STO_FMU_DIR", str(REPO / "build" / "fmus")))
     p.add_argument("--out", help="write a JSON summary here")
     args = p.parse_args(argv)
@@ -63,7 +78,7 @@ def main(argv=None) -> int:
     s = SCENARIOS[args.scenario]
     H = COMMUNICATION_STEP
     steps_per_chunk = int(round(args.chunk / H))
-    n_chunks = int(math.ceil(args.seconds / args.chunk - 1e-9))
+    n_chunks = max(1, int(math.ceil(args.seconds / args.chunk - 1e-9)))  # never nothing
     m = sum(1 for k in range(1, 9) if s.observer.get(f"identify[{k}]", k <= 3))
     rho = float(s.observer.get("rho", 1e-3))
     gamma_bound = m / rho * (1 + 1e-9)
@@ -85,7 +100,8 @@ def main(argv=None) -> int:
             t0 = chunk * args.chunk
             if args.noise > 0:
                 noise = rng.normal(0.0, args.noise, steps_per_chunk)
-            records = run(sim, t0, t0 + args.chunk, H, PROBES, decimation=steps_per_chunk // 100,
+            records = run(sim, t0, t0 + args.chunk, H, PROBES,
+                          decimation=max(1, steps_per_chunk // 100),
                           signals={"noise": noise}, use_native=True)
             t = t0 + args.chunk
             values = {name: records[name] for name in PROBES}

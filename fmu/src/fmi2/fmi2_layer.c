@@ -111,20 +111,55 @@ static void mem_free(fmi2CallbackFreeMemory release, void *p)
 static const char *const LOG_CATEGORIES[] = {"logStatusWarning", "logStatusError", "logAll"};
 #define N_LOG_CATEGORIES (sizeof LOG_CATEGORIES / sizeof LOG_CATEGORIES[0])
 
+/* The FMI 2 logger reads its message as a printf format (FMI 2.0 section
+ * 2.1.5: importers such as the FMI Library expand it with vsnprintf) in which
+ * #<type><value reference># names a variable.  Every text the FMU logs is
+ * therefore escaped as the standard says: '%' as "%%" and '#' as "##" -- the
+ * GUID, instance name, category names, variable names, numbers: everything
+ * the message is made of, whoever supplied it.  Truncates at `size`, never
+ * in the middle of an escape. */
+static void escape_for_logger(const char *text, char *out, size_t size)
+{
+    size_t n = 0;
+    for (; *text; ++text) {
+        const size_t width = (*text == '%' || *text == '#') ? 2u : 1u;
+        if (n + width >= size) break;
+        out[n++] = *text;
+        if (width == 2u) out[n++] = *text;
+    }
+    out[n] = '\0';
+}
+
+#define LOG_TEXT_SIZE 1024
+
 static void vlog_to(fmi2CallbackLogger logger, fmi2ComponentEnvironment env, const char *name,
                     fmi2Boolean logging_on, fmi2Status status, const char *format, va_list args)
 {
     if (!logger) return;
     /* Warnings and errors are always reported; OK-level messages only with debug logging. */
     if (status == fmi2OK && !logging_on) return;
-    char message[1024];
-    vsnprintf(message, sizeof message, format, args);
-    /* The logger treats the message as a format string: neutralize '%' and '#'. */
-    for (char *p = message; *p; ++p)
-        if (*p == '%' || *p == '#') *p = '_';
+    char text[LOG_TEXT_SIZE], message[2 * LOG_TEXT_SIZE];
+    vsnprintf(text, sizeof text, format, args);
+    escape_for_logger(text, message, sizeof message);
     const char *category = status >= fmi2Error ? "logStatusError"
                            : status == fmi2Warning ? "logStatusWarning" : "logAll";
     logger(env, name ? name : "", status, category, message);
+}
+
+/* A message before there is an instance (fmi2Instantiate refusing). */
+static void log_to(fmi2CallbackLogger logger, fmi2ComponentEnvironment env, const char *name,
+                   fmi2Status status, const char *format, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 5, 6)))
+#endif
+    ;
+static void log_to(fmi2CallbackLogger logger, fmi2ComponentEnvironment env, const char *name,
+                   fmi2Status status, const char *format, ...)
+{
+    va_list args;
+    va_start(args, format);
+    vlog_to(logger, env, name, fmi2True, status, format, args);
+    va_end(args);
 }
 
 static void log_instance(const Instance *inst, fmi2Status status, const char *format, ...)
@@ -367,10 +402,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 
 #define REFUSE(...)                                                                \
     do {                                                                           \
-        char text[512];                                                            \
-        snprintf(text, sizeof text, __VA_ARGS__);                                  \
-        if (logger) logger(env, instanceName ? instanceName : "", fmi2Error,       \
-                           "logStatusError", text);                                \
+        log_to(logger, env, instanceName, fmi2Error, __VA_ARGS__);                 \
         return NULL;                                                               \
     } while (0)
 
@@ -612,7 +644,12 @@ static int accept_value(Instance *inst, const char *function, const ModelVariabl
                      value);
         break;
     default:
-        log_instance(inst, fmi2Error, "%s: %s = %.17g is out of range %s%g, %g%s; value rejected",
+        /* Integer bounds in full (2147483647, not 2.14748e+09) */
+        log_instance(inst, fmi2Error,
+                     var->type == TYPE_REAL ? "%s: %s = %.17g is out of range %s%g, %g%s; value "
+                                              "rejected"
+                                            : "%s: %s = %.17g is out of range %s%.0f, %.0f%s; "
+                                              "value rejected",
                      function, name, value, var->min_exclusive ? "(" : "[", var->min, var->max,
                      var->max_exclusive ? ")" : "]");
     }
@@ -947,17 +984,31 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
      * A grid point less than GRID_SLACK h after t_end counts as reached: a master
      * that accumulates t += H drifts off the grid by rounding, far more at large t. */
     const double k_end_real = floor((t_end - clock->start_time) / h + GRID_SLACK);
+    /* The work of one call is bounded: refused before any of it is done. */
+    const uint64_t limit = MD.max_internal_steps(inst->data);
     if (!(k_end_real < 9007199254740992.0))
         return fail(inst, "fmi2DoStep: step to %.17g needs more than 2^53 internal steps of "
-                    "h = %g", t_end, h);
+                    "h = %g, more than the limit max_internal_steps = %llu allows; take shorter "
+                    "communication steps", t_end, h, (unsigned long long)limit);
     const uint64_t k_end = k_end_real > (double)clock->steps ? (uint64_t)k_end_real : clock->steps;
-    if (k_end > clock->steps) MD.advance(inst->data, clock->start_time, clock->steps, k_end);
-    clock->steps = k_end;
-    clock->comm_time = t_end;
+    if (k_end - clock->steps > limit)
+        return fail(inst, "fmi2DoStep: the step from %.17g to %.17g needs %llu internal steps of "
+                    "h = %g, more than the limit max_internal_steps = %llu; take shorter "
+                    "communication steps or raise the parameter max_internal_steps (value "
+                    "reference %u) before initialization", t, t_end,
+                    (unsigned long long)(k_end - clock->steps), h, (unsigned long long)limit,
+                    (unsigned)MAX_INTERNAL_STEPS_VR);
+    /* Called even when the step reaches no grid point (H < h): the model sees
+     * every communication step's inputs (a rising edge of a discrete input
+     * held for one short step is never lost). */
+    MD.advance(inst->data, clock->start_time, clock->steps, k_end);
     ModelLogger logger = model_logger(inst);
     if (MD.communication_point(inst->data, t_end, &logger) == MODEL_ERROR ||
         !outputs_finite(inst, "fmi2DoStep", 0))
-        return escalate(inst, fmi2Error);
+        return escalate(inst, fmi2Error); /* the clock stays at the last successful step's end
+                                           * (fmi2LastSuccessfulTime) */
+    clock->steps = k_end;
+    clock->comm_time = t_end;
     return fmi2OK;
 }
 
@@ -977,7 +1028,7 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *
     ENTER("fmi2GetRealStatus", MASK_GetStatus);
     if (!value) return fail(inst, "fmi2GetRealStatus: value is NULL");
     if (s != fmi2LastSuccessfulTime) return fmi2Discard;
-    *value = inst->clock.comm_time;
+    *value = inst->clock.comm_time; /* a failed step leaves it at the end of the last good one */
     return fmi2OK;
 }
 

@@ -89,6 +89,11 @@ typedef struct {
     ModelStatus (*initialize)(void *data, double start_time, const ModelLogger *log);
     /* The fixed internal step h of this instance (valid after initialize). */
     double (*internal_step)(const void *data);
+    /* The most internal steps one fmi2DoStep may take (the model's parameter
+     * max_internal_steps, MODEL_MAX_INTERNAL_STEPS_VARIABLE): the layer refuses
+     * a longer communication step before doing any work, so that no call runs
+     * for hours and cannot be cancelled. */
+    uint64_t (*max_internal_steps)(const void *data);
     /* The internal steps k = k_first .. k_end - 1 of one communication step,
      * step k going from start_time + k h to start_time + (k + 1) h with the
      * inputs held.  One call per communication step, so that the model can
@@ -105,6 +110,18 @@ typedef struct {
      * bounds.  May log; MODEL_ERROR refuses the state. */
     ModelStatus (*check_restored)(const void *data, const ModelLogger *log);
 } ModelDescriptor;
+
+/* Every model has the parameter max_internal_steps, at the same value
+ * reference, with the same default and description. */
+#define MAX_INTERNAL_STEPS_VR 120
+#define MAX_INTERNAL_STEPS_DEFAULT 10000000
+#define MAX_INTERNAL_STEPS_VARIABLE(field_offset)                                                 \
+    {.name = "max_internal_steps", .vr = MAX_INTERNAL_STEPS_VR, .type = TYPE_INTEGER,             \
+     PARAM(.offset = (field_offset), .start = MAX_INTERNAL_STEPS_DEFAULT, .min = 1,               \
+           .max = 2147483647,                                                                     \
+           .description = "Most internal steps one fmi2DoStep may take (10^7: about 0.1 to 2 "   \
+                          "s of work); a longer communication step is refused with fmi2Error "   \
+                          "before any work. Raise it for longer steps (docs/observer.md, Limits)")}
 
 /* Each model file defines exactly one of these (read-only, not state). */
 extern const ModelDescriptor MODEL_DESCRIPTOR;

@@ -38,6 +38,7 @@ typedef struct {
     double x1_hat_start[MAX_N], x2_hat_start[MAX_N];
     int identifier_form, identifier_start, filter_regressor, mff_drift, identify_b;
     double convergence_window;
+    int max_internal_steps;
     /* calculated parameters */
     double alpha1_used[MAX_N], alpha2_used[MAX_N];
     /* inputs */
@@ -231,6 +232,7 @@ static const ModelVariable VARIABLES[] = {
      OUTPUT(.offset = OFF(bank.bandwidth), .unit = "rad/s",
      .description = "Scheme 3: bandwidth of the published observer (1/h: the super-twisting "
                     "observer)")},
+    MAX_INTERNAL_STEPS_VARIABLE(OFF(max_internal_steps)),
 };
 
 /* theta_hat from the identified corrections.  Built-in joint: the injection
@@ -291,10 +293,27 @@ static ModelStatus complete_gains(ObserverData *d, const ModelLogger *log)
         double a1 = d->alpha1[i], a2 = d->alpha2[i];
         const double f = d->f_plus[i], p = d->p[i];
         if (gains_complete(f, p, &a1, &a2) != 0) {
-            log->log(log->context, MODEL_ERROR,
-                     "alpha1[%d] = %g, alpha2[%d] = %g: a gain left at 0 needs f_plus[%d] > 0 "
-                     "(and alpha1 > f_plus) to be computed by Theorem 3.1", i + 1, a1, i + 1, a2,
-                     i + 1);
+            const double given1 = d->alpha1[i];
+            if (!(f > 0.0))
+                log->log(log->context, MODEL_ERROR,
+                         "alpha1[%d] = %g, alpha2[%d] = %g: a gain left at 0 needs f_plus[%d] > 0 "
+                         "(and alpha1 > f_plus) to be computed by Theorem 3.1", i + 1, a1, i + 1,
+                         a2, i + 1);
+            else if (!isfinite(a1))
+                log->log(log->context, MODEL_ERROR,
+                         "f_plus[%d] = %g is too large: alpha1[%d] = %g f_plus[%d] of Theorem 3.1 "
+                         "overflows; give a smaller f_plus[%d] or set alpha1[%d] and alpha2[%d]",
+                         i + 1, f, i + 1, GAINS_ALPHA1_FACTOR, i + 1, i + 1, i + 1, i + 1);
+            else if (!(a1 > f))
+                log->log(log->context, MODEL_ERROR,
+                         "alpha2[%d] = 0 is computed by Theorem 3.1 only when alpha1[%d] exceeds "
+                         "f_plus[%d]: alpha1[%d] = %g, f_plus[%d] = %g; raise alpha1[%d] or set "
+                         "alpha2[%d]", i + 1, i + 1, i + 1, i + 1, given1, i + 1, f, i + 1, i + 1);
+            else
+                log->log(log->context, MODEL_ERROR,
+                         "f_plus[%d] = %g, alpha1[%d] = %g: the alpha2 bound of (6) overflows; "
+                         "give smaller f_plus[%d] and alpha1[%d] or set alpha2[%d]", i + 1, f,
+                         i + 1, a1, i + 1, i + 1, i + 1);
             return MODEL_ERROR;
         }
         if (f > 0.0 && !(a1 > f)) {
@@ -379,6 +398,11 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
 
 static double internal_step(const void *data) { return ((const ObserverData *)data)->h; }
 
+static uint64_t max_internal_steps(const void *data)
+{
+    return (uint64_t)((const ObserverData *)data)->max_internal_steps;
+}
+
 /* Restarts identification from the nominal parameters. */
 static void restart_identifier(ObserverData *d)
 {
@@ -391,9 +415,10 @@ static void restart_identifier(ObserverData *d)
  * nominal acceleration (the joint: affine in the velocity, its position part
  * with the sin evaluated here) and the selected regressors (the joint: all
  * but the velocity ones, which come from the observer's trace). */
-static void hold_inputs(ObserverData *d, StoAcceleration acceleration[MAX_N])
+static void nominal_model(const ObserverData *d, StoAcceleration acceleration[MAX_N],
+                          double regressor[MAX_L])
 {
-    double regressor[MAX_L] = {0};
+    memset(regressor, 0, MAX_L * sizeof *regressor);
     if (d->nominal_model == NOMINAL_JOINT) {
         joint_position_basis(d->y[0], regressor);
         regressor[JOINT_INPUT] = d->u;
@@ -404,8 +429,14 @@ static void hold_inputs(ObserverData *d, StoAcceleration acceleration[MAX_N])
             for (int k = 0; k < d->l; ++k) a += d->theta_nominal[i][k] * d->phi[k];
             acceleration[i] = (StoAcceleration){.held = a, .viscous = 0.0, .coulomb = 0.0};
         }
-        memcpy(regressor, d->phi, sizeof regressor);
+        memcpy(regressor, d->phi, MAX_L * sizeof *regressor);
     }
+}
+
+static void hold_inputs(ObserverData *d, StoAcceleration acceleration[MAX_N])
+{
+    double regressor[MAX_L];
+    nominal_model(d, acceleration, regressor);
     if (d->identifier != IDENTIFIER_OFF)
         for (int j = 0; j < d->m; ++j) d->phi_now[j] = regressor[d->selected[j]];
 }
@@ -521,6 +552,37 @@ static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
     }
 }
 
+/* Why DOF i's estimate is not finite: a nominal acceleration that overflows
+ * (the inputs or nominal parameters), a measurement out of range, else the
+ * discretization (h, gains). */
+static void explain_divergence(const ObserverData *d, double t, int i, const ModelLogger *log)
+{
+    StoAcceleration acceleration[MAX_N];
+    double regressor[MAX_L];
+    nominal_model(d, acceleration, regressor);
+    const StoAcceleration a = acceleration[i];
+    if (!(fabs(a.held) < 1e300) || !isfinite(a.viscous) || !isfinite(a.coulomb)) {
+        if (d->nominal_model == NOMINAL_JOINT)
+            log->log(log->context, MODEL_ERROR,
+                     "observer: the nominal acceleration b u - c psi(y) = %g at t = %g is out of "
+                     "floating-point range (b = %g, u = %g, y[1] = %g): the input or the nominal "
+                     "parameters are too large", a.held, t, d->b, d->u, d->y[0]);
+        else
+            log->log(log->context, MODEL_ERROR,
+                     "observer: the nominal acceleration F[%d] + theta_nominal phi = %g at t = %g "
+                     "is out of floating-point range (F[%d] = %g): the inputs F, phi or "
+                     "theta_nominal are too large", i + 1, a.held, t, i + 1, d->F[i]);
+    } else if (!(fabs(d->y[i]) < 1e300)) {
+        log->log(log->context, MODEL_ERROR,
+                 "observer: the measurement y[%d] = %g at t = %g is too large to observe",
+                 i + 1, d->y[i], t);
+    } else {
+        log->log(log->context, MODEL_ERROR,
+                 "observer diverged at t = %g: x1_hat[%d] = %g, x2_hat[%d] = %g (reduce h or "
+                 "the gains)", t, i + 1, d->obs.x1_hat[i], i + 1, d->obs.x2_hat[i]);
+    }
+}
+
 static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
 {
     ObserverData *d = data;
@@ -529,9 +591,7 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
     publish_estimates(d);
     for (int i = 0; i < d->n; ++i) {
         if (!isfinite(d->obs.x1_hat[i]) || !isfinite(d->obs.x2_hat[i])) {
-            log->log(log->context, MODEL_ERROR,
-                     "observer diverged at t = %g: x1_hat[%d] = %g, x2_hat[%d] = %g (reduce h or "
-                     "the gains)", t, i + 1, d->obs.x1_hat[i], i + 1, d->obs.x2_hat[i]);
+            explain_divergence(d, t, i, log);
             return MODEL_ERROR;
         }
     }
@@ -581,6 +641,7 @@ const ModelDescriptor MODEL_DESCRIPTOR = {
     .default_tolerance = 1e-6,
     .initialize = initialize,
     .internal_step = internal_step,
+    .max_internal_steps = max_internal_steps,
     .advance = advance,
     .communication_point = communication_point,
     .check_restored = check_restored,

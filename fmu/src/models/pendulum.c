@@ -15,6 +15,7 @@
  * then come from one extra RK4 step of the remaining fraction of h, taken from
  * the grid state into the outputs only (the state stays on the grid), so the
  * outputs always describe the pendulum at the end of the communication step. */
+#include <float.h>
 #include <math.h>
 #include <stddef.h>
 
@@ -32,6 +33,7 @@ typedef struct {
     double d_mean, d_amplitude, d_period;
     int disturbance;
     double v_amplitude, v_frequency, v_period;
+    int max_internal_steps;
     /* calculated parameters */
     double a_gravity, a_viscous, a_coulomb, b_input;
     /* input */
@@ -104,6 +106,7 @@ static const ModelVariable VARIABLES[] = {
      .description = "Disturbance v(t) now")},
     {.name = "d", .vr = 204, .type = TYPE_REAL, OUTPUT(.offset = OFF(d), .unit = "1/s",
      .description = "Damping coefficient d(t) now")},
+    MAX_INTERNAL_STEPS_VARIABLE(OFF(max_internal_steps)),
 };
 
 static double sign_of(double x) { return (x > 0.0) - (x < 0.0); }
@@ -181,6 +184,11 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
 
 static double internal_step(const void *data) { return ((const PendulumData *)data)->h; }
 
+static uint64_t max_internal_steps(const void *data)
+{
+    return (uint64_t)((const PendulumData *)data)->max_internal_steps;
+}
+
 static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
 {
     PendulumData *p = data;
@@ -191,6 +199,46 @@ static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
     }
 }
 
+/* Why the state or outputs are not finite: the first cause found, in the order
+ * in which one feeds the next (a non-finite term of the model, then the
+ * input, then RK4's stability limit, else the size of the state itself). */
+static void explain_divergence(const PendulumData *p, double t, const char *name,
+                               const ModelLogger *log)
+{
+    const double d_bound = fabs(p->d_mean) + fabs(p->d_amplitude);
+    if (p->damping == DAMPING_TIME_VARYING && !isfinite(p->d)) {
+        log->log(log->context, MODEL_ERROR,
+                 "pendulum: the damping d(t) = d_mean + d_amplitude sin(t / d_period) is %g at "
+                 "t = %g: t / d_period = %g (d_mean = %g, d_amplitude = %g, d_period = %g); "
+                 "d_period is too small or the amplitudes too large for floating point",
+                 p->d, t, t / p->d_period, p->d_mean, p->d_amplitude, p->d_period);
+    } else if (!(fabs(p->v) < DBL_MAX / 16.0)) { /* RK4 sums 6 such terms */
+        log->log(log->context, MODEL_ERROR,
+                 "pendulum: the disturbance v(t) is %g at t = %g (disturbance = %d, "
+                 "v_amplitude = %g, v_frequency = %g, v_period = %g): its parameters are out "
+                 "of floating-point range for RK4",
+                 p->v, t, p->disturbance, p->v_amplitude, p->v_frequency, p->v_period);
+    } else if (!(fabs(p->b_input * p->u) < DBL_MAX / 16.0)) { /* RK4 sums 6 such terms */
+        log->log(log->context, MODEL_ERROR,
+                 "pendulum: the input torque u = %g gives u / J = %g at t = %g, too large for "
+                 "RK4 in floating point: the input is out of range", p->u, p->b_input * p->u, t);
+    } else if (p->h * (p->a_viscous + (p->damping == DAMPING_TIME_VARYING ? d_bound : 0.0)) >
+               2.78) {
+        const double rate = p->a_viscous + (p->damping == DAMPING_TIME_VARYING ? d_bound : 0.0);
+        log->log(log->context, MODEL_ERROR,
+                 "pendulum diverged at t = %g: %s is not finite (theta = %g, omega = %g, "
+                 "acceleration = %g); RK4 needs h (a_viscous + |d|) below about 2.78, "
+                 "here h = %g, a_viscous = %g, |d| <= %g: reduce h below %g or the damping",
+                 t, name, p->theta, p->omega, p->acceleration, p->h, p->a_viscous, d_bound,
+                 2.78 / rate);
+    } else {
+        log->log(log->context, MODEL_ERROR,
+                 "pendulum diverged at t = %g: %s is not finite (theta = %g, omega = %g, "
+                 "acceleration = %g, u = %g): the inputs or parameters drive the state out of "
+                 "the floating-point range", t, name, p->theta, p->omega, p->acceleration, p->u);
+    }
+}
+
 static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
 {
     PendulumData *p = data;
@@ -198,13 +246,11 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
     const char *name = !isfinite(p->theta)          ? "theta"
                        : !isfinite(p->omega)        ? "omega"
                        : !isfinite(p->acceleration) ? "acceleration"
+                       : !isfinite(p->d)            ? "d"
+                       : !isfinite(p->v)            ? "v"
                                                     : NULL;
     if (name) {
-        log->log(log->context, MODEL_ERROR,
-                 "pendulum diverged at t = %g: %s is not finite (theta = %g, omega = %g, "
-                 "acceleration = %g); RK4 needs h (a_viscous + |d|) below about 2.78, "
-                 "here h = %g, a_viscous = %g", t, name, p->theta, p->omega, p->acceleration,
-                 p->h, p->a_viscous);
+        explain_divergence(p, t, name, log);
         return MODEL_ERROR;
     }
     return MODEL_OK;
@@ -223,6 +269,7 @@ const ModelDescriptor MODEL_DESCRIPTOR = {
     .default_tolerance = 1e-6,
     .initialize = initialize,
     .internal_step = internal_step,
+    .max_internal_steps = max_internal_steps,
     .advance = advance,
     .communication_point = communication_point,
 };

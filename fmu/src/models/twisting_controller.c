@@ -18,6 +18,7 @@
 
 typedef struct {
     double h, k1, k2, A1, w1, p1, A2, w2, p2; /* parameters */
+    int max_internal_steps;
     double theta, omega;                      /* inputs */
     double u, theta_d, omega_d;               /* outputs */
 } ControllerData;
@@ -53,6 +54,7 @@ static const ModelVariable VARIABLES[] = {
      .description = "Reference angle")},
     {.name = "omega_d", .vr = 202, .type = TYPE_REAL, OUTPUT(.offset = OFF(omega_d),
      .unit = "rad/s", .description = "Reference angular velocity (analytic derivative)")},
+    MAX_INTERNAL_STEPS_VARIABLE(OFF(max_internal_steps)),
 };
 
 static double sign_of(double x) { return (x > 0.0) - (x < 0.0); }
@@ -77,9 +79,14 @@ static double internal_step(const void *data) { return ((const ControllerData *)
  * last internal step's sample is ever seen. */
 static void advance(void *data, double start_time, uint64_t k_first, uint64_t k_end)
 {
-    (void)k_first;
     ControllerData *c = data;
+    if (k_end == k_first) return; /* no sample in this step: the output is held */
     control(c, start_time + (double)(k_end - 1) * c->h + c->h);
+}
+
+static uint64_t max_internal_steps(const void *data)
+{
+    return (uint64_t)((const ControllerData *)data)->max_internal_steps;
 }
 
 static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
@@ -101,6 +108,7 @@ const ModelDescriptor MODEL_DESCRIPTOR = {
     .default_tolerance = 1e-6,
     .initialize = initialize,
     .internal_step = internal_step,
+    .max_internal_steps = max_internal_steps,
     .advance = advance,
     .communication_point = communication_point,
 };
