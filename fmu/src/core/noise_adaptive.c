@@ -1,7 +1,6 @@
 #include "noise_adaptive.h"
 
 #include <math.h>
-#include <stddef.h>
 #include <string.h>
 
 #include "implicit_twisting.h"
@@ -157,7 +156,7 @@ static inline void track(AdaptiveStatistics *st, double r, double y, double pred
     double *slot = &st->ahead[age % ADAPTIVE_HORIZON];
     if (age >= ADAPTIVE_HORIZON) {
         const double e = y - *slot;
-        weigh(&st->mean_square_ahead, &st->ahead_samples, e * e, gain);
+        weigh(&st->ranking[ADAPTIVE_RANK_PERTURBATION], &st->ahead_samples, e * e, gain);
     }
     *slot = prediction;
 }
@@ -170,7 +169,7 @@ static inline void track_velocity(AdaptiveStatistics *st, const AdaptiveBank *ba
 {
     if (tick >= ADAPTIVE_SLOTS) {
         const double e = secant - st->velocity[(tick + ADAPTIVE_SLOTS / 2) % ADAPTIVE_SLOTS];
-        weigh(&st->mean_square_velocity, &st->velocity_samples, e * e, bank->velocity_gain);
+        weigh(&st->ranking[ADAPTIVE_RANK_VELOCITY], &st->velocity_samples, e * e, bank->velocity_gain);
     }
     st->velocity[tick % ADAPTIVE_SLOTS] = velocity;
 }
@@ -233,20 +232,17 @@ typedef struct {
     int selected, source;
 } AdaptiveSelection;
 
-/* The observer of the smallest statistic (offset of the double in
- * AdaptiveStatistics), or the current one unless the best is smaller by
- * ADAPTIVE_HYSTERESIS.  *best gets the best member. */
-static inline int choose(const AdaptiveBank *bank, int i, int current, size_t offset, int *best)
+/* The observer of the smallest mean square of a ranking, or the current one
+ * unless the best is smaller by ADAPTIVE_HYSTERESIS.  *best gets the best member. */
+static inline int choose(const AdaptiveBank *bank, int i, int current, int rank, int *best)
 {
     const AdaptiveMember *members = bank->member[i];
-#define STATISTIC(st) (*(const double *)((const char *)(st) + offset))
     *best = 0;
     for (int j = 1; j < bank->count; ++j)
-        if (STATISTIC(&members[j].stats) < STATISTIC(&members[*best].stats)) *best = j;
-    const double sta = STATISTIC(&bank->sta[i]), member = STATISTIC(&members[*best].stats);
-    const double now = current == ADAPTIVE_SUPER_TWISTING ? sta
-                                                          : STATISTIC(&members[current].stats);
-#undef STATISTIC
+        if (members[j].stats.ranking[rank] < members[*best].stats.ranking[rank]) *best = j;
+    const double sta = bank->sta[i].ranking[rank], member = members[*best].stats.ranking[rank];
+    const double now =
+        current == ADAPTIVE_SUPER_TWISTING ? sta : members[current].stats.ranking[rank];
     const int candidate = member < sta ? *best : ADAPTIVE_SUPER_TWISTING;
     return (member < sta ? member : sta) < ADAPTIVE_HYSTERESIS * now ? candidate : current;
 }
@@ -269,11 +265,9 @@ static inline AdaptiveSelection select_members(const AdaptiveBank *bank, int i, 
     int best_velocity, best_prediction;
     AdaptiveSelection choice = {
         bank->sta[i].velocity_samples > 0.0
-            ? choose(bank, i, selected, offsetof(AdaptiveStatistics, mean_square_velocity),
-                     &best_velocity)
+            ? choose(bank, i, selected, ADAPTIVE_RANK_VELOCITY, &best_velocity)
             : selected,
-        choose(bank, i, source, offsetof(AdaptiveStatistics, mean_square_ahead),
-               &best_prediction)};
+        choose(bank, i, source, ADAPTIVE_RANK_PERTURBATION, &best_prediction)};
     /* a super-twisting observer whose injection saturates often: the
      * best-predicting member's perturbation */
     if (choice.source == ADAPTIVE_SUPER_TWISTING && saturating) choice.source = best_prediction;

@@ -102,11 +102,15 @@ typedef struct {
     double publish_gain;        /* of the filter that averages xi for z_eq_filtered */
 } AdaptiveGains;
 
+/* What the observers are ranked by (indices of AdaptiveStatistics.ranking). */
+enum { ADAPTIVE_RANK_PERTURBATION, ADAPTIVE_RANK_VELOCITY, ADAPTIVE_RANKINGS };
+
 /* Exponentially weighted statistics of an observer's predictions. */
 typedef struct {
     double mean_square;       /* of the innovations r (one sample ahead) */
-    double mean_square_ahead; /* of the errors of the predictions ADAPTIVE_HORIZON ahead */
-    double mean_square_velocity; /* of the velocities against the corrected secants */
+    double ranking[ADAPTIVE_RANKINGS]; /* mean squares: the errors of the predictions
+                                        * ADAPTIVE_HORIZON ahead; the velocities against
+                                        * the corrected secants */
     double samples, ahead_samples, velocity_samples; /* counted up to 1 / gain: growing
                                                       * windows first */
     double ahead[ADAPTIVE_HORIZON];    /* the predictions in flight, by step modulo horizon */
