@@ -100,7 +100,9 @@ def test_builtin_joint_identifies_the_pendulum(observer_fmu):
             traces.append(fmu.get_real(["gamma_trace"])[0])
     est = fmu.get_real(["theta_hat[1,1]", "theta_hat[1,2]", "theta_hat[1,3]"])
     fmu.free()
-    assert active_at == pytest.approx(0.5, abs=2 * h)  # starts at t_id once converged
+    # starts at t_id, once converged and once the members' selection has been compared for
+    # 0.6 s (ADAPTIVE_SETTLED; the members start at about 0.06 s): measured 0.662 s
+    assert 0.5 <= active_at <= 0.7
     assert all(b < a for a, b in zip(traces[1:], traces[2:]))  # Gamma shrinks as data come
     # measured relative errors: 1.5e-4, 4.3e-3, 3.0e-3
     for k, tolerance in enumerate((1e-3, 0.015, 0.015)):

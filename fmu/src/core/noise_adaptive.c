@@ -121,6 +121,7 @@ static void start_member(AdaptiveMember *m, const StoTrace *trace, int i, int k,
     m->x2_now = trace->velocity[i][k];
     m->a_current = sto_acceleration(a, m->x2_now, trace->velocity_sign[i][k]);
     m->a_mean = m->a_current;
+    m->averaged = m->published = trace->z_filtered[i][k]; /* the published perturbation */
 }
 
 /* One sample of a linear member: corrects the interval that ends at y and
@@ -147,61 +148,74 @@ static inline void weigh(double *mean_square, double *samples, double value, dou
     *mean_square += g * (value - *mean_square);
 }
 
-/* Updates an observer's statistics after step `age` (since the start) with
- * its innovation r, the measurement y and its prediction of y_(k+H). */
-static inline void track(AdaptiveStatistics *st, double r, double y, double prediction,
-                         unsigned age, double gain)
-{
-    weigh(&st->mean_square, &st->samples, r * r, gain);
-    double *slot = &st->ahead[age % ADAPTIVE_HORIZON];
-    if (age >= ADAPTIVE_HORIZON) {
-        const double e = y - *slot;
-        weigh(&st->ranking[ADAPTIVE_RANK_PERTURBATION], &st->ahead_samples, e * e, gain);
-    }
-    *slot = prediction;
-}
+/* What the observers are compared with at a stride's start (see the header). */
+typedef struct {
+    double velocity;     /* at the middle of the last span (from the first full span) */
+    double perturbation; /* mean over the span before (from the second full span) */
+} AdaptiveMeasured;
 
-/* At a stride's start (`tick` strides since the start): compares the velocity
- * of ADAPTIVE_SLOTS / 2 strides ago with the secant (if there is one yet) and
- * keeps the velocity now. */
-static inline void track_velocity(AdaptiveStatistics *st, const AdaptiveBank *bank,
-                                  unsigned tick, double secant, double velocity)
+/* At a stride's start (`tick` strides since the start): compares an
+ * observer's velocity of ADAPTIVE_SLOTS / 2 strides ago and its published
+ * perturbation of ADAPTIVE_PERTURBATION_DELAY strides ago with the measured
+ * ones (once there are), and keeps both of now. */
+static inline void track_strides(AdaptiveStatistics *st, const AdaptiveBank *bank,
+                                 unsigned tick, AdaptiveMeasured measured, double velocity,
+                                 double perturbation)
 {
+    enum { KEPT = ADAPTIVE_PERTURBATION_DELAY + 1 };
     if (tick >= ADAPTIVE_SLOTS) {
-        const double e = secant - st->velocity[(tick + ADAPTIVE_SLOTS / 2) % ADAPTIVE_SLOTS];
+        const double e = measured.velocity - st->velocity[(tick + ADAPTIVE_SLOTS / 2) % ADAPTIVE_SLOTS];
         weigh(&st->ranking[ADAPTIVE_RANK_VELOCITY], &st->velocity_samples, e * e, bank->velocity_gain);
     }
+    if (tick >= ADAPTIVE_RING) {
+        const double e = measured.perturbation - st->perturbation[(tick + 1) % KEPT];
+        weigh(&st->ranking[ADAPTIVE_RANK_PERTURBATION], &st->perturbation_samples, e * e,
+              bank->velocity_gain);
+    }
     st->velocity[tick % ADAPTIVE_SLOTS] = velocity;
+    st->perturbation[tick % KEPT] = perturbation;
 }
 
-/* At a stride's start: closes the stride that ended and returns the secant
- * velocity over the last ADAPTIVE_SLOTS strides minus the nominal model's
- * (mean velocity - velocity at the middle) over them, which is what an
- * observer's velocity at the middle is compared with.  0 before the first
- * full span. */
-static double corrected_secant(AdaptiveSecant *sc, const AdaptiveBank *bank, unsigned tick,
-                               double y, double h)
+/* At a stride's start: closes the stride that ended and returns what the
+ * observers are compared with.  The velocity is the secant over the last
+ * ADAPTIVE_SLOTS strides minus the nominal model's (mean velocity - velocity
+ * at the middle) over them: the velocity at the middle.  The perturbation is
+ * the change of that velocity since the secant one span earlier minus the
+ * nominal model's change between the two middles, over the span: the mean
+ * perturbation between the middles, centred on the span's start.  0 before
+ * the first full spans. */
+static AdaptiveMeasured measure_strides(AdaptiveSecant *sc, const AdaptiveBank *bank,
+                                        unsigned tick, double y, double h)
 {
     const unsigned slot = tick % ADAPTIVE_SLOTS; /* also the oldest, tick - ADAPTIVE_SLOTS */
-    double secant = 0.0;
+    AdaptiveMeasured measured = {0.0, 0.0};
     if (tick > 0) {
-        const unsigned last = (tick - 1) % ADAPTIVE_SLOTS;
-        sc->dv[last] = sc->v;
-        sc->dw[last] = sc->w;
+        sc->dv[(tick - 1) % ADAPTIVE_RING] = sc->v;
+        sc->dw[(tick - 1) % ADAPTIVE_SLOTS] = sc->w;
     }
     if (tick >= ADAPTIVE_SLOTS) {
         double v = 0.0, w = 0.0, v_middle = 0.0; /* from the span's start */
-        for (unsigned t = 0; t < ADAPTIVE_SLOTS; ++t) {
-            const unsigned s = (slot + t) % ADAPTIVE_SLOTS;
-            w += v * bank->stride * h + sc->dw[s];
-            v += sc->dv[s];
-            if (t == ADAPTIVE_SLOTS / 2 - 1) v_middle = v;
+        for (unsigned t = tick - ADAPTIVE_SLOTS; t < tick; ++t) {
+            w += v * bank->stride * h + sc->dw[t % ADAPTIVE_SLOTS];
+            v += sc->dv[t % ADAPTIVE_RING];
+            if (t == tick - ADAPTIVE_SLOTS / 2 - 1) v_middle = v;
         }
-        secant = (y - sc->y[slot]) / bank->span - (w / bank->span - v_middle);
+        measured.velocity = (y - sc->y[slot]) / bank->span - (w / bank->span - v_middle);
+        if (tick >= ADAPTIVE_RING) {
+            /* the nominal velocity change between the two middles */
+            double nominal = 0.0;
+            for (unsigned t = tick - ADAPTIVE_SLOTS / 2 - ADAPTIVE_PERTURBATION_LAG;
+                 t < tick - ADAPTIVE_SLOTS / 2; ++t)
+                nominal += sc->dv[t % ADAPTIVE_RING];
+            const double earlier = sc->middle[(tick - ADAPTIVE_PERTURBATION_LAG) % ADAPTIVE_RING];
+            measured.perturbation = (measured.velocity - earlier - nominal) /
+                                    (ADAPTIVE_PERTURBATION_SPANS * bank->span);
+        }
+        sc->middle[tick % ADAPTIVE_RING] = measured.velocity;
     }
     sc->y[slot] = y;
     sc->v = sc->w = 0.0;
-    return secant;
+    return measured;
 }
 
 /* Integrates the nominal acceleration over one step into the running stride. */
@@ -218,12 +232,6 @@ static inline void integrate_nominal(AdaptiveSecant *sc, double acceleration, do
 static inline double expected_sign(double v_hat, double sigma)
 {
     return sigma > 0.0 ? erf(v_hat / (1.4142135623730951 * sigma)) : sto_sign(v_hat);
-}
-
-/* The prediction of the measurement ADAPTIVE_HORIZON samples ahead. */
-static inline double predict_ahead(double x1, double x2, double acceleration, double horizon)
-{
-    return x1 + horizon * (x2 + 0.5 * horizon * acceleration);
 }
 
 /* The selection after a step (see the header): whose velocity is published
@@ -262,15 +270,18 @@ static inline AdaptiveSelection select_members(const AdaptiveBank *bank, int i, 
             if (members[j].stats.mean_square < smallest) smallest = members[j].stats.mean_square;
         if (bank->sta[i].mean_square < ADAPTIVE_EXACT_RATIO * smallest) return super_twisting;
     }
-    int best_velocity, best_prediction;
-    AdaptiveSelection choice = {
-        bank->sta[i].velocity_samples > 0.0
-            ? choose(bank, i, selected, ADAPTIVE_RANK_VELOCITY, &best_velocity)
-            : selected,
-        choose(bank, i, source, ADAPTIVE_RANK_PERTURBATION, &best_prediction)};
-    /* a super-twisting observer whose injection saturates often: the
-     * best-predicting member's perturbation */
-    if (choice.source == ADAPTIVE_SUPER_TWISTING && saturating) choice.source = best_prediction;
+    const AdaptiveStatistics *sta = &bank->sta[i];
+    int best_velocity, best_perturbation;
+    AdaptiveSelection choice = {selected, source};
+    if (sta->velocity_samples > 0.0)
+        choice.selected = choose(bank, i, selected, ADAPTIVE_RANK_VELOCITY, &best_velocity);
+    if (sta->perturbation_samples > 0.0) {
+        choice.source = choose(bank, i, source, ADAPTIVE_RANK_PERTURBATION, &best_perturbation);
+        /* a super-twisting observer whose injection saturates often: the
+         * best member's perturbation */
+        if (choice.source == ADAPTIVE_SUPER_TWISTING && saturating)
+            choice.source = best_perturbation;
+    }
     return choice;
 }
 
@@ -278,15 +289,17 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                   const StoAcceleration a[], int count, StoTrace *trace)
 {
     const double h = o->h, h2 = o->h_squared, g = o->filter_gain, gain = bank->gain;
-    const double horizon = ADAPTIVE_HORIZON * h;
-    for (int i = 0; i < o->n; ++i) o->z_eq[i] = bank->sta_v[i];
+    for (int i = 0; i < o->n; ++i) {
+        o->z_eq[i] = bank->sta_v[i];
+        o->z_filtered[i] = bank->sta_filtered[i];
+    }
     implicit_run(o, y, a, count, trace);
     for (int i = 0; i < o->n; ++i) {
         bank->sta_v[i] = o->z_eq[i];
+        bank->sta_filtered[i] = o->z_filtered[i];
         AdaptiveMember *members = bank->member[i];
         int selected = bank->selected[i], source = bank->perturbation[i];
         const int follow = bank->follow;
-        double zf = bank->z_filtered[i], zp = bank->z_prefiltered[i];
         for (int k = 0; k < count; ++k) {
             if (bank->started[i]) {
                 const unsigned age = bank->age[i]++;
@@ -295,25 +308,32 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                 bank->sta_saturation[i] +=
                     gain * ((fabs(v) >= o->alpha1[i] ? 1.0 : 0.0) - bank->sta_saturation[i]);
                 const double a_sta = sto_acceleration(a[i], x2, trace->velocity_sign[i][k]);
-                track(&bank->sta[i], trace->innovation[i][k], y[i],
-                      predict_ahead(trace->position[i][k], x2, a_sta + v, horizon), age, gain);
+                weigh(&bank->sta[i].mean_square, &bank->sta[i].samples,
+                      trace->innovation[i][k] * trace->innovation[i][k], gain);
                 const int stride_start = age % (unsigned)bank->stride == 0;
                 const unsigned tick = age / (unsigned)bank->stride;
-                double secant = 0.0;
+                AdaptiveMeasured measured = {0.0, 0.0};
                 if (stride_start) {
-                    secant = corrected_secant(&bank->secant[i], bank, tick, y[i], h);
-                    track_velocity(&bank->sta[i], bank, tick, secant, x2);
+                    measured = measure_strides(&bank->secant[i], bank, tick, y[i], h);
+                    track_strides(&bank->sta[i], bank, tick, measured, x2,
+                                  trace->z_filtered[i][k]);
                 }
                 integrate_nominal(&bank->secant[i], a_sta, h, h2);
                 for (int j = 0; j < bank->count; ++j) {
                     AdaptiveMember *m = &members[j];
-                    const double r = member_step(m, &bank->gains[j], y[i], a[i], h, h2);
-                    track(&m->stats, r, y[i],
-                          predict_ahead(m->z1, m->x2_now, m->a_current + m->xi, horizon), age,
-                          gain);
-                    if (stride_start) track_velocity(&m->stats, bank, tick, secant, m->x2_now);
+                    const AdaptiveGains *gj = &bank->gains[j];
+                    const double r = member_step(m, gj, y[i], a[i], h, h2);
+                    weigh(&m->stats.mean_square, &m->stats.samples, r * r, gain);
+                    /* xi averaged over ADAPTIVE_AVERAGING of the member's time
+                     * constants 1/omega, in two first-order stages of half
+                     * that (less noise for the same delay), at least over tau */
+                    const double averaging = gj->publish_gain < g ? gj->publish_gain : g;
+                    m->averaged += averaging * (m->xi - m->averaged);
+                    m->published += averaging * (m->averaged - m->published);
+                    if (stride_start)
+                        track_strides(&m->stats, bank, tick, measured, m->x2_now, m->published);
                 }
-                if (age >= ADAPTIVE_HORIZON + ADAPTIVE_MIN_SAMPLES) {
+                if (age >= ADAPTIVE_MIN_SAMPLES) {
                     const AdaptiveSelection choice = select_members(bank, i, selected, source);
                     selected = choice.selected;
                     source = choice.source;
@@ -339,24 +359,14 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                     expected_sign(m->x2_now, gs->velocity_std * sqrt(m->stats.mean_square /
                                                                      gs->innovation_variance));
             }
-            if (source != ADAPTIVE_SUPER_TWISTING) trace->z_eq[i][k] = members[source].xi;
-            /* A linear member's xi is averaged over ADAPTIVE_AVERAGING of its
-             * time constants 1/omega (two first-order stages of half that:
-             * less noise for the same delay) before it is published. */
-            if (source == ADAPTIVE_SUPER_TWISTING) {
-                zf += g * (trace->z_eq[i][k] - zf);
-                zp = zf;
-            } else {
-                const double slow = bank->gains[source].publish_gain, gz = slow < g ? slow : g;
-                zp += gz * (trace->z_eq[i][k] - zp);
-                zf += gz * (zp - zf);
+            if (source != ADAPTIVE_SUPER_TWISTING) {
+                trace->z_eq[i][k] = members[source].xi;
+                trace->z_filtered[i][k] = members[source].published;
             }
-            trace->z_filtered[i][k] = zf;
         }
         bank->selected[i] = selected;
         bank->perturbation[i] = source;
-        bank->z_filtered[i] = zf;
-        bank->z_prefiltered[i] = zp;
+        if (count > 0) bank->z_filtered[i] = trace->z_filtered[i][count - 1];
     }
 }
 
@@ -396,7 +406,7 @@ void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank)
 int adaptive_settled(const AdaptiveBank *bank, int n)
 {
     for (int i = 0; i < n; ++i)
-        if (!bank->started[i] || bank->sta[i].ahead_samples * bank->gain < ADAPTIVE_SETTLED ||
+        if (!bank->started[i] || bank->sta[i].samples * bank->gain < ADAPTIVE_SETTLED ||
             bank->sta[i].velocity_samples * bank->velocity_gain < ADAPTIVE_SETTLED)
             return 0;
     return 1;

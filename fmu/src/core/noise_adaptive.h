@@ -39,12 +39,19 @@
  * a horizon of 16 samples at 10 kHz made the velocity error's share of the
  * criterion 1e-3 of the noise's and picked members 6x too fast.
  *
- * Selection of the published perturbation: every observer predicts the
- * measurement ADAPTIVE_HORIZON samples ahead, x1 + T x2 + T^2 (a + xi)/2; the
- * smallest mean square error of these predictions (same window, same
- * hysteresis) publishes its xi.  Its acceleration enters that error, so the
- * criterion weighs the perturbation's noise against its lag (ranking the
- * perturbations by the secant picked members too slow for the 6.1 sine).
+ * Selection of the published perturbation: each observer's published
+ * perturbation (a member's xi averaged over ADAPTIVE_AVERAGING / omega, the
+ * super-twisting injection through the tau filter) is compared at every
+ * stride with the measured one: the change between two corrected secants
+ * ADAPTIVE_PERTURBATION_SPANS spans apart minus the nominal model's change
+ * between their middles, over the time between them, which is the mean
+ * perturbation over that time (noise 2 sigma / (spans span^2), common to all
+ * observers).  The same window and hysteresis choose.  Ranking by the error
+ * of a 16-sample prediction of the measurement chose members 2-4x too slow
+ * (6.1 sine at noise 1e-5: RMS 0.070 with a 98 ms delay, the best member
+ * 0.023); secants one span apart left the noise of the comparison so large
+ * at 1e-3 that it ranked too fast members first (RMS 0.33; 4 spans 0.11,
+ * 8 spans 0.080, the best member 0.076).
  *
  * On exact data the super-twisting observer stays published
  * as long as its one-sample innovations are far below every member's
@@ -77,9 +84,14 @@
 #define ADAPTIVE_MAX_MEMBERS 16
 #define ADAPTIVE_RATIO 1.8         /* between the bandwidths of neighbouring members */
 #define ADAPTIVE_WINDOW 1.0        /* [s] of the mean square innovations */
-#define ADAPTIVE_HORIZON 16         /* samples ahead of the predictions that rank perturbations */
 #define ADAPTIVE_SECANT_TIME 0.04   /* [s] span of the secants that rank velocities ... */
 #define ADAPTIVE_SLOTS 16           /* ... at least this many strides (the slots in flight) */
+#define ADAPTIVE_PERTURBATION_SPANS 8 /* between the secants that measure the perturbation
+                                       * (see the header) */
+#define ADAPTIVE_PERTURBATION_LAG (ADAPTIVE_SLOTS * ADAPTIVE_PERTURBATION_SPANS) /* strides */
+#define ADAPTIVE_RING (ADAPTIVE_SLOTS + ADAPTIVE_PERTURBATION_LAG) /* strides of secants kept */
+/* strides from a published perturbation to the measurement it is compared with */
+#define ADAPTIVE_PERTURBATION_DELAY (ADAPTIVE_SLOTS / 2 + ADAPTIVE_PERTURBATION_LAG / 2)
 #define ADAPTIVE_MAX_STRIDE 100000000
 #define ADAPTIVE_START_TIME 0.3     /* [s]: the members start then if the super-twisting
                                      * observer has not converged (quantized data); 0.1 s cut
@@ -90,7 +102,10 @@
                                      * the members' best: exact data, it stays published */
 #define ADAPTIVE_SATURATION_LIMIT 0.1 /* ... and its injection saturated in fewer steps */
 #define ADAPTIVE_AVERAGING 10.0     /* z_eq_filtered: a member's xi averaged over this / omega */
-#define ADAPTIVE_SETTLED 0.25       /* windows of predictions before the identifier follows */
+#define ADAPTIVE_SETTLED 0.6        /* windows of comparisons before the identifier follows
+                                     * a member: 0.25 followed one chosen too early (1 kHz,
+                                     * noise 1e-4: 1.08 % for 0.74 %; the 6.2 Euler replay:
+                                     * 17 % for 0.27 %) */
 #define ADAPTIVE_SUPER_TWISTING (-1) /* member index of the super-twisting observer */
 
 /* Gains of one linear member. */
@@ -108,27 +123,30 @@ enum { ADAPTIVE_RANK_PERTURBATION, ADAPTIVE_RANK_VELOCITY, ADAPTIVE_RANKINGS };
 /* Exponentially weighted statistics of an observer's predictions. */
 typedef struct {
     double mean_square;       /* of the innovations r (one sample ahead) */
-    double ranking[ADAPTIVE_RANKINGS]; /* mean squares: the errors of the predictions
-                                        * ADAPTIVE_HORIZON ahead; the velocities against
-                                        * the corrected secants */
-    double samples, ahead_samples, velocity_samples; /* counted up to 1 / gain: growing
-                                                      * windows first */
-    double ahead[ADAPTIVE_HORIZON];    /* the predictions in flight, by step modulo horizon */
-    double velocity[ADAPTIVE_SLOTS];   /* the velocities of the last strides */
+    double ranking[ADAPTIVE_RANKINGS]; /* mean squares: the published perturbations
+                                        * against the measured one; the velocities
+                                        * against the corrected secants */
+    double samples, perturbation_samples, velocity_samples; /* counted up to 1 / gain:
+                                                             * growing windows first */
+    double perturbation[ADAPTIVE_PERTURBATION_DELAY + 1]; /* the published perturbations
+                                                           * and ... */
+    double velocity[ADAPTIVE_SLOTS];     /* ... velocities at the last strides */
 } AdaptiveStatistics;
 
 /* The measured secant velocity over the last ADAPTIVE_SLOTS strides of one
  * DOF, corrected by the nominal model's own curvature over them (see the header). */
 typedef struct {
     double y[ADAPTIVE_SLOTS];           /* the measurement at each stride's start */
-    double dv[ADAPTIVE_SLOTS], dw[ADAPTIVE_SLOTS]; /* integrals of the nominal acceleration
+    double dv[ADAPTIVE_RING], dw[ADAPTIVE_SLOTS]; /* integrals of the nominal acceleration
                                                    * over each stride: once, twice */
     double v, w;                        /* the same over the running stride */
+    double middle[ADAPTIVE_RING];       /* the corrected secants (velocities at the middles) */
 } AdaptiveSecant;
 
 /* One member's state for one DOF. */
 typedef struct {
     double z1, mid, xi, a_current, a_mean, x2_now;
+    double averaged, published; /* xi after the first and the second averaging stage */
     AdaptiveStatistics stats;
 } AdaptiveMember;
 
@@ -152,8 +170,8 @@ typedef struct {
                                           * ADAPTIVE_SUPER_TWISTING */
     int perturbation[STO_MAX_DOF];       /* whose injection is published (select_members) */
     int follow;                          /* the member the identifier follows */
-    double z_filtered[STO_MAX_DOF];      /* selected injection through the tau filter */
-    double z_prefiltered[STO_MAX_DOF];   /* a member's xi after the first averaging stage */
+    double z_filtered[STO_MAX_DOF];      /* the published perturbation */
+    double sta_filtered[STO_MAX_DOF];    /* the super-twisting injection through the tau filter */
     double noise_std[STO_MAX_DOF];       /* estimated measurement noise [rad] */
     double bandwidth[STO_MAX_DOF];       /* omega of the selected member (1/h: super-twisting) */
 } AdaptiveBank;
@@ -169,7 +187,7 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
 /* x1_hat, x2_hat, z_eq, z_filtered, noise_std and bandwidth of the selected members. */
 void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank);
 
-/* Whether every DOF's predictions have been compared for ADAPTIVE_SETTLED
+/* Whether every DOF's innovations and velocities have been compared for ADAPTIVE_SETTLED
  * windows: the selection is then worth following (the identifier waits for
  * it when it starts by itself). */
 int adaptive_settled(const AdaptiveBank *bank, int n);
