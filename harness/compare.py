@@ -35,14 +35,16 @@ class Row:
     improved: float
 
 
-def compare_scenario(s: Scenario, fmu_dir: Path, noise: float, seed: int = 0
+def compare_scenario(s: Scenario, fmu_dir: Path, noise: float, seed: int = 0,
+                     quiet: bool | None = None
                      ) -> tuple[dict[str, float], dict[str, float], Records, Records]:
-    """Runs the paper method and the improved one on the same noise sequence."""
+    """Runs the paper method and the improved one on the same noise sequence
+    (``quiet``: see master.Progress)."""
     paper = run_scenario(s, fmu_dir, noise_std=noise, seed=seed,
-                         progress=Progress(f"{s.name} paper, noise {noise:g}"))
+                         progress=Progress(f"{s.name} paper, noise {noise:g}", quiet))
     better = run_scenario(s, fmu_dir, noise_std=noise, seed=seed,
                           observer_overrides=improved_overrides(s, noise),
-                          progress=Progress(f"{s.name} improved, noise {noise:g}"))
+                          progress=Progress(f"{s.name} improved, noise {noise:g}", quiet))
     return score(s, paper), score(s, better), paper, better
 
 
@@ -93,13 +95,16 @@ def plot_comparison(s: Scenario, noise: float, paper: Records, better: Records, 
 
 
 def run_comparison(fmu_dir: Path, out: Path, scenarios: list[str] | None = None,
-                   noise_levels: tuple[float, ...] = NOISE_LEVELS) -> list[Row]:
+                   noise_levels: tuple[float, ...] = NOISE_LEVELS,
+                   quiet: bool | None = None) -> list[Row]:
+    """Both methods on each scenario and noise level; writes compare.csv/.md/.json and a
+    figure per scenario and noise level into ``out``."""
     out.mkdir(parents=True, exist_ok=True)
     rows: list[Row] = []
     for name in scenarios or list(SCENARIOS):
         s = SCENARIOS[name]
         for noise in noise_levels:
-            paper, better, rp, rb = compare_scenario(s, fmu_dir, noise)
+            paper, better, rp, rb = compare_scenario(s, fmu_dir, noise, quiet=quiet)
             plot_comparison(s, noise, rp, rb, out)
             for metric in HEADLINE[s.kind]:
                 if metric in paper:

@@ -94,6 +94,7 @@ from typing import Any
 import numpy as np
 
 from .fmus import FMUError, Value, Variable, variables_of
+from .paths import default_fmu_dir
 from .sweep_lock import OutputLocked, locked_output
 from .tempdirs import owned_temp_dir, remove_stale
 from .values import argparse_type, integer, real
@@ -102,8 +103,7 @@ from .sweep_spec import (MAX_STOP_TIME, PSEUDO, RandomSampling, Range, SpecError
                          run_count_bound, sampling_seed, value_range)
 from .sweep_spec import transient as check_transient
 
-REPO = Path(__file__).resolve().parents[1]
-DEFAULT_FMU_DIR = REPO / "build" / "fmus"
+DEFAULT_FMU_DIR = default_fmu_dir()
 FMU_FILES = {"plant": "Pendulum.fmu", "controller": "TwistingController.fmu",
              "observer": "SuperTwistingObserver.fmu"}
 METHODS = ("paper", "improved")
@@ -963,20 +963,19 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.set_defaults(func=cmd_sweep)
 
 
-def register(subparsers) -> argparse.ArgumentParser:
-    """Adds the ``sweep`` subcommand to the harness CLI's subparsers."""
+def register(subparsers, parents: Sequence[argparse.ArgumentParser] = ()
+             ) -> argparse.ArgumentParser:
+    """Adds the ``sweep`` subcommand to the harness CLI's subparsers (``parents``: the
+    options every command takes)."""
     p = subparsers.add_parser("sweep", help="parameter / noise sweeps on Dask",
-                              description=__doc__,
+                              description=__doc__, parents=list(parents),
                               formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(p)
-    # The main parser has --fmu-dir; SUPPRESS keeps its value unless given here too.
-    p.add_argument("--fmu-dir", default=argparse.SUPPRESS,
-                   help="folder with the built FMUs (default: build/fmus)")
     return p
 
 
 def cmd_sweep(args) -> int:
-    fmu_dir = Path(getattr(args, "fmu_dir", DEFAULT_FMU_DIR))
+    fmu_dir = Path(getattr(args, "fmu_dir", None) or default_fmu_dir())
     try:
         spec = load_spec(args.spec, fmu_dir)
     except SpecError as error:
@@ -1038,7 +1037,8 @@ def main(argv: list[str] | None = None) -> int:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(parser)
     parser.add_argument("--fmu-dir", default=str(DEFAULT_FMU_DIR),
-                        help="folder with the built FMUs (default: build/fmus)")
+                        help="folder with the three FMUs (default: harness.paths."
+                             "default_fmu_dir())")
     args = parser.parse_args(argv)
     return args.func(args)
 

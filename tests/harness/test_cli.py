@@ -3,6 +3,10 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
+import pandas as pd
+from fmpy.util import read_csv
+
 from harness.cli import main
 
 
@@ -13,10 +17,16 @@ def test_reproduce_writes_csv_metrics_and_figures(tmp_path, capsys, observer_fmu
                  "--out", str(out)])
     assert code == 0
     folder = out / "6.1-sine"
-    header = (folder / "signals.csv").read_text().splitlines()[0].split(",")
-    assert header[:3] == ["time", "plant.theta", "plant.omega"]
-    rows = (folder / "signals.csv").read_text().count("\n") - 1
-    assert rows == 10.0 / 1e-4 / 10 + 1  # decimated by 10, plus the initial row
+    # the quoted header reads the same with pandas and fmpy, one name per column
+    signals = pd.read_csv(folder / "signals.csv")
+    from_fmpy = read_csv(folder / "signals.csv")
+    assert list(signals.columns[:3]) == ["time", "plant.theta", "plant.omega"]
+    assert "observer.theta_hat[1][1]" in signals.columns
+    assert list(signals.columns) == list(from_fmpy.dtype.names)
+    assert len(signals) == 10.0 / 1e-4 / 10 + 1  # decimated by 10, plus the initial row
+    for name in signals.columns:
+        np.testing.assert_array_equal(signals[name].to_numpy(), from_fmpy[name])
+    assert signals["time"].iloc[-1] == 10.0
     metrics = json.loads((folder / "metrics.json").read_text())
     assert 0.02 < metrics["metrics"]["rms_perturbation"] < 0.05
     assert "tau = 0.02 s" in metrics["choices"]
