@@ -111,6 +111,7 @@ class FMUInstance:
         self.variables = variables_of(self.model_description)
         self.messages: list[str] = []
         self._repeats: dict[str, int] = {}
+        self.failed = False  # an FMI call failed: terminate is not allowed any more
         self._callbacks = self._make_callbacks()
         self.slave = FMU2Slave(
             guid=self.model_description.guid,
@@ -156,6 +157,7 @@ class FMUInstance:
         try:
             return action()
         except FMICallException as error:
+            self.failed = True
             said = "; ".join(self.messages[before:]) or "(the FMU logged nothing)"
             raise FMUError(f"{self.name}: {what} failed: {said}") from error
 
@@ -207,6 +209,7 @@ class FMUInstance:
         self._call(self.slave.reset, "fmi2Reset")
         self.messages.clear()
         self._repeats.clear()
+        self.failed = False
 
     def exit_initialization(self) -> None:
         self._call(self.slave.exitInitializationMode, "exitInitializationMode")
@@ -221,10 +224,11 @@ class FMUInstance:
     def close(self) -> None:
         """Terminate (when possible) and free the instance; remove the extracted files."""
         if self.slave is not None:
-            try:
-                self.slave.terminate()
-            except FMICallException:
-                pass
+            if not self.failed:
+                try:
+                    self.slave.terminate()
+                except FMICallException:
+                    pass
             self.slave.freeInstance()
             self.slave = None
         shutil.rmtree(self._unzip_dir, ignore_errors=True)

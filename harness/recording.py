@@ -149,16 +149,18 @@ def read_blocks(path: str | Path, options: ReadOptions | None = None) -> Iterato
 
 
 def _fast_blocks(path: Path, header: list[str], index: dict[str, int], options: ReadOptions
-                 ) -> Iterator[tuple["pa.StringArray", np.ndarray, np.ndarray, np.ndarray]]:
-    """(stamps as text, stamps as numbers, y, u) blocks from pyarrow; any complaint of
-    pyarrow (or a value that is missing or not finite) is turned into the exact message
-    by _exact_error."""
+                 ) -> Iterator[tuple["pa.StringArray", np.ndarray, np.ndarray, np.ndarray,
+                                     np.ndarray]]:
+    """(stamps as text, stamps as numbers, stamps since the first one, y, u) blocks from
+    pyarrow; any complaint of pyarrow (or a value that is missing or not finite) is turned
+    into the exact message by _exact_error."""
     import pyarrow as pa
     import pyarrow.compute as pc
     import pyarrow.csv as pacsv
 
     names = [f"c{i}" for i in range(len(header))]
     wanted = {role: names[i] for role, i in index.items()}
+    origin = None
     try:
         reader = pacsv.open_csv(
             path,
@@ -176,11 +178,34 @@ def _fast_blocks(path: Path, header: list[str], index: dict[str, int], options: 
             if not (np.isfinite(values).all() and np.isfinite(y).all()
                     and np.isfinite(u).all()):
                 raise _exact_error(path, index, options)
-            yield stamps, values, y, u
+            since, origin = _since_first(stamps, values, origin)
+            yield stamps, values, since, y, u
     except (pa.ArrowInvalid, UnicodeDecodeError, pa.ArrowException):
         raise _exact_error(path, index, options) from None
     except OSError as error:
         raise DataError(f"{path}: cannot read ({error.strerror or error})") from None
+
+
+def _since_first(stamps: "pa.StringArray", values: np.ndarray, origin):
+    """The stamps minus the first stamp of the file, computed from the text in decimal
+    arithmetic where it fits (epoch stamps keep their sub-microsecond digits, which a
+    double of 1.7e9 s has not); else from the doubles.  ``origin`` is the first stamp
+    (a decimal scalar, a float, or None for the first block)."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    exact = pa.decimal128(37, 18)  # 19 digits before the point, 18 after
+    if origin is None or isinstance(origin, pa.Scalar):
+        try:
+            decimals = pc.cast(stamps, exact)
+            origin = decimals[0] if origin is None else origin
+            since = pc.cast(pc.subtract(decimals, origin), pa.float64())
+            return since.to_numpy(zero_copy_only=False), origin
+        except pa.ArrowInvalid:  # more digits than that, or exponents out of range
+            if origin is not None:
+                origin = float(origin.as_py())
+    origin = float(values[0]) if origin is None else origin
+    return values - origin, origin
 
 
 def _scale(options: ReadOptions) -> float:
@@ -190,25 +215,22 @@ def _scale(options: ReadOptions) -> float:
 
 def _checked(path: Path, blocks, options: ReadOptions) -> Iterator[Block]:
     scale = _scale(options)
-    t0 = None
     step = None
     previous = None  # the last time [s] of the previous block, relative
     rows = 0
-    for stamps, values, y, u in blocks:
+    for stamps, values, since, y, u in blocks:
         if not len(stamps):
             continue
-        seconds = values * scale if scale != 1.0 else values
-        if t0 is None:
-            t0 = seconds[0]
-        time = seconds - t0
+        time = since * scale
         joined = time if previous is None else np.concatenate([[previous], time])
         dt = np.diff(joined)
         first_line = rows + 2 - (previous is not None)  # the file line of joined[0]
         if dt.size and not (dt > 0).all():
             i = int(np.argmin(dt > 0))
+            k = first_line + i - (rows + 2)  # index in this block of the earlier stamp
+            before = stamps[k].as_py() if k >= 0 else "the previous block's last"
             raise DataError(f"{path} line {first_line + i + 1}: time does not increase "
-                            f"(t = {_text(joined[i] + t0, scale)}, then "
-                            f"{_text(joined[i + 1] + t0, scale)})")
+                            f"(t = {before}, then {stamps[k + 1].as_py()})")
         if step is None and dt.size:
             step = float(np.median(dt[: 1000]))
             if options.time_unit is None and step >= 1.0 and np.all(values[:1000] % 1 == 0):
@@ -219,8 +241,8 @@ def _checked(path: Path, blocks, options: ReadOptions) -> Iterator[Block]:
                      f"--time-unit s confirms seconds")
         if options.resample is None and step is not None and dt.size:
             # a step may deviate by the tolerance (jitter) and by rounding of the stamps
-            slack = options.tolerance * step + 8 * np.finfo(float).eps * np.abs(joined[1:]
-                                                                                 + t0)
+            slack = options.tolerance * step + 8 * np.finfo(float).eps * np.abs(
+                values[0] * scale + joined[1:])
             bad = np.nonzero(np.abs(dt - step) > slack)[0]
             if bad.size:
                 i = int(bad[0])
@@ -235,10 +257,6 @@ def _checked(path: Path, blocks, options: ReadOptions) -> Iterator[Block]:
         yield Block(stamps, time, y, u)
     if rows < 3:
         raise DataError(f"{path}: {rows} data row(s); at least 3 are needed")
-
-
-def _text(seconds: float, scale: float) -> str:
-    return repr(float(seconds / scale))
 
 
 def _resampled(blocks: Iterator[Block], step: float, scale: float) -> Iterator[Block]:
@@ -267,7 +285,7 @@ def _resampled(blocks: Iterator[Block], step: float, scale: float) -> Iterator[B
             continue
         k = last + 1
         held = np.searchsorted(block.time, grid, side="right") - 1
-        stamps = pa.array([repr(first + g / scale) for g in grid], pa.string())
+        stamps = pa.array([repr(float(first + g / scale)) for g in grid], pa.string())
         yield Block(stamps, grid, np.interp(grid, block.time, block.y), block.u[held])
 
 

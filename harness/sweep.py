@@ -10,31 +10,38 @@ process per core, one thread each), or the running scheduler given by
 ``--scheduler`` (its workers need this package and fmpy installed; the FMUs
 are shipped to them, no shared file system is needed).
 
-SPEC is a JSON file (or TOML, if its name ends in .toml):
+SPEC is a JSON file (or TOML, if its name ends in .toml), for example:
 
     {
-      "scenario": "6.1-sine",          # a name of harness.scenarios.SCENARIOS (required)
-      "stop_time": 2.0,                # optional: override the scenario's length [s]
-      "transient": 1.0,                # optional: override the metrics' transient [s]
-      "method": "paper",               # optional: "paper" (the scenario as is) or "improved"
-                                       #   (scenarios.improved_overrides for each run's noise)
-      "fixed": {"observer.tau": 0.01}, # optional: the same value in every run
-      "grid": {                        # optional: the cartesian product of these lists
-        "observer.alpha1[1]": [2.2, 4.4],
-        "noise_std": [0, 1e-5, 1e-4]
-      },
-      "random": {                      # optional: n samples, crossed with the grid
-        "method": "lhs",               #   "lhs" (Latin hypercube) or "uniform"
-        "n": 20, "seed": 1,            #   the sampling seed
+      "scenario": "6.1-sine",
+      "stop_time": 2.0,
+      "transient": 1.0,
+      "method": "paper",
+      "fixed": {"observer.tau": 0.01},
+      "grid": {"observer.alpha1[1]": [2.2, 4.4], "noise_std": [0, 1e-5, 1e-4]},
+      "random": {
+        "method": "lhs", "n": 20, "seed": 1,
         "ranges": {
-          "observer.alpha2[1]": [10, 40],                          # uniform in [low, high]
+          "observer.alpha2[1]": [10, 40],
           "observer.tau": {"low": 1e-3, "high": 1e-1, "scale": "log"}
         }
       },
-      "points": [{"observer.h": 2e-4}],  # optional: extra runs (each crossed with the seeds)
-      "seeds": [0, 1, 2]               # optional: noise seeds (or an int n: seeds 0..n-1);
-                                       #   default [0]
+      "points": [{"observer.h": 2e-4}],
+      "seeds": [0, 1, 2]
     }
+
+Its keys (only "scenario" is required):
+  scenario   a name of harness.scenarios.SCENARIOS
+  stop_time  override the scenario's length [s]
+  transient  override the metrics' transient [s]
+  method     "paper" (the scenario as is) or "improved" (scenarios.improved_overrides)
+  fixed      the same value in every run
+  grid       the cartesian product of these lists
+  random     n samples crossed with the grid: "lhs" (Latin hypercube) or "uniform",
+             the sampling seed, and per parameter [low, high] (uniform) or
+             {"low", "high", "scale": "log"}
+  points     extra runs (each crossed with the seeds)
+  seeds      noise seeds (or an int n: seeds 0..n-1); default [0]
 
 A parameter is "fmu.variable" with fmu one of plant, controller, observer and
 a variable of that FMU, e.g. "observer.alpha1[1]", "observer.scheme",
@@ -80,6 +87,7 @@ import json
 import math
 import os
 import shutil
+import signal
 import sys
 import tempfile
 import threading
@@ -664,9 +672,19 @@ def start_client(scheduler: str | None, n_workers: int | None,
         if scheduler:
             client = Client(scheduler, timeout=f"{connect_timeout}s")
         else:
-            cluster = LocalCluster(n_workers=n_workers or os.cpu_count() or 1,
-                                   threads_per_worker=1, processes=True, host="127.0.0.1",
-                                   dashboard_address=None)
+            # The workers start with SIGINT ignored (inherited): Ctrl-C stops the sweep
+            # here, which cancels their runs, instead of printing a traceback per worker.
+            # The scheduler's HTTP endpoint takes any free port (":0"), never warning
+            # that 8787 is taken.
+            previous = signal.signal(signal.SIGINT, signal.SIG_IGN) \
+                if threading.current_thread() is threading.main_thread() else None
+            try:
+                cluster = LocalCluster(n_workers=n_workers or os.cpu_count() or 1,
+                                       threads_per_worker=1, processes=True, host="127.0.0.1",
+                                       dashboard_address=":0")
+            finally:
+                if previous is not None:
+                    signal.signal(signal.SIGINT, previous)
             client = Client(cluster)
     except (OSError, ValueError, TypeError) as error:  # TimeoutError is an OSError
         where = f"the Dask scheduler at {scheduler}" if scheduler else "a local Dask cluster"
@@ -1003,7 +1021,8 @@ def cmd_sweep(args) -> int:
     try:
         result = run_sweep(spec, out, fmu_dir, scheduler=args.scheduler, n_workers=args.workers,
                            retry_failed=args.retry_failed, plots=not args.no_plots,
-                           connect_timeout=args.connect_timeout)
+                           connect_timeout=args.connect_timeout,
+                           progress=not getattr(args, "quiet", False))
     except (SpecError, ClusterError, OutputLocked) as error:
         print(f"harness sweep: {error}", file=sys.stderr)
         return 3 if isinstance(error, OutputLocked) else 2

@@ -26,11 +26,18 @@ def _table(columns: Mapping[str, Any]):
     return pa.table({csv_name(name): values for name, values in columns.items()})
 
 
+def _options():
+    import pyarrow.csv as pacsv
+
+    # the header quoted; values never: they are numbers, or time stamps kept as written
+    return pacsv.WriteOptions(quoting_style="none")
+
+
 def write_csv(path: str | Path, columns: Mapping[str, Any]) -> Path:
     """Writes the columns (equal-length arrays; text columns as pyarrow strings) as CSV."""
     import pyarrow.csv as pacsv
 
-    pacsv.write_csv(_table(columns), str(path))
+    pacsv.write_csv(_table(columns), str(path), _options())
     return Path(path)
 
 
@@ -46,7 +53,8 @@ class CsvStream:
 
         table = _table(columns)
         if self._writer is None:
-            self._writer = pacsv.CSVWriter(str(self.path), table.schema)
+            self._writer = pacsv.CSVWriter(str(self.path), table.schema,
+                                           write_options=_options())
         self._writer.write_table(table)
 
     def close(self) -> None:
