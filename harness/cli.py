@@ -144,7 +144,8 @@ def cmd_identify(args) -> int:
         return 2
     out = _output_folder(args.out, "identify")
     try:
-        summary = identify_file(args.data, fmu, parameters, out / "estimates.csv",
+        table = out / f"estimates.{args.format}"
+        summary = identify_file(args.data, fmu, parameters, table,
                                 options=options, input_hold=args.input_hold,
                                 decimation=args.csv_decimation)
     except DataError as error:
@@ -160,7 +161,7 @@ def cmd_identify(args) -> int:
         {**summary.as_json(), "parameters": parameters, "input_hold": args.input_hold,
          "columns": options.columns, "time_unit": args.time_unit,
          "resample": args.resample}, indent=2) + "\n")
-    print(f"wrote {out / 'estimates.csv'}, {out / 'estimates.json'}, {plot}")
+    print(f"wrote {table}, {out / 'estimates.json'}, {plot}")
     for name, value in summary.final.items():
         print(f"  {name} = {value:.6g} +- {summary.standard_error[name]:.2g} (1 sigma)")
     print(f"  measurement noise (estimated) = {summary.noise_std:.3g} rad")
@@ -305,7 +306,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="zoh: u[k] was applied over the interval after t_k (a controller's "
                         "command, the default); sampled: u[k] samples a continuous signal")
     p.add_argument("--csv-decimation", type=DECIMATION, default=1, metavar="N",
-                   help="write every Nth sample to estimates.csv (default 1: all)")
+                   help="write every Nth sample to the estimates table (default 1: all)")
+    p.add_argument("--format", choices=["csv", "parquet"], default="csv",
+                   help="estimates.csv (default) or estimates.parquet (faster for long logs)")
     p.set_defaults(func=cmd_identify)
 
     register_sweep(sub, parents=[common])

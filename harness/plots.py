@@ -67,10 +67,11 @@ def plot_perturbation(s: Scenario, r: Records, out: Path) -> Path:
     axes[0].set_ylabel("perturbation [rad/s²]")
     axes[0].legend(loc="upper right", fontsize=8)
     axes[0].set_title(_title(s, "perturbation", s.title), fontsize=10)
-    axes[1].plot(t, r["observer.z_eq_filtered[1]"] - xi, lw=0.6)
+    error = r["observer.z_eq_filtered[1]"] - xi
+    axes[1].plot(t, error, lw=0.4)
     axes[1].set_ylabel("identified - true [rad/s²]")
     axes[1].set_xlabel("t [s]")
-    axes[1].set_ylim(-0.3, 0.3)
+    axes[1].set_ylim(*_robust_limits(error[t >= s.transient]))  # the transient would hide it
     return save(fig, out / "perturbation.png")
 
 
@@ -119,8 +120,10 @@ def _moving_mean(x: np.ndarray, width: int) -> np.ndarray:
     return np.convolve(x, kernel, mode="same")
 
 
-def _robust_limits(x: np.ndarray) -> tuple[float, float]:
+def _robust_limits(x: np.ndarray, include: list[float] | tuple = ()) -> tuple[float, float]:
+    """The axis range of the central 99 % of x, widened to show the ``include`` values."""
     low, high = np.percentile(x, [0.5, 99.5])
+    low, high = min([low, *include]), max([high, *include])
     pad = 0.1 * (high - low) or 0.1
     return float(low - pad), float(high + pad)
 
@@ -144,6 +147,7 @@ def plot_identification(t: np.ndarray, columns: Mapping[str, np.ndarray], out: P
     axes[1].set_ylabel("perturbation [rad/s²]")
     axes[1].legend(fontsize=7, loc="upper right")
     shown: list[list[np.ndarray]] = [[], []]  # what axes 2 and 3 are fitted to
+    marks: list[list[float]] = [[], []]  # nominal values they show in full
     for k in range(1, 6):
         key = f"theta_hat[1,{k}]"
         std = columns.get(f"theta_std[1,{k}]")
@@ -156,7 +160,7 @@ def plot_identification(t: np.ndarray, columns: Mapping[str, np.ndarray], out: P
         shown[0].append(np.asarray(columns[key]))
         if f"c_nominal[{k}]" in nominal:
             axes[2].axhline(nominal[f"c_nominal[{k}]"], color=line.get_color(), ls=":", lw=1.0)
-            shown[0].append(np.full(10, nominal[f"c_nominal[{k}]"]))
+            marks[0].append(nominal[f"c_nominal[{k}]"])
     axes[2].set_ylabel("coefficients\n(+-2 sigma; dotted: nominal)")
     if shown[0]:
         axes[2].legend(fontsize=7, ncol=3, loc="upper right")
@@ -168,12 +172,13 @@ def plot_identification(t: np.ndarray, columns: Mapping[str, np.ndarray], out: P
     shown[1].append(b)
     if "b" in nominal:
         axes[3].axhline(nominal["b"], label="nominal b", **NOMINAL_STYLE)
-        shown[1].append(np.full(10, nominal["b"]))
+        marks[1].append(nominal["b"])
     axes[3].set_ylabel("input gain b [1/(kg m²)]")
     axes[3].legend(fontsize=7, loc="upper right")
     axes[3].set_xlabel("t since the first sample [s]")
-    for ax, series in zip(axes[2:], shown):  # the transient's first 10 % left out
+    for ax, series, values in zip(axes[2:], shown, marks):  # the first 10 % left out
         if series:
-            ax.set_ylim(*_robust_limits(np.concatenate([x[len(x) // 10:] for x in series])))
+            ax.set_ylim(*_robust_limits(np.concatenate([x[len(x) // 10:] for x in series]),
+                                        values))
     axes[0].set_title("Offline identification of recorded data", fontsize=10)
     return save(fig, out / "identification.png")

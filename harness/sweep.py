@@ -607,32 +607,26 @@ def result_row(spec: SweepSpec, run: Run, result: Mapping[str, Any]) -> dict[str
 # ---- running a sweep -------------------------------------------------------------
 
 class ProgressLine:
-    """A one-line counter on stderr (a line per 10 % when stderr is not a terminal)."""
+    """Runs done, failed, rate and time left on stderr (tqdm; on a file or pipe at most
+    one update per 10 s)."""
 
     def __init__(self, label: str, total: int, stream=None):
+        from tqdm import tqdm
+
         stream = stream or sys.stderr
-        self.label, self.total, self.stream = label, total, stream
-        self.tty = hasattr(stream, "isatty") and stream.isatty()
-        self.start = time.monotonic()
-        self.done = self.failed = 0
-        self._next_report = max(1, total // 10)
+        tty = hasattr(stream, "isatty") and stream.isatty()
+        self.failed = 0
+        self.bar = tqdm(total=total, desc=label, file=stream, disable=False,
+                        mininterval=0.2 if tty else 10.0, postfix="0 failed",
+                        bar_format="{desc}: {n}/{total} runs, {postfix}, {rate_fmt}, "
+                                   "{remaining} left", unit="run")
 
     def update(self, failed: bool) -> None:
-        self.done += 1
         self.failed += failed
-        if not self.tty and self.done < self._next_report and self.done < self.total:
-            return
-        self._next_report = self.done + max(1, self.total // 10)
-        elapsed = time.monotonic() - self.start
-        rate = self.done / elapsed if elapsed > 0 else 0.0
-        left = (self.total - self.done) / rate if rate > 0 else 0.0
-        text = (f"{self.label}: {self.done}/{self.total} runs, {self.failed} failed, "
-                f"{rate:.2f} runs/s, {left:.0f} s left")
-        if self.tty:
-            self.stream.write(f"\r{text}\x1b[K" + ("\n" if self.done == self.total else ""))
-        else:
-            self.stream.write(text + "\n")
-        self.stream.flush()
+        self.bar.set_postfix_str(f"{self.failed} failed", refresh=False)
+        self.bar.update(1)
+        if self.bar.n >= self.bar.total:
+            self.bar.close()
 
 
 @dataclass
@@ -878,10 +872,7 @@ def plot_summary(spec: SweepSpec, rows: list[dict[str, Any]], out: Path) -> list
     """One figure per swept parameter: each headline metric against it (ok runs as
     dots, coloured by noise level if the noise is swept too; the median per
     distinct value as a line; failed runs as red marks on the axis)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure  # no pyplot: the backend of a session stays
 
     metrics = headline_metrics(spec, rows)
     swept = [p for p in spec.swept if p != "seed"] or spec.swept
@@ -893,7 +884,8 @@ def plot_summary(spec: SweepSpec, rows: list[dict[str, Any]], out: Path) -> list
             continue  # nothing to plot against
         ncols = min(3, len(metrics))
         nrows = (len(metrics) + ncols - 1) // ncols
-        fig, axes = plt.subplots(nrows, ncols, figsize=(4.2 * ncols, 3.2 * nrows), squeeze=False)
+        fig = Figure(figsize=(4.2 * ncols, 3.2 * nrows + 0.4), layout="constrained")
+        axes = fig.subplots(nrows, ncols, squeeze=False)
         # Colour by noise level when the noise is swept too (the runs differ most by it).
         levels = sorted({r["noise_std"] for r in rows if _is_number(r.get("noise_std"))})
         by_noise = param != "noise_std" and "noise_std" in spec.swept and 1 < len(levels) <= 6
@@ -926,7 +918,7 @@ def plot_summary(spec: SweepSpec, rows: list[dict[str, Any]], out: Path) -> list
                 ax.plot(bad, [0.0] * len(bad), "x", color="red", transform=ax.get_xaxis_transform(),
                         clip_on=False, label=f"failed ({len(bad)})")
             ax.set_xlabel(param)
-            ax.set_ylabel(metric)
+            ax.set_ylabel(f"{metric} [{metric_unit(metric)}]")
             ax.grid(True, alpha=0.3)
             if points or bad:
                 ax.legend(fontsize=7)
@@ -935,12 +927,20 @@ def plot_summary(spec: SweepSpec, rows: list[dict[str, Any]], out: Path) -> list
         n_ok = sum(r.get("status") == "ok" for r in rows)
         fig.suptitle(f"{spec.scenario} ({spec.stop_time:g} s, {spec.method}): {n_ok} ok, "
                      f"{len(rows) - n_ok} failed of {len(rows)} runs", fontsize=10)
-        fig.tight_layout()
         path = out / f"sweep_{_filename(param)}.png"
-        fig.savefig(path, dpi=100)
-        plt.close(fig)
+        fig.savefig(path, dpi=100, bbox_inches="tight")
         paths.append(path)
     return paths
+
+
+METRIC_UNITS = {"rms_perturbation": "rad/s²", "delay": "s", "max_e2_after_1s": "rad/s",
+                "convergence_time": "s", "rms_damping": "1/s", "damping_lag": "s",
+                "max_e1_after_1s": "rad", "mean_e2_after_1s": "rad/s"}
+
+
+def metric_unit(metric: str) -> str:
+    """The unit of a harness.metrics.score metric (relative errors: 1)."""
+    return METRIC_UNITS.get(metric, "1" if "rel_error" in metric else "?")
 
 
 def _scale(ax, axis: str, values: np.ndarray) -> None:

@@ -121,3 +121,14 @@ def test_long_logs_are_decimated_in_the_csv(tmp_path, observer_fmu):
     frame = pd.read_csv(out / "estimates.csv")
     assert len(frame) == 2000
     np.testing.assert_array_equal(frame["t"].to_numpy(), t[::10])
+
+
+def test_estimates_as_parquet(tmp_path, observer_fmu):
+    t = np.arange(3000) * 1e-3
+    path, y, _ = _log(tmp_path / "r.csv", t)
+    out = tmp_path / "o"
+    assert main(["identify", str(path), "--out", str(out), "--format", "parquet",
+                 "--identifier", "off", "--fmu-dir", str(observer_fmu.parent)]) == 0
+    frame = pd.read_parquet(out / "estimates.parquet")
+    np.testing.assert_array_equal(frame["y"].to_numpy(), y)
+    assert len(frame) == 3000 and "theta_hat[1][1]" in frame.columns
