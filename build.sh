@@ -90,8 +90,20 @@ build_all() {
     "$PY" -m harness.ssp "$BUILD/fmus" "$BUILD/ClosedLoop.ssp"
 }
 
+# ---- the Python package: FMUs as package data, a wheel, the API documentation ----
+package_python() {
+    log "packaging the harness: FMUs into harness/data, wheel into $BUILD/wheel, API docs"
+    rm -rf harness/data && mkdir -p harness/data
+    cp "$BUILD"/fmus/*.fmu harness/data/
+    rm -rf "$BUILD/wheel" "$BUILD/api"
+    "$PY" -m pip wheel --quiet --disable-pip-version-check --no-deps --no-build-isolation \
+        --wheel-dir "$BUILD/wheel" .
+    "$PY" -m pdoc --output-directory "$BUILD/api" harness
+}
+
 setup_venv
 build_all
+package_python
 case "${1:-demo}" in
     fmus) ;;
     test)

@@ -1,27 +1,33 @@
-"""Command line: ``python -m harness`` (or ``sto-harness``).
+"""Command line: ``sto-harness`` (or ``python -m harness``).
 
     reproduce [--scenario NAME|all] --out DIR   the paper's section 6 examples
-    identify DATA.csv --out DIR [--param NAME=VALUE ...]   offline identification
+    identify DATA.csv --out DIR [--columns t=time,y=theta,u=tau] [--param NAME=VALUE ...]
+                                                offline identification of a recorded log
     demo [--out DIR]                            the closed-loop demonstration (reproduce + compare)
     compare --out DIR                           paper method vs the improved defaults
     sweep SPEC --out DIR [--scheduler tcp://HOST:PORT]   parameter / noise sweeps on Dask
+
+Options of every command (before or after it): --fmu-dir DIR, --quiet.
+Exit status: 0 done; 1 done, but the result cannot be trusted (an FMU warned, the
+observer did not converge, some sweep runs failed: see stderr); 2 bad input or an FMU
+error; 3 a sweep's --out is locked by another sweep; 130 interrupted.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
 from .fmus import FMUError
+from .messages import Console
+from .paths import default_fmu_dir
 from .values import INT32_MAX, BadValue, argparse_type, integer, real
-
-REPO = Path(__file__).resolve().parents[1]
-DEFAULT_FMU_DIR = REPO / "build" / "fmus"
 
 
 def _fmu_dir(args) -> Path:
-    path = Path(args.fmu_dir)
+    path = Path(args.fmu_dir) if args.fmu_dir else default_fmu_dir()
     if not (path / "SuperTwistingObserver.fmu").exists():
         raise SystemExit(f"harness: no FMUs in {path}: run ./build.sh fmus first "
                          f"(or pass --fmu-dir)")
@@ -44,10 +50,10 @@ def cmd_reproduce(args) -> int:
     summary = {}
     for name in names:
         scenario = SCENARIOS[name]
-        print(f"{name}: {scenario.title} ({scenario.stop_time:g} s)")
+        print(f"{name}: {scenario.title} ({scenario.stop_time:g} s)", flush=True)
         records = run_scenario(scenario, fmu_dir, noise_std=args.noise, seed=args.seed,
                                use_native=False if args.python_loop else None,
-                               progress=Progress(name))
+                               progress=Progress(name, quiet=True if args.quiet else None))
         metrics = score(scenario, records)
         folder = out / name
         folder.mkdir(parents=True, exist_ok=True)
@@ -121,42 +127,63 @@ def _output_folder(path: str, command: str) -> Path:
 
 def cmd_identify(args) -> int:
     from .fmus import check_parameters
-    from .identify import (DataError, default_internal_step, final_estimates, identify,
-                           largest_internal_step, read_recording, write_csv)
+    from .identify import DataError, ReadOptions, identify_file
     from .plots import plot_identification
+    from .recording import parse_columns
 
     fmu = _fmu_dir(args) / "SuperTwistingObserver.fmu"
     parameters = check_parameters(fmu, {
         "identifier": {"off": 0, "lsm": 1, "mff": 2}[args.identifier],
         **_parse_params(args.param)})
-    out = _output_folder(args.out, "identify")
     try:
-        recording = read_recording(args.data)
+        options = ReadOptions(columns=parse_columns(args.columns), time_unit=args.time_unit,
+                              tolerance=args.time_tolerance,
+                              resample=None if args.resample is None else args.resample)
     except DataError as error:
         print(f"harness identify: {error}", file=sys.stderr)
         return 2
-    h = parameters.get("h")
-    if h is None:
-        h_max = largest_internal_step(fmu)
-        h = default_internal_step(recording.step, h_max)
-        if h != recording.step:
-            print(f"note: samples {recording.step:g} s apart are more than the observer's "
-                  f"largest internal step ({h_max:g} s): h = {h:g} s "
-                  f"({round(recording.step / h)} internal steps per sample); set it with "
-                  f"--param h=...")
-    columns = identify(recording, fmu, parameters, input_hold=args.input_hold)
-    write_csv(columns, out / "estimates.csv")
-    plot = plot_identification(columns["t"], columns, out)
-    summary = final_estimates(columns)
-    (out / "estimates.json").write_text(json.dumps({**summary, "parameters": parameters,
-                                                    "h": h,
-                                                    "input_hold": args.input_hold},
-                                                   indent=2) + "\n")
-    print(f"wrote {out / 'estimates.csv'}, {out / 'estimates.json'}, {plot}")
-    for name, value in summary["final"].items():
-        print(f"  {name} = {value:.6g} +- {summary['standard_error'][name]:.2g} (1 sigma)")
-    print(f"  measurement noise (estimated) = {summary['noise_std']:.3g} rad")
+    out = _output_folder(args.out, "identify")
+    try:
+        table = out / f"estimates.{args.format}"
+        summary = identify_file(args.data, fmu, parameters, table,
+                                options=options, input_hold=args.input_hold,
+                                decimation=args.csv_decimation)
+    except DataError as error:
+        print(f"harness identify: {error}", file=sys.stderr)
+        return 2
+    if summary.h != summary.step:
+        print(f"note: samples {summary.step:g} s apart are more than the observer's largest "
+              f"internal step: h = {summary.h:g} s ({round(summary.step / summary.h)} internal "
+              f"steps per sample); set it with --param h=...")
+    plot = plot_identification(summary.figure_rows["t"], summary.figure_rows, out,
+                               nominal=_nominal(fmu, parameters))
+    (out / "estimates.json").write_text(json.dumps(
+        {**summary.as_json(), "parameters": parameters, "input_hold": args.input_hold,
+         "columns": options.columns, "time_unit": args.time_unit,
+         "resample": args.resample}, indent=2) + "\n")
+    print(f"wrote {table}, {out / 'estimates.json'}, {plot}")
+    for name, value in summary.final.items():
+        print(f"  {name} = {value:.6g} +- {summary.standard_error[name]:.2g} (1 sigma)")
+    print(f"  measurement noise (estimated) = {summary.noise_std:.3g} rad")
+    print(f"  observer converged: {'yes' if summary.converged else 'no'}; identifier active: "
+          f"{'yes' if summary.identifier_active else 'no'}; excitation = "
+          f"{summary.excitation:.3g}")
+    if not summary.converged:
+        print("harness identify: the observer has not converged by the end of the record: "
+              "the estimates cannot be trusted (check the gains, b and the nominal model)",
+              file=sys.stderr)
+        return 1
     return 0
+
+
+def _nominal(fmu: Path, parameters: dict) -> dict[str, float]:
+    """The nominal coefficients and b the observer ran with (given or the FMU's start)."""
+    from fmpy import read_model_description
+
+    names = [f"c_nominal[{k}]" for k in range(1, 6)] + ["b"]
+    start = {v.name: v.start for v in read_model_description(str(fmu)).modelVariables
+             if v.name in names}
+    return {n: float(parameters.get(n, start.get(n) or 0.0)) for n in names}
 
 
 def cmd_demo(args) -> int:
@@ -175,7 +202,8 @@ def cmd_compare(args) -> int:
 
     noise = args.noise if isinstance(args.noise, tuple) else _noise_list(args.noise)
     rows = run_comparison(_fmu_dir(args), _output_folder(args.out, "compare"),
-                          None if args.scenario == "all" else [args.scenario], noise)
+                          None if args.scenario == "all" else [args.scenario], noise,
+                          quiet=True if args.quiet else None)
     print(markdown_table(rows))
     print(f"\nwrote {Path(args.out) / 'compare.md'}, compare.csv and figures")
     return 0
@@ -194,62 +222,134 @@ def _noise_list(text: str) -> tuple[float, ...]:
 NOISE = argparse_type(real, "--noise", low=0.0)
 SEED = argparse_type(integer, "--seed", low=0, high=2**63 - 1)
 DECIMATION = argparse_type(integer, "--csv-decimation", low=1, high=INT32_MAX)
+TOLERANCE = argparse_type(real, "--time-tolerance", low=0.0)
+RESAMPLE = argparse_type(real, "--resample", low=0.0)
 
 
-def main(argv: list[str] | None = None) -> int:
+def global_options() -> argparse.ArgumentParser:
+    """Options every command takes, before or after its name (a parent parser: the
+    subcommands leave them alone when not given, argparse.SUPPRESS)."""
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--fmu-dir", default=argparse.SUPPRESS, metavar="DIR",
+                        help="folder with the three FMUs (default: $STO_FMU_DIR, else build/fmus "
+                             "of a source checkout, else the FMUs installed with the package)")
+    common.add_argument("--quiet", "-q", action="store_true", default=argparse.SUPPRESS,
+                        help="no progress bars and no warnings on stderr, only errors (the "
+                             "exit status still says when a result cannot be trusted)")
+    return common
+
+
+def build_parser() -> argparse.ArgumentParser:
     from .scenarios import SCENARIOS
+    from .sweep import register as register_sweep
 
-    parser = argparse.ArgumentParser(prog="python -m harness", description=__doc__,
+    common = global_options()
+    parser = argparse.ArgumentParser(prog="sto-harness", description=__doc__, parents=[common],
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--fmu-dir", default=str(DEFAULT_FMU_DIR),
-                        help="folder with the built FMUs (default: build/fmus)")
-    sub = parser.add_subparsers(dest="command", required=True)
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    scenario_help = "a scenario of the paper's section 6, or all (default)"
 
-    p = sub.add_parser("reproduce", help="run the paper's section 6 examples")
-    p.add_argument("--scenario", default="all", choices=["all", *SCENARIOS])
-    p.add_argument("--out", required=True)
+    p = sub.add_parser("reproduce", parents=[common], help="run the paper's section 6 examples",
+                       description="Runs the paper's section 6 examples in closed loop and "
+                       "writes signals.csv, metrics.json and figures per scenario.")
+    p.add_argument("--scenario", default="all", choices=["all", *SCENARIOS], help=scenario_help)
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     p.add_argument("--noise", type=NOISE, default=0.0, help="std of noise on theta [rad], >= 0")
     p.add_argument("--seed", type=SEED, default=0, help="noise seed, >= 0")
-    p.add_argument("--csv-decimation", type=DECIMATION, default=10,
+    p.add_argument("--csv-decimation", type=DECIMATION, default=10, metavar="N",
                    help="write every Nth step to signals.csv (default 10, >= 1)")
     p.add_argument("--python-loop", action="store_true", help="use the plain-Python master loop")
     p.set_defaults(func=cmd_reproduce)
 
-    p = sub.add_parser("demo", help="the closed-loop demonstration: all scenarios, paper "
-                       "method and improved defaults")
-    p.add_argument("--out", default=str(REPO / "build" / "demo"))
+    p = sub.add_parser("demo", parents=[common], help="the closed-loop demonstration: all "
+                       "scenarios, paper method and improved defaults")
+    p.add_argument("--out", default="demo", metavar="DIR",
+                   help="output folder (default: ./demo)")
     p.set_defaults(func=cmd_demo)
 
-    p = sub.add_parser("compare", help="paper method vs the improved defaults, with noise")
-    p.add_argument("--scenario", default="all", choices=["all", *SCENARIOS])
+    p = sub.add_parser("compare", parents=[common],
+                       help="paper method vs the improved defaults, with noise")
+    p.add_argument("--scenario", default="all", choices=["all", *SCENARIOS], help=scenario_help)
     p.add_argument("--noise", type=_noise_list, default=(0.0, 1e-5, 1e-4),
                    help="comma-separated noise std [rad], each >= 0 (default 0,1e-5,1e-4)")
-    p.add_argument("--out", required=True)
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     p.set_defaults(func=cmd_compare)
 
-    p = sub.add_parser("identify", help="identify from recorded data (columns t, y, u)")
-    p.add_argument("data")
-    p.add_argument("--out", required=True)
-    p.add_argument("--identifier", choices=["off", "lsm", "mff"], default="lsm")
+    p = sub.add_parser("identify", parents=[common], help="identify from a recorded log (CSV)",
+                       description="Feeds a recorded experiment through the observer FMU and "
+                       "writes estimates.csv, estimates.json and identification.png.")
+    p.add_argument("data", help="CSV file with a header row naming the time, position and "
+                   "input columns")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    p.add_argument("--identifier", choices=["off", "lsm", "mff"], default="lsm",
+                   help="least squares for constant parameters (lsm, default), with matrix "
+                        "forgetting factor for time-varying ones (mff), or none")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                    help="observer FMU parameter, e.g. --param b=1.12 --param 'c_nominal[1]=2'")
+    p.add_argument("--columns", default="", metavar="t=NAME,y=NAME,u=NAME",
+                   help="the file's names of the time, position and input columns (default: "
+                        "t or time, y, u; any case), e.g. t=time,y=theta,u=tau")
+    p.add_argument("--time-unit", default=None, choices=["s", "ms", "us", "ns", "min"],
+                   help="unit of the time column (default: seconds, with a warning when whole-"
+                        "number stamps 1 or more apart look like milliseconds); epoch time "
+                        "stamps are fine")
+    p.add_argument("--time-tolerance", type=TOLERANCE, default=0.01, metavar="FRACTION",
+                   help="how far a sampling step may differ from the recording's step, as a "
+                        "fraction of it (default 0.01: clock jitter); larger gaps are refused "
+                        "unless --resample")
+    p.add_argument("--resample", type=RESAMPLE, default=None, nargs="?", const=0.0,
+                   metavar="STEP",
+                   help="put the samples on a uniform grid of STEP seconds first (without "
+                        "STEP: the median step): y interpolated linearly, u holds its last "
+                        "value; the time stamps written are then the grid's")
     p.add_argument("--input-hold", choices=["zoh", "sampled"], default="zoh",
                    help="zoh: u[k] was applied over the interval after t_k (a controller's "
                         "command, the default); sampled: u[k] samples a continuous signal")
+    p.add_argument("--csv-decimation", type=DECIMATION, default=1, metavar="N",
+                   help="write every Nth sample to the estimates table (default 1: all)")
+    p.add_argument("--format", choices=["csv", "parquet"], default="csv",
+                   help="estimates.csv (default) or estimates.parquet (faster for long logs)")
     p.set_defaults(func=cmd_identify)
 
-    from .sweep import register as register_sweep
-    register_sweep(sub)
+    register_sweep(sub, parents=[common])
+    return parser
 
-    args = parser.parse_args(argv)
+
+def main(argv: list[str] | None = None) -> int:
+    """Runs the command line; returns the exit status (see the module documentation)."""
+    args = build_parser().parse_args(argv)
+    args.fmu_dir = getattr(args, "fmu_dir", None)
+    args.quiet = getattr(args, "quiet", False)
+    with Console(quiet=args.quiet) as console:
+        try:
+            code = args.func(args)
+        except FMUError as error:
+            print(f"harness: {error}", file=sys.stderr)
+            return 2
+        except KeyError as error:
+            print(f"harness: {error.args[0] if error.args else error}", file=sys.stderr)
+            return 2
+        except KeyboardInterrupt:
+            print("\nharness: interrupted", file=sys.stderr)
+            return 130
+        except BrokenPipeError:
+            _silence_stdout()  # the reader went away (| head): nothing more to say
+            return 0
+        if code == 0 and console.warnings + console.errors:
+            print(f"harness: the FMUs or the harness warned {console.warnings + console.errors} "
+                  f"time(s) (see above{'; --quiet hid them' if args.quiet else ''}): the "
+                  f"results cannot be trusted as they are", file=sys.stderr)
+            return 1
+        return code
+
+
+def _silence_stdout() -> None:
+    """Points stdout at /dev/null, so that Python's final flush does not fail again."""
     try:
-        return args.func(args)
-    except FMUError as error:
-        print(f"harness: {error}", file=sys.stderr)
-        return 2
-    except KeyError as error:
-        print(f"harness: {error.args[0] if error.args else error}", file=sys.stderr)
-        return 2
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):  # not a real file (tests): nothing to redirect
+        pass
 
 
 if __name__ == "__main__":

@@ -7,6 +7,7 @@ said) and exposes the raw ctypes FMI functions that the master loops use.
 from __future__ import annotations
 
 import ctypes
+import logging
 import shutil
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
@@ -29,6 +30,11 @@ from .values import BadValue, fmi_value
 Value = float | int | bool
 
 STATUS_NAMES = ("OK", "Warning", "Discard", "Error", "Fatal", "Pending")
+# FMI status -> logging level of the FMU's log lines (logger "harness.fmu")
+STATUS_LEVELS = (logging.DEBUG, logging.WARNING, logging.WARNING, logging.ERROR,
+                 logging.CRITICAL, logging.INFO)
+LOGGER = logging.getLogger("harness.fmu")
+MAX_REPEATS = 5  # the same line is passed on this many times per instance, then counted
 
 
 class FMUError(RuntimeError):
@@ -104,6 +110,8 @@ class FMUInstance:
         self._unzip_dir = extract(str(self.path), unzipdir=str(owned_temp_dir("fmu")))
         self.variables = variables_of(self.model_description)
         self.messages: list[str] = []
+        self._repeats: dict[str, int] = {}
+        self.failed = False  # an FMI call failed: terminate is not allowed any more
         self._callbacks = self._make_callbacks()
         self.slave = FMU2Slave(
             guid=self.model_description.guid,
@@ -126,6 +134,7 @@ class FMUInstance:
                 .replace("%%", "%").replace("##", "#")
             label = STATUS_NAMES[status] if 0 <= status < len(STATUS_NAMES) else str(status)
             self.messages.append(f"[{label}] {text}")
+            self._forward(status, text)
 
         callbacks = fmi2CallbackFunctions()
         callbacks.logger = fmi2CallbackLoggerTYPE(log)
@@ -133,11 +142,22 @@ class FMUInstance:
         callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
         return callbacks
 
+    def _forward(self, status: int, text: str) -> None:
+        """Passes a log line to the logging module (logger ``harness.fmu``): Warning and
+        Discard as WARNING, Error as ERROR, Fatal as CRITICAL, OK as DEBUG."""
+        level = STATUS_LEVELS[status] if 0 <= status < len(STATUS_LEVELS) else logging.ERROR
+        seen = self._repeats.get(text, 0) + 1
+        self._repeats[text] = seen
+        if seen <= MAX_REPEATS:
+            suffix = " (further identical lines not shown)" if seen == MAX_REPEATS else ""
+            LOGGER.log(level, "%s (%s): %s%s", self.name, self.path.name, text, suffix)
+
     def _call(self, action, what: str):
         before = len(self.messages)
         try:
             return action()
         except FMICallException as error:
+            self.failed = True
             said = "; ".join(self.messages[before:]) or "(the FMU logged nothing)"
             raise FMUError(f"{self.name}: {what} failed: {said}") from error
 
@@ -188,6 +208,8 @@ class FMUInstance:
         """fmi2Reset: back to the freshly instantiated state; forgets the log."""
         self._call(self.slave.reset, "fmi2Reset")
         self.messages.clear()
+        self._repeats.clear()
+        self.failed = False
 
     def exit_initialization(self) -> None:
         self._call(self.slave.exitInitializationMode, "exitInitializationMode")
@@ -202,10 +224,11 @@ class FMUInstance:
     def close(self) -> None:
         """Terminate (when possible) and free the instance; remove the extracted files."""
         if self.slave is not None:
-            try:
-                self.slave.terminate()
-            except FMICallException:
-                pass
+            if not self.failed:
+                try:
+                    self.slave.terminate()
+                except FMICallException:
+                    pass
             self.slave.freeInstance()
             self.slave = None
         shutil.rmtree(self._unzip_dir, ignore_errors=True)

@@ -1,124 +1,34 @@
-"""Offline identification: a recorded experiment (t, y, u) fed through the observer FMU."""
+"""Offline identification: a recorded experiment (t, y, u) fed through the observer FMU.
+
+:func:`identify` runs a recording held in memory; :func:`identify_file` streams a
+CSV log of any length block by block (see :mod:`harness.recording` for what it
+reads), writing the estimates as it goes, so that memory does not grow with the
+log.  Both return the observer's outputs at every sample; the trust outputs
+(``converged``, ``identifier_active``, ``excitation``, the standard errors and
+the estimated noise) say how far to believe them.
+"""
 from __future__ import annotations
 
-import csv
 import math
-from dataclasses import dataclass
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from .fmus import FMUInstance, Value
 from .master import CoSimulation, Link, initialize, run
+from .recording import Block, DataError, ReadOptions, Recording, read_blocks, read_recording
 
-REQUIRED = ("t", "y", "u")
+__all__ = ["DataError", "ReadOptions", "Recording", "read_recording", "identify",
+           "identify_file", "held_input", "final_estimates", "Summary"]
+
 OUTPUTS = ["x1_hat[1]", "x2_hat[1]", "z_eq[1]", "z_eq_filtered[1]"] + \
           [f"theta_hat[1,{k}]" for k in range(1, 6)] + \
           [f"theta_std[1,{k}]" for k in range(1, 6)] + \
-          ["b_hat", "b_std", "gamma_trace", "noise_std[1]", "observer_bandwidth[1]"]
-
-
-class DataError(ValueError):
-    """The recorded data cannot be used; the message names the file and line."""
-
-
-@dataclass
-class Recording:
-    t: np.ndarray
-    y: np.ndarray
-    u: np.ndarray
-
-    @property
-    def step(self) -> float:
-        return float(self.t[1] - self.t[0])
-
-
-def read_recording(path: str | Path, relative_tolerance: float = 1e-6) -> Recording:
-    """Read columns t, y, u (header row, any order, extra columns ignored) with clear errors.
-
-    The file is UTF-8 text (a byte-order mark, as spreadsheets write for "CSV UTF-8",
-    is skipped); anything else -- another encoding, a binary file, a field too long
-    for a CSV reader -- is a DataError that names the file and line, never a
-    traceback."""
-    path = Path(path)
-    try:
-        handle = path.open(newline="", encoding="utf-8-sig")
-    except OSError as error:
-        raise DataError(f"{path}: cannot open ({error.strerror})") from None
-    reader = None
-    try:
-        with handle:
-            reader = csv.reader(handle)
-            return _parse_recording(path, reader, relative_tolerance)
-    except UnicodeDecodeError:
-        raise DataError(f"{path}: {_not_utf8(path)}; identify reads UTF-8 text (save the file "
-                        f"as CSV UTF-8)") from None
-    except csv.Error as error:
-        line = reader.line_num if reader is not None else 0
-        raise DataError(f"{path} line {line}: not a readable CSV file ({error}); identify needs "
-                        f"a text CSV with a header t, y, u") from None
-    except OSError as error:
-        raise DataError(f"{path}: cannot read ({error.strerror or error})") from None
-
-
-def _not_utf8(path: Path) -> str:
-    """Where the file stops being UTF-8: its first bad byte, with line and offset."""
-    data = path.read_bytes()
-    try:
-        data.decode("utf-8")
-    except UnicodeDecodeError as error:
-        line = data.count(b"\n", 0, error.start) + 1
-        return (f"line {line}: byte 0x{data[error.start]:02x} at offset {error.start} is not "
-                f"UTF-8")
-    return "not UTF-8"
-
-
-def _parse_recording(path: Path, reader, relative_tolerance: float) -> Recording:
-    header = next(reader, None)
-    if header is None:
-        raise DataError(f"{path}: the file is empty")
-    names = [h.strip().lower() for h in header]
-    missing = [c for c in REQUIRED if c not in names]
-    if missing:
-        raise DataError(f"{path} line 1: missing column(s) {', '.join(missing)}; the header "
-                        f"must name t, y and u (found: {', '.join(header) or 'nothing'})")
-    columns = {c: names.index(c) for c in REQUIRED}
-    rows: list[tuple[float, float, float]] = []
-    for line, row in enumerate(reader, start=2):
-        if not row or all(not cell.strip() for cell in row):
-            continue
-        values = []
-        for name in REQUIRED:
-            index = columns[name]
-            if index >= len(row):
-                raise DataError(f"{path} line {line}: column {name!r} is missing "
-                                f"({len(row)} fields)")
-            text = row[index].strip()
-            try:
-                value = float(text)
-            except ValueError:
-                raise DataError(f"{path} line {line}: {name} = {text!r} is not a number") \
-                    from None
-            if not math.isfinite(value):
-                raise DataError(f"{path} line {line}: {name} = {text} is not finite "
-                                f"(NaN or Inf rows must be removed or interpolated first)")
-            values.append(value)
-        rows.append((values[0], values[1], values[2]))
-    if len(rows) < 3:
-        raise DataError(f"{path}: {len(rows)} data row(s); at least 3 are needed")
-    data = np.array(rows)
-    t = data[:, 0]
-    dt = np.diff(t)
-    step = dt[0]
-    if not step > 0:
-        raise DataError(f"{path} line 3: time does not increase (t = {t[0]!r}, then {t[1]!r})")
-    bad = np.nonzero(np.abs(dt - step) > relative_tolerance * max(abs(step), 1e-300) +
-                     4 * np.finfo(float).eps * np.abs(t[1:]))[0]
-    if bad.size:
-        i = int(bad[0])
-        raise DataError(f"{path} line {i + 3}: sampling step {dt[i]!r} differs from the first "
-                        f"step {step!r}; identify needs uniform sampling (resample first)")
-    return Recording(t, data[:, 1], data[:, 2])
+          ["b_hat", "b_std", "gamma_trace", "noise_std[1]", "observer_bandwidth[1]", "excitation"]
+FLAGS = ("converged", "identifier_active")  # Booleans: read at the end of the record
+PLOT_POINTS = 20_000  # identify_file keeps at most twice this many rows for the figure
 
 
 INPUT_HOLDS = ("zoh", "sampled")
@@ -141,30 +51,194 @@ def held_input(u: np.ndarray, input_hold: str) -> np.ndarray:
     raise ValueError(f"input_hold = {input_hold!r}: expected one of {', '.join(INPUT_HOLDS)}")
 
 
-def identify(recording: Recording, observer_fmu: Path, parameters: dict[str, Value],
+def _column(name: str) -> str:
+    """The output's column name: joint 1's vectors without the index."""
+    return name.replace("[1]", "")
+
+
+class _Run:
+    """The observer FMU over consecutive blocks of one recording (sample step ``step``).
+
+    Each block gives the outputs at its own samples: the first sample's after
+    initialization, every other one's after the step from the sample before it."""
+
+    def __init__(self, observer_fmu: Path, parameters: Mapping[str, Value], step: float,
+                 input_hold: str):
+        if input_hold not in INPUT_HOLDS:
+            held_input(np.zeros(1), input_hold)  # raises the message
+        self.observer = FMUInstance(observer_fmu, "observer")
+        self.sim = CoSimulation({"observer": self.observer},
+                                [Link("signal:y", "observer.y[1]"), Link("signal:u", "observer.u")])
+        self.parameters = {"h": default_internal_step(step, self.observer.variable("h").max),
+                           **parameters}
+        self.step, self.input_hold = step, input_hold
+        self.k = 0  # index of the next sample to step from
+        self.carry: tuple[float, float] | None = None  # (y, u) of the last sample so far
+
+    def feed(self, y: np.ndarray, u: np.ndarray) -> dict[str, np.ndarray]:
+        """The outputs at these samples (the next ones of the recording)."""
+        if self.carry is not None:
+            y = np.concatenate([[self.carry[0]], y])
+            u = np.concatenate([[self.carry[1]], u])
+        signals = {"y": y[:-1], "u": held_input(u, self.input_hold)[:-1]}
+        start = self.k * self.step
+        if self.carry is None:
+            first = {"y": y, "u": held_input(u, self.input_hold)}
+            initialize(self.sim, 0.0, {"observer": self.parameters}, first)
+        n = len(y) - 1
+        records = run(self.sim, start, start + n * self.step, self.step,
+                      [f"observer.{o}" for o in OUTPUTS], signals=signals)
+        skip = 0 if self.carry is None else 1  # the row of the carried sample is out already
+        self.k += n
+        self.carry = (float(y[-1]), float(u[-1]))
+        return {_column(o): records[f"observer.{o}"][skip:] for o in OUTPUTS}
+
+    def flags(self) -> dict[str, bool]:
+        return {name: bool(value) for name, value in zip(FLAGS, self.observer.get(FLAGS))}
+
+    def close(self) -> None:
+        self.sim.close()
+
+
+def identify(recording: Recording, observer_fmu: Path, parameters: Mapping[str, Value],
              input_hold: str = "zoh") -> dict[str, np.ndarray]:
-    """Run the observer over the recording; returns t, y, u and the observer outputs.
+    """Run the observer over the recording; returns t, y, u and the observer outputs
+    (joint 1's, named without the index: x2_hat, theta_hat[1,2], excitation, ...) and
+    the final Booleans ``converged`` and ``identifier_active`` as 1-element arrays.
 
     ``input_hold`` says how u was applied between samples (see held_input)."""
-    observer = FMUInstance(observer_fmu, "observer")
-    sim = CoSimulation({"observer": observer},
-                       [Link("signal:y", "observer.y[1]"), Link("signal:u", "observer.u")])
-    parameters = {"h": default_internal_step(recording.step, observer.variable("h").max),
-                  **parameters}
-    n = len(recording.t) - 1
-    signals = {"y": recording.y[:n], "u": held_input(recording.u, input_hold)[:n]}
+    observer = _Run(observer_fmu, parameters, recording.step, input_hold)
     try:
-        initialize(sim, float(recording.t[0]), {"observer": parameters}, signals)
-        records = run(sim, float(recording.t[0]), float(recording.t[0]) + n * recording.step,
-                      recording.step, [f"observer.{o}" for o in OUTPUTS], signals=signals)
+        out = {"t": recording.t, "y": recording.y, "u": recording.u,
+               **observer.feed(recording.y, recording.u)}
+        out.update({name: np.array([flag]) for name, flag in observer.flags().items()})
     finally:
-        sim.close()
-    # the recording's own time stamps (the master's t0 + k H may differ in the last bit)
-    out = {"t": recording.t[: len(records.time)], "y": recording.y[: len(records.time)],
-           "u": recording.u[: len(records.time)]}
-    for name in OUTPUTS:
-        out[name.replace("[1]", "")] = records[f"observer.{name}"]
+        observer.close()
     return out
+
+
+@dataclass
+class Summary:
+    """What identify_file found: the final estimates and how far to trust them."""
+
+    final: dict[str, float]
+    standard_error: dict[str, float]
+    noise_std: float
+    excitation: float
+    converged: bool
+    identifier_active: bool
+    samples: int
+    step: float  # [s]
+    h: float  # the observer's internal step [s]
+    first_stamp: str  # the first time stamp as written
+    fmu_warnings: list[str] = field(default_factory=list)
+    figure_rows: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
+
+    @property
+    def trusted(self) -> bool:
+        """The observer converged and the FMU did not warn."""
+        return self.converged and not self.fmu_warnings
+
+    def as_json(self) -> dict[str, object]:
+        return {"final": self.final, "standard_error": self.standard_error,
+                "noise_std": self.noise_std,
+                "trust": {"converged": self.converged,
+                          "identifier_active": self.identifier_active,
+                          "excitation": self.excitation, "fmu_warnings": self.fmu_warnings},
+                "samples": self.samples, "step": self.step, "h": self.h,
+                "first_stamp": self.first_stamp}
+
+
+def identify_file(path: str | Path, observer_fmu: Path, parameters: Mapping[str, Value],
+                  out_csv: str | Path | None = None, *, options: ReadOptions | None = None,
+                  input_hold: str = "zoh", decimation: int = 1) -> Summary:
+    """Streams the recording at ``path`` through the observer: writes t (as written in
+    the file), y, u and the outputs of every ``decimation``-th sample to ``out_csv``
+    and returns the Summary (with at most 2 * PLOT_POINTS rows kept for a figure)."""
+    from .tables import CsvStream
+
+    if decimation < 1:
+        raise ValueError(f"decimation {decimation} must be >= 1")
+    blocks = read_blocks(path, options)
+    first = next(blocks)
+    observer = None
+    kept = _Thinned(PLOT_POINTS)
+    index = 0
+    last: dict[str, float] = {}
+    step = _block_step(first)
+    try:
+        with CsvStream(out_csv) if out_csv else _NoStream() as stream:
+            for block in _chain(first, blocks):
+                if observer is None:
+                    observer = _Run(Path(observer_fmu), parameters, step, input_hold)
+                outputs = observer.feed(block.y, block.u)
+                columns = {"t": block.time, "y": block.y, "u": block.u, **outputs}
+                rows = np.arange(index, index + len(block.y))
+                chosen = rows % decimation == 0
+                stream.write({"t": block.stamps.filter(chosen) if not chosen.all()
+                              else block.stamps,
+                              **{k: v[chosen] for k, v in columns.items() if k != "t"}})
+                kept.add(rows, columns)
+                last = {k: float(v[-1]) for k, v in columns.items()}
+                index += len(block.y)
+            flags = observer.flags()
+            warnings = observer.observer.warnings()
+            h = float(observer.parameters["h"])
+    finally:
+        if observer is not None:
+            observer.close()
+    estimates = final_estimates({k: np.array([v]) for k, v in last.items()})
+    return Summary(estimates["final"], estimates["standard_error"], estimates["noise_std"],
+                   last["excitation"], flags["converged"], flags["identifier_active"], index,
+                   step, h, str(first.stamps[0].as_py()), warnings, kept.columns())
+
+
+def _block_step(block: Block) -> float:
+    """The sampling step of a recording from its first block (its median step)."""
+    if len(block.time) < 2:
+        raise DataError("the recording's first block has fewer than 2 samples")
+    return float(np.median(np.diff(block.time[:1001])))
+
+
+def _chain(first: Block, rest: Iterable[Block]):
+    yield first
+    yield from rest
+
+
+class _NoStream:
+    def write(self, columns) -> None:
+        pass
+
+    def __enter__(self) -> "_NoStream":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pass
+
+
+class _Thinned:
+    """Every stride-th row of a long series, the stride doubled whenever more than
+    2 * limit rows are kept (so that at most that many are)."""
+
+    def __init__(self, limit: int):
+        self.limit, self.stride = limit, 1
+        self.parts: list[dict[str, np.ndarray]] = []
+        self.count = 0
+
+    def add(self, rows: np.ndarray, columns: Mapping[str, np.ndarray]) -> None:
+        chosen = rows % self.stride == 0
+        self.parts.append({k: np.asarray(v)[chosen] for k, v in columns.items()})
+        self.count += int(chosen.sum())
+        if self.count > 2 * self.limit:
+            merged = self.columns()
+            self.stride *= 2
+            self.parts = [{k: v[::2] for k, v in merged.items()}]
+            self.count = len(next(iter(self.parts[0].values())))
+
+    def columns(self) -> dict[str, np.ndarray]:
+        if not self.parts:
+            return {}
+        return {k: np.concatenate([p[k] for p in self.parts]) for k in self.parts[0]}
 
 
 def largest_internal_step(observer_fmu: Path) -> float | None:
@@ -187,19 +261,11 @@ def default_internal_step(step: float, h_max: float | None) -> float:
     return step / math.ceil(step / h_max)
 
 
-def final_estimates(columns: dict[str, np.ndarray]) -> dict[str, object]:
+def final_estimates(columns: Mapping[str, np.ndarray]) -> dict[str, object]:
     """The estimates at the end of the record with their standard errors (1 sigma) and
-    the estimated measurement noise: what ``identify`` writes to estimates.json."""
+    the estimated measurement noise."""
     names = [f"theta_hat[1,{k}]" for k in range(1, 6)] + ["b_hat"]
     errors = [f"theta_std[1,{k}]" for k in range(1, 6)] + ["b_std"]
     return {"final": {n: float(columns[n][-1]) for n in names},
             "standard_error": {n: float(columns[e][-1]) for n, e in zip(names, errors)},
             "noise_std": float(columns["noise_std"][-1])}
-
-
-def write_csv(columns: dict[str, np.ndarray], path: Path) -> None:
-    """The columns as CSV, every number at full precision (%.17g round-trips a
-    double: epoch timestamps at 1 kHz stay distinct)."""
-    names = list(columns)
-    np.savetxt(path, np.column_stack([columns[n] for n in names]), delimiter=",",
-               header=",".join(names), comments="", fmt="%.17g")

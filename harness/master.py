@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import ctypes
 import sys
-import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -56,10 +55,10 @@ class Records:
         return self.signals[name]
 
     def to_csv(self, path: str | Path) -> None:
-        names = list(self.signals)
-        table = np.column_stack([self.time] + [self.signals[n] for n in names])
-        np.savetxt(path, table, delimiter=",", header=",".join(["time"] + names), comments="",
-                   fmt="%.17g")  # full precision: %.17g round-trips a double
+        """time and every probe, full precision, quoted header (harness.tables)."""
+        from .tables import write_csv
+
+        write_csv(path, {"time": self.time, **self.signals})
 
 
 @dataclass
@@ -301,20 +300,19 @@ def run(sim: CoSimulation, start_time: float, stop_time: float, step: float, pro
 
 
 class Progress:
-    """A one-line progress report on stderr, shown only for runs longer than a second."""
+    """A progress bar on stderr (tqdm) for one run, called with the fraction done.
 
-    def __init__(self, label: str, stream=sys.stderr):
-        self.label, self.stream = label, stream
-        self.start = time.monotonic()
-        self.shown = False
+    Shown only after the first second, and only on a terminal unless ``quiet`` is
+    False explicitly (``quiet=None``: tqdm's choice, off when stderr is a file or pipe)."""
+
+    def __init__(self, label: str, quiet: bool | None = None):
+        from tqdm import tqdm
+
+        self.bar = tqdm(total=100, desc=f"  {label}", unit="%", delay=1.0, leave=False,
+                        disable=None if quiet is None else quiet,
+                        bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}")
 
     def __call__(self, fraction: float) -> None:
-        elapsed = time.monotonic() - self.start
-        if elapsed < 1.0 and not self.shown:
-            return
-        self.shown = True
-        eta = elapsed / fraction - elapsed if fraction > 0 else 0.0
-        end = "\n" if fraction >= 1.0 else ""
-        self.stream.write(f"\r  {self.label}: {100 * fraction:5.1f} % ({elapsed:.1f} s, "
-                          f"{eta:.1f} s left){end}")
-        self.stream.flush()
+        self.bar.update(round(100 * fraction) - self.bar.n)
+        if fraction >= 1.0:
+            self.bar.close()

@@ -10,31 +10,38 @@ process per core, one thread each), or the running scheduler given by
 ``--scheduler`` (its workers need this package and fmpy installed; the FMUs
 are shipped to them, no shared file system is needed).
 
-SPEC is a JSON file (or TOML, if its name ends in .toml):
+SPEC is a JSON file (or TOML, if its name ends in .toml), for example:
 
     {
-      "scenario": "6.1-sine",          # a name of harness.scenarios.SCENARIOS (required)
-      "stop_time": 2.0,                # optional: override the scenario's length [s]
-      "transient": 1.0,                # optional: override the metrics' transient [s]
-      "method": "paper",               # optional: "paper" (the scenario as is) or "improved"
-                                       #   (scenarios.improved_overrides for each run's noise)
-      "fixed": {"observer.tau": 0.01}, # optional: the same value in every run
-      "grid": {                        # optional: the cartesian product of these lists
-        "observer.alpha1[1]": [2.2, 4.4],
-        "noise_std": [0, 1e-5, 1e-4]
-      },
-      "random": {                      # optional: n samples, crossed with the grid
-        "method": "lhs",               #   "lhs" (Latin hypercube) or "uniform"
-        "n": 20, "seed": 1,            #   the sampling seed
+      "scenario": "6.1-sine",
+      "stop_time": 2.0,
+      "transient": 1.0,
+      "method": "paper",
+      "fixed": {"observer.tau": 0.01},
+      "grid": {"observer.alpha1[1]": [2.2, 4.4], "noise_std": [0, 1e-5, 1e-4]},
+      "random": {
+        "method": "lhs", "n": 20, "seed": 1,
         "ranges": {
-          "observer.alpha2[1]": [10, 40],                          # uniform in [low, high]
+          "observer.alpha2[1]": [10, 40],
           "observer.tau": {"low": 1e-3, "high": 1e-1, "scale": "log"}
         }
       },
-      "points": [{"observer.h": 2e-4}],  # optional: extra runs (each crossed with the seeds)
-      "seeds": [0, 1, 2]               # optional: noise seeds (or an int n: seeds 0..n-1);
-                                       #   default [0]
+      "points": [{"observer.h": 2e-4}],
+      "seeds": [0, 1, 2]
     }
+
+Its keys (only "scenario" is required):
+  scenario   a name of harness.scenarios.SCENARIOS
+  stop_time  override the scenario's length [s]
+  transient  override the metrics' transient [s]
+  method     "paper" (the scenario as is) or "improved" (scenarios.improved_overrides)
+  fixed      the same value in every run
+  grid       the cartesian product of these lists
+  random     n samples crossed with the grid: "lhs" (Latin hypercube) or "uniform",
+             the sampling seed, and per parameter [low, high] (uniform) or
+             {"low", "high", "scale": "log"}
+  points     extra runs (each crossed with the seeds)
+  seeds      noise seeds (or an int n: seeds 0..n-1); default [0]
 
 A parameter is "fmu.variable" with fmu one of plant, controller, observer and
 a variable of that FMU, e.g. "observer.alpha1[1]", "observer.scheme",
@@ -80,6 +87,7 @@ import json
 import math
 import os
 import shutil
+import signal
 import sys
 import tempfile
 import threading
@@ -94,6 +102,7 @@ from typing import Any
 import numpy as np
 
 from .fmus import FMUError, Value, Variable, variables_of
+from .paths import default_fmu_dir
 from .sweep_lock import OutputLocked, locked_output
 from .tempdirs import owned_temp_dir, remove_stale
 from .values import argparse_type, integer, real
@@ -102,8 +111,7 @@ from .sweep_spec import (MAX_STOP_TIME, PSEUDO, RandomSampling, Range, SpecError
                          run_count_bound, sampling_seed, value_range)
 from .sweep_spec import transient as check_transient
 
-REPO = Path(__file__).resolve().parents[1]
-DEFAULT_FMU_DIR = REPO / "build" / "fmus"
+DEFAULT_FMU_DIR = default_fmu_dir()
 FMU_FILES = {"plant": "Pendulum.fmu", "controller": "TwistingController.fmu",
              "observer": "SuperTwistingObserver.fmu"}
 METHODS = ("paper", "improved")
@@ -599,32 +607,26 @@ def result_row(spec: SweepSpec, run: Run, result: Mapping[str, Any]) -> dict[str
 # ---- running a sweep -------------------------------------------------------------
 
 class ProgressLine:
-    """A one-line counter on stderr (a line per 10 % when stderr is not a terminal)."""
+    """Runs done, failed, rate and time left on stderr (tqdm; on a file or pipe at most
+    one update per 10 s)."""
 
     def __init__(self, label: str, total: int, stream=None):
+        from tqdm import tqdm
+
         stream = stream or sys.stderr
-        self.label, self.total, self.stream = label, total, stream
-        self.tty = hasattr(stream, "isatty") and stream.isatty()
-        self.start = time.monotonic()
-        self.done = self.failed = 0
-        self._next_report = max(1, total // 10)
+        tty = hasattr(stream, "isatty") and stream.isatty()
+        self.failed = 0
+        self.bar = tqdm(total=total, desc=label, file=stream, disable=False,
+                        mininterval=0.2 if tty else 10.0, postfix="0 failed",
+                        bar_format="{desc}: {n}/{total} runs, {postfix}, {rate_fmt}, "
+                                   "{remaining} left", unit="run")
 
     def update(self, failed: bool) -> None:
-        self.done += 1
         self.failed += failed
-        if not self.tty and self.done < self._next_report and self.done < self.total:
-            return
-        self._next_report = self.done + max(1, self.total // 10)
-        elapsed = time.monotonic() - self.start
-        rate = self.done / elapsed if elapsed > 0 else 0.0
-        left = (self.total - self.done) / rate if rate > 0 else 0.0
-        text = (f"{self.label}: {self.done}/{self.total} runs, {self.failed} failed, "
-                f"{rate:.2f} runs/s, {left:.0f} s left")
-        if self.tty:
-            self.stream.write(f"\r{text}\x1b[K" + ("\n" if self.done == self.total else ""))
-        else:
-            self.stream.write(text + "\n")
-        self.stream.flush()
+        self.bar.set_postfix_str(f"{self.failed} failed", refresh=False)
+        self.bar.update(1)
+        if self.bar.n >= self.bar.total:
+            self.bar.close()
 
 
 @dataclass
@@ -664,9 +666,19 @@ def start_client(scheduler: str | None, n_workers: int | None,
         if scheduler:
             client = Client(scheduler, timeout=f"{connect_timeout}s")
         else:
-            cluster = LocalCluster(n_workers=n_workers or os.cpu_count() or 1,
-                                   threads_per_worker=1, processes=True, host="127.0.0.1",
-                                   dashboard_address=None)
+            # The workers start with SIGINT ignored (inherited): Ctrl-C stops the sweep
+            # here, which cancels their runs, instead of printing a traceback per worker.
+            # The scheduler's HTTP endpoint takes any free port (":0"), never warning
+            # that 8787 is taken.
+            previous = signal.signal(signal.SIGINT, signal.SIG_IGN) \
+                if threading.current_thread() is threading.main_thread() else None
+            try:
+                cluster = LocalCluster(n_workers=n_workers or os.cpu_count() or 1,
+                                       threads_per_worker=1, processes=True, host="127.0.0.1",
+                                       dashboard_address=":0")
+            finally:
+                if previous is not None:
+                    signal.signal(signal.SIGINT, previous)
             client = Client(cluster)
     except (OSError, ValueError, TypeError) as error:  # TimeoutError is an OSError
         where = f"the Dask scheduler at {scheduler}" if scheduler else "a local Dask cluster"
@@ -860,10 +872,7 @@ def plot_summary(spec: SweepSpec, rows: list[dict[str, Any]], out: Path) -> list
     """One figure per swept parameter: each headline metric against it (ok runs as
     dots, coloured by noise level if the noise is swept too; the median per
     distinct value as a line; failed runs as red marks on the axis)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure  # no pyplot: the backend of a session stays
 
     metrics = headline_metrics(spec, rows)
     swept = [p for p in spec.swept if p != "seed"] or spec.swept
@@ -875,7 +884,8 @@ def plot_summary(spec: SweepSpec, rows: list[dict[str, Any]], out: Path) -> list
             continue  # nothing to plot against
         ncols = min(3, len(metrics))
         nrows = (len(metrics) + ncols - 1) // ncols
-        fig, axes = plt.subplots(nrows, ncols, figsize=(4.2 * ncols, 3.2 * nrows), squeeze=False)
+        fig = Figure(figsize=(4.2 * ncols, 3.2 * nrows + 0.4), layout="constrained")
+        axes = fig.subplots(nrows, ncols, squeeze=False)
         # Colour by noise level when the noise is swept too (the runs differ most by it).
         levels = sorted({r["noise_std"] for r in rows if _is_number(r.get("noise_std"))})
         by_noise = param != "noise_std" and "noise_std" in spec.swept and 1 < len(levels) <= 6
@@ -908,7 +918,7 @@ def plot_summary(spec: SweepSpec, rows: list[dict[str, Any]], out: Path) -> list
                 ax.plot(bad, [0.0] * len(bad), "x", color="red", transform=ax.get_xaxis_transform(),
                         clip_on=False, label=f"failed ({len(bad)})")
             ax.set_xlabel(param)
-            ax.set_ylabel(metric)
+            ax.set_ylabel(f"{metric} [{metric_unit(metric)}]")
             ax.grid(True, alpha=0.3)
             if points or bad:
                 ax.legend(fontsize=7)
@@ -917,12 +927,20 @@ def plot_summary(spec: SweepSpec, rows: list[dict[str, Any]], out: Path) -> list
         n_ok = sum(r.get("status") == "ok" for r in rows)
         fig.suptitle(f"{spec.scenario} ({spec.stop_time:g} s, {spec.method}): {n_ok} ok, "
                      f"{len(rows) - n_ok} failed of {len(rows)} runs", fontsize=10)
-        fig.tight_layout()
         path = out / f"sweep_{_filename(param)}.png"
-        fig.savefig(path, dpi=100)
-        plt.close(fig)
+        fig.savefig(path, dpi=100, bbox_inches="tight")
         paths.append(path)
     return paths
+
+
+METRIC_UNITS = {"rms_perturbation": "rad/s²", "delay": "s", "max_e2_after_1s": "rad/s",
+                "convergence_time": "s", "rms_damping": "1/s", "damping_lag": "s",
+                "max_e1_after_1s": "rad", "mean_e2_after_1s": "rad/s"}
+
+
+def metric_unit(metric: str) -> str:
+    """The unit of a harness.metrics.score metric (relative errors: 1)."""
+    return METRIC_UNITS.get(metric, "1" if "rel_error" in metric else "?")
 
 
 def _scale(ax, axis: str, values: np.ndarray) -> None:
@@ -963,20 +981,19 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.set_defaults(func=cmd_sweep)
 
 
-def register(subparsers) -> argparse.ArgumentParser:
-    """Adds the ``sweep`` subcommand to the harness CLI's subparsers."""
+def register(subparsers, parents: Sequence[argparse.ArgumentParser] = ()
+             ) -> argparse.ArgumentParser:
+    """Adds the ``sweep`` subcommand to the harness CLI's subparsers (``parents``: the
+    options every command takes)."""
     p = subparsers.add_parser("sweep", help="parameter / noise sweeps on Dask",
-                              description=__doc__,
+                              description=__doc__, parents=list(parents),
                               formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(p)
-    # The main parser has --fmu-dir; SUPPRESS keeps its value unless given here too.
-    p.add_argument("--fmu-dir", default=argparse.SUPPRESS,
-                   help="folder with the built FMUs (default: build/fmus)")
     return p
 
 
 def cmd_sweep(args) -> int:
-    fmu_dir = Path(getattr(args, "fmu_dir", DEFAULT_FMU_DIR))
+    fmu_dir = Path(getattr(args, "fmu_dir", None) or default_fmu_dir())
     try:
         spec = load_spec(args.spec, fmu_dir)
     except SpecError as error:
@@ -1004,7 +1021,8 @@ def cmd_sweep(args) -> int:
     try:
         result = run_sweep(spec, out, fmu_dir, scheduler=args.scheduler, n_workers=args.workers,
                            retry_failed=args.retry_failed, plots=not args.no_plots,
-                           connect_timeout=args.connect_timeout)
+                           connect_timeout=args.connect_timeout,
+                           progress=not getattr(args, "quiet", False))
     except (SpecError, ClusterError, OutputLocked) as error:
         print(f"harness sweep: {error}", file=sys.stderr)
         return 3 if isinstance(error, OutputLocked) else 2
@@ -1038,7 +1056,8 @@ def main(argv: list[str] | None = None) -> int:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(parser)
     parser.add_argument("--fmu-dir", default=str(DEFAULT_FMU_DIR),
-                        help="folder with the built FMUs (default: build/fmus)")
+                        help="folder with the three FMUs (default: harness.paths."
+                             "default_fmu_dir())")
     args = parser.parse_args(argv)
     return args.func(args)
 

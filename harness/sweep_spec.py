@@ -53,7 +53,9 @@ class RandomSampling:
         rng = np.random.default_rng(self.seed)
         d = len(self.ranges)
         if self.method == "lhs":  # one sample in each of n strata, per dimension
-            u = (np.argsort(rng.random((d, self.n)), axis=1).T + rng.random((self.n, d))) / self.n
+            from scipy.stats import qmc
+
+            u = qmc.LatinHypercube(d, rng=rng).random(self.n)
         else:
             u = rng.random((self.n, d))
         out = np.empty_like(u)

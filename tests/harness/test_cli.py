@@ -3,6 +3,10 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
+import pandas as pd
+from fmpy.util import read_csv
+
 from harness.cli import main
 
 
@@ -13,10 +17,16 @@ def test_reproduce_writes_csv_metrics_and_figures(tmp_path, capsys, observer_fmu
                  "--out", str(out)])
     assert code == 0
     folder = out / "6.1-sine"
-    header = (folder / "signals.csv").read_text().splitlines()[0].split(",")
-    assert header[:3] == ["time", "plant.theta", "plant.omega"]
-    rows = (folder / "signals.csv").read_text().count("\n") - 1
-    assert rows == 10.0 / 1e-4 / 10 + 1  # decimated by 10, plus the initial row
+    # the quoted header reads the same with pandas and fmpy, one name per column
+    signals = pd.read_csv(folder / "signals.csv")
+    from_fmpy = read_csv(folder / "signals.csv")
+    assert list(signals.columns[:3]) == ["time", "plant.theta", "plant.omega"]
+    assert "observer.theta_hat[1][1]" in signals.columns
+    assert list(signals.columns) == list(from_fmpy.dtype.names)
+    assert len(signals) == 10.0 / 1e-4 / 10 + 1  # decimated by 10, plus the initial row
+    for name in signals.columns:
+        np.testing.assert_array_equal(signals[name].to_numpy(), from_fmpy[name])
+    assert signals["time"].iloc[-1] == 10.0
     metrics = json.loads((folder / "metrics.json").read_text())
     assert 0.02 < metrics["metrics"]["rms_perturbation"] < 0.05
     assert "tau = 0.02 s" in metrics["choices"]
@@ -48,3 +58,51 @@ def test_missing_fmus_give_a_hint_not_a_traceback(tmp_path, capsys):
         assert "run ./build.sh fmus first" in str(exit_)
     else:
         raise AssertionError("expected SystemExit")
+
+
+def test_global_options_work_after_the_command_and_every_option_has_help(tmp_path,
+                                                                         observer_fmu):
+    from harness.cli import build_parser
+
+    parser = build_parser()
+    for argv in (["--fmu-dir", "X", "--quiet", "reproduce", "--out", "o"],
+                 ["reproduce", "--out", "o", "--fmu-dir", "X", "-q"],
+                 ["sweep", "spec.json", "--out", "o", "--fmu-dir", "X", "--quiet"],
+                 ["identify", "d.csv", "--out", "o", "--fmu-dir", "X", "--quiet"]):
+        args = parser.parse_args(argv)
+        assert args.fmu_dir == "X" and args.quiet is True, argv
+    subparsers = next(a for a in parser._actions if a.choices and "sweep" in a.choices)
+    for name, sub in subparsers.choices.items():
+        for action in sub._actions:
+            assert action.help, f"{name} {action.option_strings or action.dest} has no help"
+
+
+def test_the_spec_in_sweep_help_parses(tmp_path, observer_fmu):
+    import re
+
+    from harness.cli import build_parser
+    from harness.sweep import load_spec
+
+    subparsers = next(a for a in build_parser()._actions if a.choices and "sweep" in a.choices)
+    text = subparsers.choices["sweep"].format_help()
+    example = re.search(r"\n    \{\n.*?\n    \}\n", text, re.S).group(0)
+    (tmp_path / "spec.json").write_text(example)
+    spec = load_spec(tmp_path / "spec.json", observer_fmu.parent)
+    assert spec.scenario == "6.1-sine" and len(spec.runs()) > 20
+
+
+def test_a_closed_pipe_ends_quietly(tmp_path):
+    import subprocess
+    import sys
+
+    spec = tmp_path / "spec.json"
+    spec.write_text('{"scenario": "6.1-sine", "stop_time": 2, "grid": {"observer.tau": '
+                    + json.dumps([0.001 * k for k in range(1, 2000)]) + "}}")
+    process = subprocess.Popen([sys.executable, "-m", "harness", "sweep", str(spec), "--out",
+                                str(tmp_path / "o"), "--dry-run"], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE)
+    process.stdout.readline()
+    process.stdout.close()  # what `| head -1` does
+    err = process.stderr.read().decode()
+    assert process.wait(timeout=60) == 0
+    assert "Traceback" not in err and "BrokenPipe" not in err

@@ -1,0 +1,70 @@
+"""identify on a long log: wall time and peak memory of ``sto-harness identify``.
+
+    .venv/bin/python bench/identify_long_log.py [--samples 10000000] [--csv-decimation N]
+                                                [--format csv|parquet]
+
+Writes a log of N samples at 1 kHz (a pendulum-like y, a two-tone u; about 55
+bytes a row) into a temporary folder, then runs the command line on it in a
+child process and reports the child's wall time and peak resident memory
+(getrusage of the children: ru_maxrss).  The issue's target: 10^7 samples in
+<= 15 s and <= 300 MB.
+"""
+from __future__ import annotations
+
+import argparse
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.csv as pacsv
+
+
+def write_log(path: Path, samples: int, chunk: int = 1_000_000) -> None:
+    with pacsv.CSVWriter(str(path), pa.schema([("time", pa.float64()), ("theta", pa.float64()),
+                                               ("tau", pa.float64())])) as writer:
+        for start in range(0, samples, chunk):
+            t = np.arange(start, min(samples, start + chunk)) * 1e-3
+            writer.write_table(pa.table({"time": t, "theta": 0.2 * np.sin(1.3 * t)
+                                         + 0.05 * np.sin(7.1 * t),
+                                         "tau": np.sin(2.0 * t) + 0.5 * np.sin(5.3 * t)}))
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--samples", type=int, default=10_000_000)
+    parser.add_argument("--csv-decimation", type=int, default=1)
+    parser.add_argument("--format", choices=["csv", "parquet"], default="csv")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as folder:
+        log = Path(folder) / "log.csv"
+        start = time.perf_counter()
+        write_log(log, args.samples)
+        print(f"log: {args.samples} samples, {log.stat().st_size / 1e6:.0f} MB "
+              f"(written in {time.perf_counter() - start:.1f} s)")
+        command = [sys.executable, "-m", "harness", "identify", str(log), "--out",
+                   str(Path(folder) / "out"), "--columns", "y=theta,u=tau", "--quiet",
+                   "--csv-decimation", str(args.csv_decimation), "--format", args.format]
+        start = time.perf_counter()
+        result = subprocess.run(command, capture_output=True, text=True)
+        wall = time.perf_counter() - start
+        peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024  # kB -> MB
+        if result.returncode not in (0, 1):
+            print(result.stderr, file=sys.stderr)
+            return 1
+        table = Path(folder) / "out" / f"estimates.{args.format}"
+        written = table.stat().st_size / 1e6
+        print(f"identify: {wall:.1f} s wall, peak resident memory {peak:.0f} MB, "
+              f"{table.name} {written:.0f} MB (every {args.csv_decimation}. row), "
+              f"exit status {result.returncode}")
+        print(f"{args.samples / wall / 1e6:.2f} million samples per second")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

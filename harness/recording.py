@@ -1,0 +1,365 @@
+"""Reading a recorded experiment (time, position, input) for identification.
+
+A recording is a CSV file with a header row.  Three of its columns are used:
+the time stamps ``t``, the measured position ``y`` and the applied input
+``u``; ``columns`` maps them to the file's own names (``{"t": "time", "y":
+"theta", "u": "tau"}``; by default ``t`` or ``time``, ``y``, ``u``, any case).
+
+Time stamps may be in any unit (``time_unit``) and start anywhere (epoch
+seconds included): inside, time runs from 0 at the first sample, in seconds; the
+stamps themselves are kept as written for the outputs.  Samples must be
+uniformly spaced within ``tolerance`` (a fraction of the step, default 1 %:
+clock jitter of a logger); anything else is refused unless ``resample`` puts the
+recording on a uniform grid first (linear interpolation of y; u held or
+interpolated, see :func:`harness.identify.held_input`).
+
+Long logs are read in blocks (pyarrow's streaming CSV reader): memory does not
+grow with the length of the file.  A file the fast reader refuses is read again
+by a careful line-by-line parser (:func:`_exact_error`) only to name the line
+and the problem.
+"""
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    import pyarrow as pa
+
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9, "min": 60.0}
+DEFAULT_TOLERANCE = 0.01  # of the sampling step
+BLOCK_BYTES = 1 << 22  # 4 MB of CSV text per block (about 10^5 rows of t, y, u)
+
+
+class DataError(ValueError):
+    """The recorded data cannot be used; the message names the file and line."""
+
+
+@dataclass
+class Recording:
+    """A recording in memory: time stamps [s] (as given), positions, inputs."""
+
+    t: np.ndarray
+    y: np.ndarray
+    u: np.ndarray
+
+    @property
+    def step(self) -> float:
+        return float(self.t[1] - self.t[0])
+
+
+@dataclass
+class ReadOptions:
+    """How to read a recording (see the module documentation)."""
+
+    columns: Mapping[str, str] = field(default_factory=dict)  # "t"/"y"/"u" -> file's name
+    time_unit: str | None = None  # None: seconds, checked for a likely other unit
+    tolerance: float = DEFAULT_TOLERANCE  # allowed deviation of a step, fraction of the step
+    resample: float | None = None  # None: no; 0: to the median step; > 0: to this step [s]
+
+
+@dataclass
+class Block:
+    """Consecutive samples: the stamps as written (text), time since the first
+    sample [s], position and input."""
+
+    stamps: "pa.StringArray"  # pyarrow strings: written out unchanged
+    time: np.ndarray
+    y: np.ndarray
+    u: np.ndarray
+
+
+def parse_columns(text: str) -> dict[str, str]:
+    """``t=time,y=theta,u=tau`` -> {"t": "time", "y": "theta", "u": "tau"}."""
+    mapping: dict[str, str] = {}
+    for item in filter(None, (part.strip() for part in text.split(","))):
+        role, sep, name = item.partition("=")
+        role = role.strip()
+        if not sep or role not in ("t", "y", "u") or not name.strip():
+            raise DataError(f"--columns {text!r}: expected ROLE=NAME items with ROLE one of t, "
+                            f"y, u (e.g. t=time,y=theta,u=tau), got {item!r}")
+        mapping[role] = name.strip()
+    return mapping
+
+
+def _header(path: Path) -> list[str]:
+    try:
+        with path.open(newline="", encoding="utf-8-sig") as handle:
+            reader = csv.reader(handle)
+            header = next(reader, None)
+    except OSError as error:
+        raise DataError(f"{path}: cannot open ({error.strerror or error})") from None
+    except UnicodeDecodeError:
+        raise DataError(f"{path}: {_not_utf8(path)}; identify reads UTF-8 text (save the file "
+                        f"as CSV UTF-8)") from None
+    except csv.Error as error:
+        raise DataError(f"{path} line 1: not a readable CSV file ({error}); identify needs "
+                        f"a text CSV with a header naming t, y, u") from None
+    if header is None:
+        raise DataError(f"{path}: the file is empty")
+    return header
+
+
+def _locate(path: Path, header: list[str], columns: Mapping[str, str]) -> dict[str, int]:
+    """role -> index of its column in the header (names compared without case)."""
+    names = [h.strip().lower() for h in header]
+    found: dict[str, int] = {}
+    missing = []
+    for role in ("t", "y", "u"):
+        wanted = [columns[role]] if role in columns else (["t", "time"] if role == "t"
+                                                          else [role])
+        index = next((names.index(w.strip().lower()) for w in wanted
+                      if w.strip().lower() in names), None)
+        if index is None:
+            missing.append(columns.get(role, role))
+        else:
+            found[role] = index
+    if missing:
+        raise DataError(f"{path} line 1: missing column(s) {', '.join(missing)}; the header "
+                        f"must name t (or time), y and u, or map them with --columns "
+                        f"t=NAME,y=NAME,u=NAME (found: {', '.join(header) or 'nothing'})")
+    return found
+
+
+def read_blocks(path: str | Path, options: ReadOptions | None = None) -> Iterator[Block]:
+    """The recording's samples in blocks, checked (finite numbers, time increasing and
+    uniformly spaced within the tolerance, or resampled); DataError names the line."""
+    options = options or ReadOptions()
+    path = Path(path)
+    if options.time_unit is not None and options.time_unit not in TIME_UNITS:
+        raise DataError(f"time unit {options.time_unit!r}: expected one of "
+                        f"{', '.join(TIME_UNITS)}")
+    if not (math.isfinite(options.tolerance) and options.tolerance >= 0):
+        raise DataError(f"time tolerance {options.tolerance!r}: expected a number >= 0")
+    if path.is_dir():
+        raise DataError(f"{path}: cannot read a folder as a recording")
+    header = _header(path)
+    index = _locate(path, header, options.columns)
+    blocks = _fast_blocks(path, header, index, options)
+    checked = _checked(path, blocks, options)
+    if options.resample is not None:
+        return _resampled(checked, options.resample, _scale(options))
+    return checked
+
+
+def _fast_blocks(path: Path, header: list[str], index: dict[str, int], options: ReadOptions
+                 ) -> Iterator[tuple["pa.StringArray", np.ndarray, np.ndarray, np.ndarray,
+                                     np.ndarray]]:
+    """(stamps as text, stamps as numbers, stamps since the first one, y, u) blocks from
+    pyarrow; any complaint of pyarrow (or a value that is missing or not finite) is turned
+    into the exact message by _exact_error."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+    import pyarrow.csv as pacsv
+
+    names = [f"c{i}" for i in range(len(header))]
+    wanted = {role: names[i] for role, i in index.items()}
+    origin = None
+    try:
+        reader = pacsv.open_csv(
+            path,
+            read_options=pacsv.ReadOptions(column_names=names, skip_rows=1,
+                                           block_size=BLOCK_BYTES),
+            convert_options=pacsv.ConvertOptions(
+                include_columns=list(dict.fromkeys(wanted.values())),
+                column_types={wanted["t"]: pa.string(), wanted["y"]: pa.float64(),
+                              wanted["u"]: pa.float64()}))
+        for batch in reader:
+            stamps = pc.utf8_trim_whitespace(batch.column(wanted["t"]))
+            y = batch.column(wanted["y"]).to_numpy(zero_copy_only=False)
+            u = batch.column(wanted["u"]).to_numpy(zero_copy_only=False)
+            values = pc.cast(stamps, pa.float64()).to_numpy(zero_copy_only=False)
+            if not (np.isfinite(values).all() and np.isfinite(y).all()
+                    and np.isfinite(u).all()):
+                raise _exact_error(path, index, options)
+            since, origin = _since_first(stamps, values, origin)
+            yield stamps, values, since, y, u
+    except (pa.ArrowInvalid, UnicodeDecodeError, pa.ArrowException):
+        raise _exact_error(path, index, options) from None
+    except OSError as error:
+        raise DataError(f"{path}: cannot read ({error.strerror or error})") from None
+
+
+def _since_first(stamps: "pa.StringArray", values: np.ndarray, origin):
+    """The stamps minus the first stamp of the file, computed from the text in decimal
+    arithmetic where it fits (epoch stamps keep their sub-microsecond digits, which a
+    double of 1.7e9 s has not); else from the doubles.  ``origin`` is the first stamp
+    (a decimal scalar, a float, or None for the first block)."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    exact = pa.decimal128(37, 18)  # 19 digits before the point, 18 after
+    if origin is None or isinstance(origin, pa.Scalar):
+        try:
+            decimals = pc.cast(stamps, exact)
+            origin = decimals[0] if origin is None else origin
+            since = pc.cast(pc.subtract(decimals, origin), pa.float64())
+            return since.to_numpy(zero_copy_only=False), origin
+        except pa.ArrowInvalid:  # more digits than that, or exponents out of range
+            if origin is not None:
+                origin = float(origin.as_py())
+    origin = float(values[0]) if origin is None else origin
+    return values - origin, origin
+
+
+def _scale(options: ReadOptions) -> float:
+    """Seconds per unit of the time column."""
+    return TIME_UNITS[options.time_unit or "s"]
+
+
+def _checked(path: Path, blocks, options: ReadOptions) -> Iterator[Block]:
+    scale = _scale(options)
+    step = None
+    previous = None  # the last time [s] of the previous block, relative
+    rows = 0
+    for stamps, values, since, y, u in blocks:
+        if not len(stamps):
+            continue
+        time = since * scale
+        joined = time if previous is None else np.concatenate([[previous], time])
+        dt = np.diff(joined)
+        first_line = rows + 2 - (previous is not None)  # the file line of joined[0]
+        if dt.size and not (dt > 0).all():
+            i = int(np.argmin(dt > 0))
+            k = first_line + i - (rows + 2)  # index in this block of the earlier stamp
+            before = stamps[k].as_py() if k >= 0 else "the previous block's last"
+            raise DataError(f"{path} line {first_line + i + 1}: time does not increase "
+                            f"(t = {before}, then {stamps[k + 1].as_py()})")
+        if step is None and dt.size:
+            step = float(np.median(dt[: 1000]))
+            if options.time_unit is None and step >= 1.0 and np.all(values[:1000] % 1 == 0):
+                from .messages import note
+
+                note(f"{path}: whole-number time stamps {step:g} apart, taken as seconds: "
+                     f"if they are milliseconds (or us, ns), give --time-unit ms; "
+                     f"--time-unit s confirms seconds")
+        if options.resample is None and step is not None and dt.size:
+            # a step may deviate by the tolerance (jitter) and by rounding of the stamps
+            slack = options.tolerance * step + 8 * np.finfo(float).eps * np.abs(
+                values[0] * scale + joined[1:])
+            bad = np.nonzero(np.abs(dt - step) > slack)[0]
+            if bad.size:
+                i = int(bad[0])
+                raise DataError(
+                    f"{path} line {first_line + i + 1}: sampling step {dt[i] / scale:.9g} "
+                    f"{options.time_unit} differs from the step {step / scale:.9g} "
+                    f"{options.time_unit} by more than the tolerance "
+                    f"({100 * options.tolerance:g} % of the step); identify needs uniform "
+                    f"sampling: raise --time-tolerance, or --resample onto a uniform grid")
+        previous = float(time[-1])
+        rows += len(stamps)
+        yield Block(stamps, time, y, u)
+    if rows < 3:
+        raise DataError(f"{path}: {rows} data row(s); at least 3 are needed")
+
+
+def _resampled(blocks: Iterator[Block], step: float, scale: float) -> Iterator[Block]:
+    """The blocks on the uniform grid k * step [s] (step 0: the median step of the first
+    block): y interpolated linearly, u the last sample at or before each grid time (a
+    command holds until the next one), stamps first stamp + k * step in the file's unit."""
+    import pyarrow as pa
+
+    carry: Block | None = None
+    k = 0  # the next grid point
+    first = None  # the first stamp, in the file's unit
+    for block in blocks:
+        if first is None:
+            first = float(block.stamps[0].as_py())
+            if not step > 0:
+                step = float(np.median(np.diff(block.time[:1001])))
+        if carry is not None:
+            block = Block(pa.concat_arrays([carry.stamps[-1:], block.stamps]),
+                          np.concatenate([carry.time[-1:], block.time]),
+                          np.concatenate([carry.y[-1:], block.y]),
+                          np.concatenate([carry.u[-1:], block.u]))
+        last = int(np.floor(block.time[-1] / step + 1e-9))
+        grid = np.arange(k, last + 1) * step
+        carry = block
+        if not grid.size:
+            continue
+        k = last + 1
+        held = np.searchsorted(block.time, grid, side="right") - 1
+        stamps = pa.array([repr(float(first + g / scale)) for g in grid], pa.string())
+        yield Block(stamps, grid, np.interp(grid, block.time, block.y), block.u[held])
+
+
+def read_recording(path: str | Path, options: ReadOptions | None = None) -> Recording:
+    """The whole recording in memory (for short logs and scripts); the time stamps are
+    seconds from the first sample plus the first stamp (in seconds)."""
+    options = options or ReadOptions()
+    import pyarrow as pa
+
+    blocks = list(read_blocks(path, options))
+    scale = _scale(options)
+    if options.resample is None:  # the stamps as written, in seconds
+        t = np.concatenate([b.stamps.cast(pa.float64()).to_numpy(zero_copy_only=False)
+                            for b in blocks]) * scale
+    else:
+        t = float(blocks[0].stamps[0].as_py()) * scale + np.concatenate([b.time
+                                                                          for b in blocks])
+    return Recording(t, np.concatenate([b.y for b in blocks]),
+                     np.concatenate([b.u for b in blocks]))
+
+
+# ---- the careful parser, for messages -----------------------------------------------------
+
+def _exact_error(path: Path, index: dict[str, int], options: ReadOptions) -> DataError:
+    """The first problem of the file, with its line, found by reading it line by line."""
+    try:
+        with path.open(newline="", encoding="utf-8-sig") as handle:
+            reader = csv.reader(handle)
+            rows = 0
+            try:
+                next(reader, None)
+                for row in reader:
+                    line = reader.line_num
+                    if not row or all(not cell.strip() for cell in row):
+                        continue
+                    rows += 1
+                    for role in ("t", "y", "u"):
+                        i = index[role]
+                        name = options.columns.get(role, role)
+                        if i >= len(row):
+                            return DataError(f"{path} line {line}: column {name!r} is missing "
+                                             f"({len(row)} fields)")
+                        text = row[i].strip()
+                        try:
+                            value = float(text)
+                        except ValueError:
+                            return DataError(f"{path} line {line}: {name} = {text!r} is not "
+                                             f"a number")
+                        if not math.isfinite(value):
+                            return DataError(f"{path} line {line}: {name} = {text} is not "
+                                             f"finite (NaN or Inf rows must be removed or "
+                                             f"interpolated first)")
+            except csv.Error as error:
+                return DataError(f"{path} line {reader.line_num}: not a readable CSV file "
+                                 f"({error}); identify needs a text CSV with a header naming "
+                                 f"t, y, u")
+    except UnicodeDecodeError:
+        return DataError(f"{path}: {_not_utf8(path)}; identify reads UTF-8 text (save the "
+                         f"file as CSV UTF-8)")
+    except OSError as error:
+        return DataError(f"{path}: cannot read ({error.strerror or error})")
+    if rows < 3:
+        return DataError(f"{path}: {rows} data row(s); at least 3 are needed")
+    return DataError(f"{path}: not a readable CSV file; identify needs a text CSV with a "
+                     f"header naming t, y, u")
+
+
+def _not_utf8(path: Path) -> str:
+    """Where the file stops being UTF-8: its first bad byte, with line and offset."""
+    data = path.read_bytes()
+    try:
+        data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        line = data.count(b"\n", 0, error.start) + 1
+        return (f"line {line}: byte 0x{data[error.start]:02x} at offset {error.start} is not "
+                f"UTF-8")
+    return "not UTF-8"
