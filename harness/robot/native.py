@@ -20,7 +20,7 @@ from ..native import NativeUnavailable, cache_dir
 
 HERE = Path(__file__).resolve().parent
 CORE = HERE.parents[1] / "fmu" / "src" / "core"
-CORE_SOURCES = ("rigid_body.c",)
+CORE_SOURCES = ("rigid_body.c", "regressor_identifier.c")
 WRAPPER = HERE / "native" / "robot_native.c"
 CFLAGS = ["-std=c11", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2", "-fPIC", "-shared"]
 
@@ -73,6 +73,12 @@ def load() -> ctypes.CDLL:
                                         _double_p]
     dll.rn_regressor.argtypes = [ctypes.c_void_p, count, _double_p, _double_p, _double_p,
                                  _double_p]
+    dll.rn_identifier_size.restype = ctypes.c_size_t
+    dll.rn_identify.restype = ctypes.c_int
+    dll.rn_identify.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int, ctypes.c_int,
+                                _int_p, _double_p, ctypes.c_double, ctypes.c_double,
+                                ctypes.c_double, count, _double_p, _double_p, _double_p,
+                                _double_p, ctypes.c_long, _double_p, _double_p, _double_p]
     return dll
 
 
@@ -142,6 +148,29 @@ class RigidBody:
             raise ValueError("the inertia matrix is not positive definite (non-physical "
                              "inertial parameters)")
         return qdd
+
+    def identify_online(self, columns, q, qd, qdd, tau, h: float, kind: str = "lsm",
+                        rho: float = 1e-6, R: float = 0.1, torque_scale=None,
+                        reset_at: int = -1) -> dict:
+        """Run the C online identifier (regressor_identifier.c) over the samples.
+
+        The model is the nominal one; returns {"delta": beta - beta_nominal over the
+        base `columns`, "std_error", "gamma_trace", "excitation"}; the identifier is
+        reset before sample `reset_at` (-1: never)."""
+        dll = load()
+        q, qd, qdd, tau = (_samples(x, self.n) for x in (q, qd, qdd, tau))
+        columns = np.ascontiguousarray(columns, dtype=np.int32)
+        scale = np.ones(self.n) if torque_scale is None else np.asarray(torque_scale, float)
+        delta, std, stats = np.zeros(len(columns)), np.zeros(len(columns)), np.zeros(2)
+        state = ctypes.create_string_buffer(dll.rn_identifier_size())
+        status = dll.rn_identify(self._buffer, state, {"lsm": 1, "mff": 2}[kind], len(columns),
+                                 columns, np.ascontiguousarray(scale), h, rho, R, len(q), q,
+                                 qd, qdd, tau, reset_at, delta, std, stats)
+        if status != 0:
+            raise ValueError("online identifier rejected its settings (columns, h, rho, R or "
+                             "torque scales out of range)")
+        return {"delta": delta, "std_error": std, "gamma_trace": stats[0],
+                "excitation": stats[1]}
 
     def regressor(self, q, qd, qdd) -> np.ndarray:
         """Y with tau = Y pi: shape (count, n, 12 n), pi = 10 link parameters per link,

@@ -424,8 +424,9 @@ static void link_force_columns(const LinkMotion *s, int i, double lin[10][3], do
 }
 
 void rb_regressor(const RigidBodyModel *model, const double q[], const double qd[],
-                  const double qdd[], double Y[RB_MAX_JOINTS][RB_MAX_PARAMETERS])
+                  const double qdd[], RbRegressor *regressor)
 {
+    double(*Y)[RB_MAX_PARAMETERS] = regressor->row;
     const int n = model->n;
     LinkMotion s;
     forward_pass(model, q, qd, qdd, 1, &s);

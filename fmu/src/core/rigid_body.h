@@ -103,9 +103,13 @@ double rb_coulomb_shape(const RigidBodyModel *model, double v);
 int rb_forward_dynamics(const RigidBodyModel *model, const double q[], const double qd[],
                         const double tau[], double qdd[]);
 
-/* The regressor: tau = Y pi with gravity and friction, pi as above; row i
- * is joint i, columns 0..12n-1 (the rest of each row is left alone). */
+/* A regressor matrix: row i is joint i, columns 0..12n-1 are used. */
+typedef struct {
+    double row[RB_MAX_JOINTS][RB_MAX_PARAMETERS];
+} RbRegressor;
+
+/* The regressor: tau = Y pi with gravity and friction, pi as above. */
 void rb_regressor(const RigidBodyModel *model, const double q[], const double qd[],
-                  const double qdd[], double Y[RB_MAX_JOINTS][RB_MAX_PARAMETERS]);
+                  const double qdd[], RbRegressor *Y);
 
 #endif

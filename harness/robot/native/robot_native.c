@@ -4,6 +4,7 @@
 #include <stddef.h>
 #include <string.h>
 
+#include "regressor_identifier.h"
 #include "rigid_body.h"
 
 size_t rn_model_size(void) { return sizeof(RigidBodyModel); }
@@ -73,8 +74,43 @@ void rn_regressor(const RigidBodyModel *model, long count, const double q[], con
 {
     const int n = model->n, p = rb_parameter_count(model);
     for (long k = 0; k < count; ++k) {
-        double full[RB_MAX_JOINTS][RB_MAX_PARAMETERS];
-        rb_regressor(model, q + k * n, qd + k * n, qdd + k * n, full);
-        for (int i = 0; i < n; ++i) memcpy(Y + (k * n + i) * p, full[i], (size_t)p * sizeof(double));
+        RbRegressor full;
+        rb_regressor(model, q + k * n, qd + k * n, qdd + k * n, &full);
+        for (int i = 0; i < n; ++i)
+            memcpy(Y + (k * n + i) * p, full.row[i], (size_t)p * sizeof(double));
     }
+}
+
+/* The online identifier (regressor_identifier.c) over recorded samples: the torque
+ * residual of the model is z = tau - (M qdd + C qd + G + friction), the regressor
+ * the model's.  Outputs the estimate Delta (p), its standard errors (p) and
+ * stats = (trace of Gamma, excitation).  Returns 0, or -1 for bad settings.
+ * The identifier's state lives in a buffer of rn_identifier_size() bytes; it is
+ * reset before sample reset_at (-1: never). */
+size_t rn_identifier_size(void) { return sizeof(RegressorIdentifier); }
+
+int rn_identify(const RigidBodyModel *model, RegressorIdentifier *identifier, int kind, int p, const int columns[],
+                const double torque_scale[], double h, double rho, double R, long count,
+                const double q[], const double qd[], const double qdd[], const double tau[],
+                long reset_at, double delta[], double std_error[], double stats[2])
+{
+    RegressorIdentifier *id = identifier;
+    const int n = model->n;
+    if (rri_init(id, (RriKind)kind, n, p, columns, torque_scale, h, rho, R) != 0) return -1;
+    for (long k = 0; k < count; ++k) {
+        if (k == reset_at) rri_reset(id);
+        RbRegressor Y;
+        double nominal[RB_MAX_JOINTS], z[RB_MAX_JOINTS];
+        rb_regressor(model, q + k * n, qd + k * n, qdd + k * n, &Y);
+        rn_inverse_dynamics(model, 1, q + k * n, qd + k * n, qdd + k * n, 1, 1, nominal);
+        for (int i = 0; i < n; ++i) z[i] = tau[k * n + i] - nominal[i];
+        rri_step(id, z, &Y);
+    }
+    if (rri_solve(id) != 0) return -1;
+    rri_statistics(id);
+    memcpy(delta, id->delta, (size_t)p * sizeof(double));
+    memcpy(std_error, id->std_error, (size_t)p * sizeof(double));
+    stats[0] = id->gamma_trace;
+    stats[1] = id->excitation;
+    return 0;
 }
