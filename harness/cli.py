@@ -2,6 +2,7 @@
 
     reproduce [--scenario NAME|all] --out DIR   the paper's section 6 examples
     identify DATA.csv --out DIR [--param NAME=VALUE ...]   offline identification
+    identify DATA.csv --robot ROBOT.urdf --out DIR         a serial robot (harness.robot)
     demo [--out DIR]                            the closed-loop demonstration (reproduce + compare)
     compare --out DIR                           paper method vs the improved defaults
     sweep SPEC --out DIR [--scheduler tcp://HOST:PORT]   parameter / noise sweeps on Dask
@@ -120,6 +121,9 @@ def _output_folder(path: str, command: str) -> Path:
 
 
 def cmd_identify(args) -> int:
+    if args.robot:  # a serial robot from its URDF: harness.robot
+        from .robot.cli import identify_command
+        return identify_command(args, _output_folder(args.out, "identify"))
     from .fmus import check_parameters
     from .identify import (DataError, default_internal_step, final_estimates, identify,
                            largest_internal_step, read_recording, write_csv)
@@ -236,6 +240,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--input-hold", choices=["zoh", "sampled"], default="zoh",
                    help="zoh: u[k] was applied over the interval after t_k (a controller's "
                         "command, the default); sampled: u[k] samples a continuous signal")
+    from .robot.cli import add_arguments as add_robot_arguments
+    add_robot_arguments(p)
     p.set_defaults(func=cmd_identify)
 
     from .sweep import register as register_sweep

@@ -17,7 +17,8 @@ class Fit:
         return np.abs(self.beta - truth) / np.maximum(np.abs(truth), 1e-12)
 
 
-def torque_least_squares(Yb: np.ndarray, z: np.ndarray, batch: int = 1) -> Fit:
+def torque_least_squares(Yb: np.ndarray, z: np.ndarray, batch: int = 1,
+                         mask: np.ndarray | None = None) -> Fit:
     """beta minimizing sum_k |W (z_k - Yb_k beta)|^2 over samples k.
 
     Yb: (N, n, r) base regressors, z: (N, n) torques (or torque residuals).
@@ -25,8 +26,12 @@ def torque_least_squares(Yb: np.ndarray, z: np.ndarray, batch: int = 1) -> Fit:
     unweighted first pass, so that each joint counts by its fit, not its scale.
     Standard errors by the sandwich (A^T A)^-1 S (A^T A)^-1 with S summed over
     batches of `batch` consecutive samples (residuals correlated over fewer
-    samples than a batch, e.g. filtered signals, are accounted for)."""
+    samples than a batch, e.g. filtered signals, are accounted for).
+    mask (N, n): the joint equations to use (False leaves that joint's row of that
+    sample out, e.g. near its velocity reversals)."""
     N, n, r = Yb.shape
+    if mask is not None:  # a left-out row is a row of zeros: no information, no residual
+        Yb, z = Yb * mask[:, :, None], z * mask
     if N * n < r:
         raise ValueError(f"{N} samples of {n} joints cannot determine {r} parameters")
     scale = np.ones(n)
@@ -34,7 +39,8 @@ def torque_least_squares(Yb: np.ndarray, z: np.ndarray, batch: int = 1) -> Fit:
         A = Yb / scale[None, :, None]
         beta, *_ = np.linalg.lstsq(A.reshape(-1, r), (z / scale[None, :]).ravel(), rcond=None)
         residual = z - np.einsum("kij,j->ki", Yb, beta)
-        rms = np.sqrt(np.mean(residual ** 2, axis=0))
+        used = mask.sum(axis=0) if mask is not None else np.full(n, N)
+        rms = np.sqrt(np.sum(residual ** 2, axis=0) / np.maximum(used, 1))
         if not weighted:  # noise-free joints keep a scale relative to the others
             scale = np.maximum(rms, 1e-9 * rms.max()) if rms.max() > 0 else np.ones(n)
     information = np.einsum("kia,kib->ab", A, A)

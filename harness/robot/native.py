@@ -20,7 +20,8 @@ from ..native import NativeUnavailable, cache_dir
 
 HERE = Path(__file__).resolve().parent
 CORE = HERE.parents[1] / "fmu" / "src" / "core"
-CORE_SOURCES = ("rigid_body.c", "regressor_identifier.c")
+CORE_SOURCES = ("rigid_body.c", "regressor_identifier.c", "super_twisting.c",
+                "implicit_twisting.c", "noise_adaptive.c", "gains.c")
 WRAPPER = HERE / "native" / "robot_native.c"
 CFLAGS = ["-std=c11", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2", "-fPIC", "-shared"]
 
@@ -79,7 +80,24 @@ def load() -> ctypes.CDLL:
                                 _int_p, _double_p, ctypes.c_double, ctypes.c_double,
                                 ctypes.c_double, count, _double_p, _double_p, _double_p,
                                 _double_p, ctypes.c_long, _double_p, _double_p, _double_p]
+    dll.rn_observe.restype = ctypes.c_int
+    dll.rn_observe.argtypes = [ctypes.c_int, count, ctypes.c_double, _double_p, _double_p,
+                               ctypes.c_double, _double_p, _double_p]
     return dll
+
+
+def observe_velocities(q: np.ndarray, h: float, acceleration_bound, tau: float = 0.01):
+    """(velocity, acceleration) of each joint from positions q (count, n) sampled every h,
+    by the super-twisting observer of the C core used as a differentiator (no model):
+    causal; acceleration_bound (per joint) bounds |q''| (Theorem 3.1 gains), tau is the
+    time constant of the injection's filter (the acceleration estimate)."""
+    q = np.ascontiguousarray(np.atleast_2d(q), dtype=np.float64)
+    count, n = q.shape
+    bound = np.ascontiguousarray(np.broadcast_to(np.asarray(acceleration_bound, float), (n,)))
+    velocity, acceleration = np.empty_like(q), np.empty_like(q)
+    if load().rn_observe(n, count, h, q, bound, tau, velocity, acceleration) != 0:
+        raise ValueError(f"no observer gains for the acceleration bounds {bound.tolist()}")
+    return velocity, acceleration
 
 
 STATUS = {-1: "the number of joints is not between 1 and 7",

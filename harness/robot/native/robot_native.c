@@ -4,8 +4,10 @@
 #include <stddef.h>
 #include <string.h>
 
+#include "gains.h"
 #include "regressor_identifier.h"
 #include "rigid_body.h"
+#include "super_twisting.h"
 
 size_t rn_model_size(void) { return sizeof(RigidBodyModel); }
 
@@ -112,5 +114,31 @@ int rn_identify(const RigidBodyModel *model, RegressorIdentifier *identifier, in
     memcpy(std_error, id->std_error, (size_t)p * sizeof(double));
     stats[0] = id->gamma_trace;
     stats[1] = id->excitation;
+    return 0;
+}
+
+/* Velocities of each joint by a super-twisting observer (implicit scheme,
+ * super_twisting.c) without a model (F = 0: a robust exact differentiator),
+ * gains from Theorem 3.1 for the acceleration bound f_plus[i] (p = 0.5) and
+ * the injection filtered with time constant tau (the acceleration estimate).
+ * y, velocity, acceleration: count x n row by row.  Returns 0, or -1 for a
+ * bound that gives no gains. */
+int rn_observe(int n, long count, double h, const double y[], const double f_plus[], double tau,
+               double velocity[], double acceleration[])
+{
+    for (int i = 0; i < n; ++i) {
+        double alpha1 = 0.0, alpha2 = 0.0, zero = 0.0, y0 = y[i];
+        if (gains_complete(f_plus[i], 0.5, &alpha1, &alpha2) != 0) return -1;
+        SuperTwistingObserver o;
+        sto_init(&o, 1, h, &alpha1, &alpha2, tau, &y0, &zero);
+        sto_configure(&o, STO_SCHEME_IMPLICIT, 0.1);
+        const StoAcceleration none = {0.0, 0.0, 0.0};
+        StoTrace trace;
+        for (long k = 0; k < count; ++k) {
+            sto_run(&o, y + k * n + i, &none, 1, &trace);
+            velocity[k * n + i] = trace.velocity[0][0];
+            acceleration[k * n + i] = trace.z_filtered[0][0];
+        }
+    }
     return 0;
 }
