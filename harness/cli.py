@@ -3,6 +3,7 @@
     reproduce [--scenario NAME|all] --out DIR   the paper's section 6 examples
     identify DATA.csv --out DIR [--columns t=time,y=theta,u=tau] [--param NAME=VALUE ...]
                                                 offline identification of a recorded log
+    identify DATA.csv --robot ROBOT.urdf --out DIR   a serial robot (harness.robot)
     demo [--out DIR]                            the closed-loop demonstration (reproduce + compare)
     compare --out DIR                           paper method vs the improved defaults
     sweep SPEC --out DIR [--scheduler tcp://HOST:PORT]   parameter / noise sweeps on Dask
@@ -126,6 +127,9 @@ def _output_folder(path: str, command: str) -> Path:
 
 
 def cmd_identify(args) -> int:
+    if args.robot:  # a serial robot from its URDF: harness.robot
+        from .robot.cli import identify_command
+        return identify_command(args, _output_folder(args.out, "identify"))
     from .fmus import check_parameters
     from .identify import DataError, ReadOptions, identify_file
     from .plots import plot_identification
@@ -288,7 +292,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="observer FMU parameter, e.g. --param b=1.12 --param 'c_nominal[1]=2'")
     p.add_argument("--columns", default="", metavar="t=NAME,y=NAME,u=NAME",
                    help="the file's names of the time, position and input columns (default: "
-                        "t or time, y, u; any case), e.g. t=time,y=theta,u=tau")
+                        "t or time, y, u; any case), e.g. t=time,y=theta,u=tau; with --robot "
+                        "the roles are t, q1..qn, u1..un, e.g. q1=shoulder_pos")
     p.add_argument("--time-unit", default=None, choices=["s", "ms", "us", "ns", "min"],
                    help="unit of the time column (default: seconds, with a warning when whole-"
                         "number stamps 1 or more apart look like milliseconds); epoch time "
@@ -309,6 +314,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="write every Nth sample to the estimates table (default 1: all)")
     p.add_argument("--format", choices=["csv", "parquet"], default="csv",
                    help="estimates.csv (default) or estimates.parquet (faster for long logs)")
+    from .robot.cli import add_arguments as add_robot_arguments
+    add_robot_arguments(p)
     p.set_defaults(func=cmd_identify)
 
     register_sweep(sub, parents=[common])

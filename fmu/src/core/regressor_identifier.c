@@ -1,0 +1,185 @@
+#include "regressor_identifier.h"
+
+#include <math.h>
+#include <string.h>
+
+int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int columns[],
+             const double torque_scale[], double h, double rho, double R)
+{
+    memset(id, 0, sizeof *id);
+    if (rows < 1 || rows > RRI_MAX_ROWS || p < 1 || p > RRI_PARAMETERS_OF(rows)) return -1;
+    if (!(h > 0.0) || !isfinite(h) || !(rho > 0.0) || !isfinite(rho)) return -1;
+    if (kind == RRI_MFF && !(R > 0.0 && R < 1.0)) return -1;
+    if (kind != RRI_LSM && kind != RRI_MFF) return -1;
+    for (int k = 0; k < p; ++k) {
+        if (columns[k] < 0 || columns[k] >= RRI_PARAMETERS_OF(rows)) return -1;
+        for (int j = 0; j < k; ++j)
+            if (columns[j] == columns[k]) return -1;
+        id->columns[k] = columns[k];
+    }
+    for (int i = 0; i < rows; ++i) {
+        const double s = torque_scale ? torque_scale[i] : 1.0;
+        if (!(s > 0.0) || !isfinite(s)) return -1;
+        id->weight[i] = 1.0 / (s * s);
+    }
+    id->rows = rows;
+    id->p = p;
+    id->h = h;
+    id->rho = rho;
+    id->lambda = kind == RRI_MFF ? pow(R, h) : 1.0;
+    id->one_minus_lambda_rho = (1.0 - id->lambda) * rho;
+    id->batch_samples = (int)ceil(RRI_BATCH_TIME / h);
+    id->batch_lambda = pow(id->lambda, 2.0 * id->batch_samples); /* variances forget twice as fast */
+    rri_reset(id);
+    return 0;
+}
+
+void rri_reset(RegressorIdentifier *id)
+{
+    memset(id->P, 0, sizeof id->P);
+    memset(id->b, 0, sizeof id->b);
+    memset(id->delta, 0, sizeof id->delta);
+    memset(id->anchor, 0, sizeof id->anchor);
+    memset(id->score, 0, sizeof id->score);
+    memset(id->score_power, 0, sizeof id->score_power);
+    memset(id->std_error, 0, sizeof id->std_error);
+    for (int k = 0; k < id->p; ++k) id->P[k][k] = id->rho;
+    id->anchor_age = id->batch_age = 0;
+    id->active_time = 0.0;
+    id->gamma_trace = id->p / id->rho;
+    id->excitation = 0.0;
+}
+
+/* Cholesky P = L L^T into id->factor (lower triangle); 0 or -1. */
+static int factorize(RegressorIdentifier *id)
+{
+    const int p = id->p;
+    for (int j = 0; j < p; ++j) {
+        double d = id->P[j][j];
+        for (int k = 0; k < j; ++k) d -= id->factor[j][k] * id->factor[j][k];
+        if (!(d > 0.0) || !isfinite(d)) return -1;
+        id->factor[j][j] = sqrt(d);
+        for (int i = j + 1; i < p; ++i) {
+            double x = id->P[j][i];  /* upper triangle holds P */
+            for (int k = 0; k < j; ++k) x -= id->factor[i][k] * id->factor[j][k];
+            id->factor[i][j] = x / id->factor[j][j];
+        }
+    }
+    return 0;
+}
+
+/* x <- P^-1 x with the factor. */
+static void cholesky_solve(const RegressorIdentifier *id, double x[])
+{
+    const int p = id->p;
+    for (int i = 0; i < p; ++i) {
+        for (int k = 0; k < i; ++k) x[i] -= id->factor[i][k] * x[k];
+        x[i] /= id->factor[i][i];
+    }
+    for (int i = p - 1; i >= 0; --i) {
+        for (int k = i + 1; k < p; ++k) x[i] -= id->factor[k][i] * x[k];
+        x[i] /= id->factor[i][i];
+    }
+}
+
+static void solve_anchor(RegressorIdentifier *id)
+{
+    if (factorize(id) != 0) return;
+    memcpy(id->anchor, id->b, sizeof id->b);
+    cholesky_solve(id, id->anchor);
+}
+
+void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
+{
+    const int rows = id->rows, p = id->p;
+    const double h = id->h;
+    double y[RRI_MAX_ROWS][RRI_MAX_PARAMETERS], wy[RRI_MAX_ROWS][RRI_MAX_PARAMETERS];
+    double residual[RRI_MAX_ROWS];
+    for (int i = 0; i < rows; ++i) {
+        double r = z[i];
+        for (int k = 0; k < p; ++k) {
+            y[i][k] = Y->row[i][id->columns[k]];
+            wy[i][k] = h * id->weight[i] * y[i][k];
+            r -= y[i][k] * id->anchor[k];
+        }
+        residual[i] = r;
+    }
+    if (id->lambda < 1.0) {
+        const double lambda = id->lambda, pull = id->one_minus_lambda_rho;
+        for (int j = 0; j < p; ++j) {
+            for (int k = j; k < p; ++k) id->P[j][k] *= lambda;
+            id->P[j][j] += pull;
+            id->b[j] = lambda * id->b[j] + pull * id->anchor[j];
+        }
+    }
+    for (int j = 0; j < p; ++j) {
+        double bz = 0.0, score = 0.0;
+        for (int i = 0; i < rows; ++i) {
+            bz += wy[i][j] * z[i];
+            score += wy[i][j] * residual[i];
+        }
+        id->b[j] += bz;
+        id->score[j] += score;
+        for (int k = j; k < p; ++k) {
+            double sum = 0.0;
+            for (int i = 0; i < rows; ++i) sum += wy[i][j] * y[i][k];
+            id->P[j][k] += sum;
+        }
+    }
+    id->active_time += h;
+    if (++id->batch_age >= id->batch_samples) {
+        for (int j = 0; j < p; ++j)
+            for (int k = j; k < p; ++k)
+                id->score_power[j][k] =
+                    id->batch_lambda * id->score_power[j][k] + id->score[j] * id->score[k];
+        memset(id->score, 0, sizeof id->score);
+        id->batch_age = 0;
+    }
+    if (++id->anchor_age >= RRI_ANCHOR_INTERVAL) {
+        solve_anchor(id);
+        id->anchor_age = 0;
+    }
+}
+
+int rri_solve(RegressorIdentifier *id)
+{
+    if (factorize(id) != 0) return -1;
+    memcpy(id->delta, id->b, sizeof id->b);
+    cholesky_solve(id, id->delta);
+    return 0;
+}
+
+void rri_statistics(RegressorIdentifier *id)
+{
+    const int p = id->p;
+    /* Gamma's columns g_k give trace(Gamma) and the sandwich g_k^T S g_k */
+    double trace = 0.0;
+    for (int k = 0; k < p; ++k) {
+        double g[RRI_MAX_PARAMETERS] = {0};
+        g[k] = 1.0;
+        cholesky_solve(id, g);
+        trace += g[k];
+        double variance = 0.0;
+        for (int j = 0; j < p; ++j) {
+            double row = id->score_power[j][j] * g[j];
+            for (int i = j + 1; i < p; ++i) row += 2.0 * id->score_power[j][i] * g[i];
+            variance += g[j] * row;
+        }
+        id->std_error[k] = sqrt(variance > 0.0 ? variance : 0.0);
+    }
+    id->gamma_trace = trace;
+    /* smallest eigenvalue of P by inverse iteration, per unit of remembered time */
+    double v[RRI_MAX_PARAMETERS], norm = 0.0;
+    for (int k = 0; k < p; ++k) v[k] = 1.0 / sqrt((double)p);
+    for (int iteration = 0; iteration < 30; ++iteration) {
+        cholesky_solve(id, v);
+        norm = 0.0;
+        for (int k = 0; k < p; ++k) norm += v[k] * v[k];
+        norm = sqrt(norm);
+        for (int k = 0; k < p; ++k) v[k] /= norm;
+    }
+    const double rate = id->lambda < 1.0 ? -log(id->lambda) / id->h : 0.0;
+    const double memory = rate > 0.0 ? -expm1(-rate * id->active_time) / rate : id->active_time;
+    id->excitation = memory > 0.0 ? (1.0 / norm - id->rho) / memory : 0.0;
+    if (id->excitation < 0.0) id->excitation = 0.0;
+}

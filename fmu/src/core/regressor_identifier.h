@@ -1,0 +1,83 @@
+/* LSM and MFF in information form over a regressor matrix: the identification
+ * of robots, where one parameter vector is shared by all joints.
+ *     z = Y Delta,   z (n) the torque residual tau - Y beta_nominal,
+ *                    Y (n x p) the base regressor, Delta = beta - beta_nominal.
+ * Per-joint friction then costs 2 parameters per joint, and link inertial
+ * parameters (reduced to base parameters) and a payload enter the regression.
+ *
+ * Same guarantees as information_identifier.h, in this form:
+ * - information form, an exact quadrature at each step, stable for any h:
+ *       P <- lambda P + (1 - lambda) rho I          + h Y^T W Y
+ *       b <- lambda b + (1 - lambda) rho Delta_anchor + h Y^T W z
+ *   with lambda = R^h (MFF) or 1 (LSM), W = diag(1/s_i^2) the joints' torque
+ *   scales (so that joints with large torques do not drown the others);
+ * - stabilized forgetting toward rho I: Gamma = P^-1 <= I / rho always;
+ * - Delta_hat = P^-1 b by Cholesky only when asked (rri_solve), so the
+ *   internal step costs n p (p + 3) / 2 multiply-adds;
+ * - reset back to the nominal parameters (Delta = 0, P = rho I);
+ * - standard errors by the sandwich formula P^-1 S P^-1, S the (forgotten) sum
+ *   of the outer products of the scores h Y^T W (z - Y Delta_anchor) summed over
+ *   batches of RRI_BATCH_TIME seconds, so that residuals correlated over less
+ *   than a batch (filtered signals) are accounted for;
+ * - trust outputs: trace(Gamma) and the excitation (smallest eigenvalue of the
+ *   information per unit time).
+ * The columns of Y taken are the base columns (an index list that the harness
+ * computes offline from the URDF, harness/robot/base_parameters.py). */
+#ifndef REGRESSOR_IDENTIFIER_H
+#define REGRESSOR_IDENTIFIER_H
+
+#include "rigid_body.h"
+
+#define RRI_MAX_ROWS RB_MAX_JOINTS
+#define RRI_MAX_PARAMETERS RB_MAX_PARAMETERS
+#define RRI_PARAMETERS_OF(rows) (RB_PARAMETERS_PER_JOINT * (rows)) /* full regressor's columns */
+#define RRI_BATCH_TIME 0.5       /* [s] of scores summed into one batch */
+#define RRI_ANCHOR_INTERVAL 32   /* samples between re-solves of the anchor (MFF) */
+
+typedef struct {
+    int rows, p;                 /* joints n; identified (base) parameters p */
+    int columns[RRI_MAX_PARAMETERS]; /* columns of the full regressor taken */
+    double weight[RRI_MAX_ROWS]; /* 1 / s_i^2 */
+    double h, rho, lambda, one_minus_lambda_rho;
+    double active_time;          /* [s] since the (re)start */
+    double P[RRI_MAX_PARAMETERS][RRI_MAX_PARAMETERS]; /* upper triangle kept */
+    double b[RRI_MAX_PARAMETERS];
+    double delta[RRI_MAX_PARAMETERS];       /* last solved Delta_hat */
+    double anchor[RRI_MAX_PARAMETERS];      /* what MFF forgets toward; the scores' estimate */
+    int anchor_age;
+    /* scores over the current batch, and the sum of their outer products */
+    double score[RRI_MAX_PARAMETERS];
+    double score_power[RRI_MAX_PARAMETERS][RRI_MAX_PARAMETERS]; /* upper triangle */
+    int batch_samples, batch_age;
+    double batch_lambda;         /* lambda over one batch */
+    double std_error[RRI_MAX_PARAMETERS];   /* from the last solve */
+    double gamma_trace, excitation;
+    double factor[RRI_MAX_PARAMETERS][RRI_MAX_PARAMETERS]; /* Cholesky workspace */
+} RegressorIdentifier;
+
+typedef enum { RRI_LSM = 1, RRI_MFF = 2 } RriKind;
+
+/* columns[p]: the base columns of the full regressor (0..12n-1, distinct);
+ * torque_scale[rows]: per-joint torque scales s_i > 0 (NULL: 1).
+ * Returns 0, or -1 for sizes, columns, h, rho or R out of range. */
+int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int columns[],
+             const double torque_scale[], double h, double rho, double R);
+
+/* Back to the nominal parameters and P = rho I. */
+void rri_reset(RegressorIdentifier *id);
+
+/* One internal step: z the torque residual (rows), Y the full regressor. */
+void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y);
+
+/* Solves Delta_hat = P^-1 b (p^3/6 multiply-adds).  Returns 0, or -1 if P is
+ * not positive definite (cannot happen with rho > 0 and finite data; the
+ * estimate is then kept).  Between solves, the anchor is an estimate at most
+ * RRI_ANCHOR_INTERVAL samples old, which the step keeps at no extra cost per
+ * step on average: what an FMU can output at every communication point. */
+int rri_solve(RegressorIdentifier *id);
+
+/* After rri_solve: the standard errors, trace(Gamma) and the excitation
+ * (p^3 multiply-adds: at a slower rate than the estimate). */
+void rri_statistics(RegressorIdentifier *id);
+
+#endif

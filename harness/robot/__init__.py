@@ -1,0 +1,1 @@
+"""Serial robots: URDF reading, rigid-body dynamics (the C core), identification."""

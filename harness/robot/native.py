@@ -1,0 +1,199 @@
+"""The C rigid-body core (fmu/src/core/rigid_body.c) for the harness, through ctypes.
+
+The shared library is compiled on first use from the core sources and
+native/robot_native.c (batch entry points) with the project's C flags, and cached
+like the native master loop (harness.native.cache_dir), keyed by a hash of the sources.
+"""
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import shutil
+import subprocess
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from ..native import NativeUnavailable, cache_dir
+
+HERE = Path(__file__).resolve().parent
+CORE = HERE.parents[1] / "fmu" / "src" / "core"
+CORE_SOURCES = ("rigid_body.c", "regressor_identifier.c", "super_twisting.c",
+                "implicit_twisting.c", "noise_adaptive.c", "gains.c")
+WRAPPER = HERE / "native" / "robot_native.c"
+CFLAGS = ["-std=c11", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2", "-fPIC", "-shared"]
+
+_double_p = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
+_int_p = np.ctypeslib.ndpointer(dtype=np.int32, flags="C_CONTIGUOUS")
+
+
+def compile_library(name: str, sources: list[Path], include: Path) -> Path:
+    """Compile `sources` into a cached shared library (rebuilt when a source changes)."""
+    missing = [str(s) for s in sources if not s.exists()]
+    if missing:
+        raise NativeUnavailable(f"C sources not found: {', '.join(missing)} (the harness needs "
+                                f"the repository's fmu/src/core next to it)")
+    digest = hashlib.sha256(b"".join(s.read_bytes() for s in sources) +
+                            b"".join(h.read_bytes() for h in sorted(include.glob("*.h"))) +
+                            " ".join(CFLAGS).encode()).hexdigest()[:16]
+    library = cache_dir() / f"{name}-{digest}.so"
+    if not library.exists():
+        compiler = os.environ.get("CC", "gcc")
+        if shutil.which(compiler) is None:
+            raise NativeUnavailable(f"C compiler {compiler!r} not found")
+        library.parent.mkdir(parents=True, exist_ok=True)
+        partial = library.with_suffix(f".{os.getpid()}.tmp")
+        result = subprocess.run([compiler, *CFLAGS, f"-I{include}", "-o", str(partial),
+                                 *map(str, sources), "-lm"], capture_output=True, text=True)
+        if result.returncode != 0:
+            raise NativeUnavailable(f"compiling {name} failed:\n{result.stderr}")
+        partial.replace(library)  # atomic: concurrent runs never load a half-written file
+    return library
+
+
+@lru_cache(maxsize=1)
+def load() -> ctypes.CDLL:
+    """Compile (once) and load the rigid-body library."""
+    dll = ctypes.CDLL(str(compile_library(
+        "robot_native", [WRAPPER, *(CORE / s for s in CORE_SOURCES)], CORE)))
+    dll.rn_model_size.restype = ctypes.c_size_t
+    dll.rn_max_joints.restype = ctypes.c_int
+    dll.rn_load.restype = ctypes.c_int
+    dll.rn_load.argtypes = [ctypes.c_void_p, ctypes.c_int, _int_p, _double_p, _double_p,
+                            _double_p, _double_p, _double_p, _double_p, ctypes.c_double]
+    count = ctypes.c_long
+    dll.rn_inverse_dynamics.argtypes = [ctypes.c_void_p, count, _double_p, _double_p, _double_p,
+                                        ctypes.c_int, ctypes.c_int, _double_p]
+    dll.rn_gravity.argtypes = [ctypes.c_void_p, count, _double_p, _double_p]
+    dll.rn_coriolis.argtypes = [ctypes.c_void_p, count, _double_p, _double_p, _double_p]
+    dll.rn_mass_matrix.argtypes = [ctypes.c_void_p, count, _double_p, _double_p]
+    dll.rn_forward_dynamics.restype = ctypes.c_long
+    dll.rn_forward_dynamics.argtypes = [ctypes.c_void_p, count, _double_p, _double_p, _double_p,
+                                        _double_p]
+    dll.rn_regressor.argtypes = [ctypes.c_void_p, count, _double_p, _double_p, _double_p,
+                                 _double_p]
+    dll.rn_identifier_size.restype = ctypes.c_size_t
+    dll.rn_identify.restype = ctypes.c_int
+    dll.rn_identify.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int, ctypes.c_int,
+                                _int_p, _double_p, ctypes.c_double, ctypes.c_double,
+                                ctypes.c_double, count, _double_p, _double_p, _double_p,
+                                _double_p, ctypes.c_long, _double_p, _double_p, _double_p]
+    dll.rn_observe.restype = ctypes.c_int
+    dll.rn_observe.argtypes = [ctypes.c_int, count, ctypes.c_double, _double_p, _double_p,
+                               ctypes.c_double, _double_p, _double_p]
+    return dll
+
+
+def observe_velocities(q: np.ndarray, h: float, acceleration_bound, tau: float = 0.01):
+    """(velocity, acceleration) of each joint from positions q (count, n) sampled every h,
+    by the super-twisting observer of the C core used as a differentiator (no model):
+    causal; acceleration_bound (per joint) bounds |q''| (Theorem 3.1 gains), tau is the
+    time constant of the injection's filter (the acceleration estimate)."""
+    q = np.ascontiguousarray(np.atleast_2d(q), dtype=np.float64)
+    count, n = q.shape
+    bound = np.ascontiguousarray(np.broadcast_to(np.asarray(acceleration_bound, float), (n,)))
+    velocity, acceleration = np.empty_like(q), np.empty_like(q)
+    if load().rn_observe(n, count, h, q, bound, tau, velocity, acceleration) != 0:
+        raise ValueError(f"no observer gains for the acceleration bounds {bound.tolist()}")
+    return velocity, acceleration
+
+
+STATUS = {-1: "the number of joints is not between 1 and 7",
+          -2: "a joint type is neither revolute nor prismatic",
+          -3: "a joint axis is zero or not finite",
+          -4: "a placement, inertial, friction or gravity value is not finite"}
+
+
+def _samples(x: np.ndarray, n: int) -> np.ndarray:
+    """Samples as a C-contiguous (count, n) float array (one sample may be 1-D)."""
+    array = np.ascontiguousarray(np.atleast_2d(np.asarray(x, dtype=np.float64)))
+    if array.shape[1] != n:
+        raise ValueError(f"expected {n} joint values per sample, got {array.shape[1]}")
+    return array
+
+
+class RigidBody:
+    """The C model of a serial chain, built from the flat arrays of rigid_body.h.
+
+    All methods take samples as arrays (count, n) (or one sample (n,)) and return
+    arrays with a leading sample axis."""
+
+    def __init__(self, types, axis, xyz, rpy, link, friction, gravity=(0.0, 0.0, -9.81),
+                 coulomb_velocity: float = 0.0):
+        dll = load()
+        self.n = len(types)
+        self._buffer = ctypes.create_string_buffer(dll.rn_model_size())
+        flat = [np.ascontiguousarray(np.asarray(a, dtype=np.float64).ravel())
+                for a in (axis, xyz, rpy, link, friction, gravity)]
+        status = dll.rn_load(self._buffer, self.n, np.ascontiguousarray(types, dtype=np.int32),
+                             *flat, float(coulomb_velocity))
+        if status != 0:
+            raise ValueError(f"rigid-body model rejected: {STATUS.get(status, status)}")
+        self.parameter_count = 12 * self.n
+
+    def inverse_dynamics(self, q, qd, qdd, gravity: bool = True,
+                         friction: bool = True) -> np.ndarray:
+        q, qd, qdd = (_samples(x, self.n) for x in (q, qd, qdd))
+        tau = np.empty_like(q)
+        load().rn_inverse_dynamics(self._buffer, len(q), q, qd, qdd, int(gravity), int(friction),
+                                   tau)
+        return tau
+
+    def gravity(self, q) -> np.ndarray:
+        q = _samples(q, self.n)
+        g = np.empty_like(q)
+        load().rn_gravity(self._buffer, len(q), q, g)
+        return g
+
+    def coriolis(self, q, qd) -> np.ndarray:
+        q, qd = _samples(q, self.n), _samples(qd, self.n)
+        c = np.empty_like(q)
+        load().rn_coriolis(self._buffer, len(q), q, qd, c)
+        return c
+
+    def mass_matrix(self, q) -> np.ndarray:
+        q = _samples(q, self.n)
+        M = np.empty((len(q), self.n, self.n))
+        load().rn_mass_matrix(self._buffer, len(q), q, M)
+        return M
+
+    def forward_dynamics(self, q, qd, tau) -> np.ndarray:
+        q, qd, tau = (_samples(x, self.n) for x in (q, qd, tau))
+        qdd = np.empty_like(q)
+        if load().rn_forward_dynamics(self._buffer, len(q), q, qd, tau, qdd):
+            raise ValueError("the inertia matrix is not positive definite (non-physical "
+                             "inertial parameters)")
+        return qdd
+
+    def identify_online(self, columns, q, qd, qdd, tau, h: float, kind: str = "lsm",
+                        rho: float = 1e-6, R: float = 0.1, torque_scale=None,
+                        reset_at: int = -1) -> dict:
+        """Run the C online identifier (regressor_identifier.c) over the samples.
+
+        The model is the nominal one; returns {"delta": beta - beta_nominal over the
+        base `columns`, "std_error", "gamma_trace", "excitation"}; the identifier is
+        reset before sample `reset_at` (-1: never)."""
+        dll = load()
+        q, qd, qdd, tau = (_samples(x, self.n) for x in (q, qd, qdd, tau))
+        columns = np.ascontiguousarray(columns, dtype=np.int32)
+        scale = np.ones(self.n) if torque_scale is None else np.asarray(torque_scale, float)
+        delta, std, stats = np.zeros(len(columns)), np.zeros(len(columns)), np.zeros(2)
+        state = ctypes.create_string_buffer(dll.rn_identifier_size())
+        status = dll.rn_identify(self._buffer, state, {"lsm": 1, "mff": 2}[kind], len(columns),
+                                 columns, np.ascontiguousarray(scale), h, rho, R, len(q), q,
+                                 qd, qdd, tau, reset_at, delta, std, stats)
+        if status != 0:
+            raise ValueError("online identifier rejected its settings (columns, h, rho, R or "
+                             "torque scales out of range)")
+        return {"delta": delta, "std_error": std, "gamma_trace": stats[0],
+                "excitation": stats[1]}
+
+    def regressor(self, q, qd, qdd) -> np.ndarray:
+        """Y with tau = Y pi: shape (count, n, 12 n), pi = 10 link parameters per link,
+        then (viscous, Coulomb) per joint."""
+        q, qd, qdd = (_samples(x, self.n) for x in (q, qd, qdd))
+        Y = np.empty((len(q), self.n, self.parameter_count))
+        load().rn_regressor(self._buffer, len(q), q, qd, qdd, Y)
+        return Y

@@ -1,0 +1,144 @@
+/* Batch entry points over fmu/src/core for the harness (ctypes): the model is an
+ * opaque buffer of rn_model_size() bytes that rn_load fills, and every function
+ * runs over `count` samples stored row by row (sample k's joint i at k n + i). */
+#include <stddef.h>
+#include <string.h>
+
+#include "gains.h"
+#include "regressor_identifier.h"
+#include "rigid_body.h"
+#include "super_twisting.h"
+
+size_t rn_model_size(void) { return sizeof(RigidBodyModel); }
+
+int rn_max_joints(void) { return RB_MAX_JOINTS; }
+
+int rn_load(RigidBodyModel *model, int n, const int type[], const double axis[], const double xyz[],
+            const double rpy[], const double link[], const double friction[],
+            const double gravity[3], double coulomb_velocity)
+{
+    return rb_load(model, n, type, axis, xyz, rpy, link, friction, gravity, coulomb_velocity);
+}
+
+/* tau = M qdd + C qd + G + friction (with_friction) for each sample. */
+void rn_inverse_dynamics(const RigidBodyModel *model, long count, const double q[],
+                         const double qd[], const double qdd[], int with_gravity,
+                         int with_friction, double tau[])
+{
+    const int n = model->n;
+    for (long k = 0; k < count; ++k) {
+        rb_inverse_dynamics(model, q + k * n, qd + k * n, qdd + k * n, with_gravity, tau + k * n);
+        if (with_friction) {
+            double f[RB_MAX_JOINTS];
+            rb_friction(model, qd + k * n, f);
+            for (int i = 0; i < n; ++i) tau[k * n + i] += f[i];
+        }
+    }
+}
+
+void rn_gravity(const RigidBodyModel *model, long count, const double q[], double g[])
+{
+    for (long k = 0; k < count; ++k) rb_gravity(model, q + k * model->n, g + k * model->n);
+}
+
+void rn_coriolis(const RigidBodyModel *model, long count, const double q[], const double qd[],
+                 double c[])
+{
+    const int n = model->n;
+    for (long k = 0; k < count; ++k) rb_coriolis(model, q + k * n, qd + k * n, c + k * n);
+}
+
+/* M of each sample, n x n row-major. */
+void rn_mass_matrix(const RigidBodyModel *model, long count, const double q[], double M[])
+{
+    const int n = model->n;
+    for (long k = 0; k < count; ++k) {
+        double full[RB_MAX_JOINTS][RB_MAX_JOINTS];
+        rb_mass_matrix(model, q + k * n, full);
+        for (int i = 0; i < n; ++i) memcpy(M + (k * n + i) * n, full[i], (size_t)n * sizeof(double));
+    }
+}
+
+/* Returns the number of samples whose M was not positive definite. */
+long rn_forward_dynamics(const RigidBodyModel *model, long count, const double q[],
+                         const double qd[], const double tau[], double qdd[])
+{
+    const int n = model->n;
+    long failures = 0;
+    for (long k = 0; k < count; ++k)
+        failures += rb_forward_dynamics(model, q + k * n, qd + k * n, tau + k * n, qdd + k * n) != 0;
+    return failures;
+}
+
+/* Y of each sample, n x 12n row-major. */
+void rn_regressor(const RigidBodyModel *model, long count, const double q[], const double qd[],
+                  const double qdd[], double Y[])
+{
+    const int n = model->n, p = rb_parameter_count(model);
+    for (long k = 0; k < count; ++k) {
+        RbRegressor full;
+        rb_regressor(model, q + k * n, qd + k * n, qdd + k * n, &full);
+        for (int i = 0; i < n; ++i)
+            memcpy(Y + (k * n + i) * p, full.row[i], (size_t)p * sizeof(double));
+    }
+}
+
+/* The online identifier (regressor_identifier.c) over recorded samples: the torque
+ * residual of the model is z = tau - (M qdd + C qd + G + friction), the regressor
+ * the model's.  Outputs the estimate Delta (p), its standard errors (p) and
+ * stats = (trace of Gamma, excitation).  Returns 0, or -1 for bad settings.
+ * The identifier's state lives in a buffer of rn_identifier_size() bytes; it is
+ * reset before sample reset_at (-1: never). */
+size_t rn_identifier_size(void) { return sizeof(RegressorIdentifier); }
+
+int rn_identify(const RigidBodyModel *model, RegressorIdentifier *identifier, int kind, int p, const int columns[],
+                const double torque_scale[], double h, double rho, double R, long count,
+                const double q[], const double qd[], const double qdd[], const double tau[],
+                long reset_at, double delta[], double std_error[], double stats[2])
+{
+    RegressorIdentifier *id = identifier;
+    const int n = model->n;
+    if (rri_init(id, (RriKind)kind, n, p, columns, torque_scale, h, rho, R) != 0) return -1;
+    for (long k = 0; k < count; ++k) {
+        if (k == reset_at) rri_reset(id);
+        RbRegressor Y;
+        double nominal[RB_MAX_JOINTS], z[RB_MAX_JOINTS];
+        rb_regressor(model, q + k * n, qd + k * n, qdd + k * n, &Y);
+        rn_inverse_dynamics(model, 1, q + k * n, qd + k * n, qdd + k * n, 1, 1, nominal);
+        for (int i = 0; i < n; ++i) z[i] = tau[k * n + i] - nominal[i];
+        rri_step(id, z, &Y);
+    }
+    if (rri_solve(id) != 0) return -1;
+    rri_statistics(id);
+    memcpy(delta, id->delta, (size_t)p * sizeof(double));
+    memcpy(std_error, id->std_error, (size_t)p * sizeof(double));
+    stats[0] = id->gamma_trace;
+    stats[1] = id->excitation;
+    return 0;
+}
+
+/* Velocities of each joint by a super-twisting observer (implicit scheme,
+ * super_twisting.c) without a model (F = 0: a robust exact differentiator),
+ * gains from Theorem 3.1 for the acceleration bound f_plus[i] (p = 0.5) and
+ * the injection filtered with time constant tau (the acceleration estimate).
+ * y, velocity, acceleration: count x n row by row.  Returns 0, or -1 for a
+ * bound that gives no gains. */
+int rn_observe(int n, long count, double h, const double y[], const double f_plus[], double tau,
+               double velocity[], double acceleration[])
+{
+    for (int i = 0; i < n; ++i) {
+        double alpha1 = 0.0, alpha2 = 0.0, zero = 0.0, y0 = y[i];
+        if (gains_complete(f_plus[i], 0.5, &alpha1, &alpha2) != 0) return -1;
+        SuperTwistingObserver o;
+        sto_init(&o, 1, h, &alpha1, &alpha2, tau, &y0, &zero);
+        sto_configure(&o, STO_SCHEME_IMPLICIT, 0.1);
+        const StoAcceleration none = {0.0, 0.0, 0.0};
+        StoTrace trace;
+        for (long k = 0; k < count; ++k) {
+            sto_run(&o, y + k * n + i, &none, 1, &trace);
+            velocity[k * n + i] = trace.velocity[0][0];
+            acceleration[k * n + i] = trace.z_filtered[0][0];
+        }
+    }
+    return 0;
+}

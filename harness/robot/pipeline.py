@@ -1,0 +1,232 @@
+"""Offline identification of a serial robot from a log of joint positions and torques.
+
+    python -m harness identify DATA.csv --robot ROBOT.urdf --out DIR
+
+DATA.csv has a header and columns t, q1..qn (rad, or m for prismatic joints), u1..un
+(N.m or N); other names map with --column q1=shoulder_pos etc.  Steps:
+1. velocities and accelerations: Savitzky-Golay (zero-phase, the default) or the
+   super-twisting observer of the C core (causal), the torques filtered alike;
+2. the base regressor of the URDF's model (C core) and torque-space weighted least
+   squares with standard errors (harness.robot.least_squares);
+3. physically consistent link parameters near the URDF's (harness.robot.consistency),
+   written as DIR/identified.urdf with the joints' viscous and Coulomb friction.
+"""
+from __future__ import annotations
+
+import csv
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.signal import lfilter, savgol_filter
+
+from .base_parameters import BaseParameters, base_parameters
+from .consistency import consistent_parameters, write_identified_urdf
+from .least_squares import Fit, torque_least_squares
+from .urdf import Robot
+
+
+class LogError(ValueError):
+    """The joint log cannot be used; the message names the file and line or column."""
+
+
+@dataclass
+class JointLog:
+    t: np.ndarray   # (N,)
+    q: np.ndarray   # (N, n)
+    u: np.ndarray   # (N, n)
+
+    @property
+    def step(self) -> float:
+        return float(self.t[1] - self.t[0])
+
+
+def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
+             relative_tolerance: float = 1e-6) -> JointLog:
+    """Columns t, q1..qn, u1..un (or the names `mapping` gives them), evenly sampled."""
+    path, mapping = Path(path), dict(mapping or {})
+    wanted = ["t"] + [f"q{i}" for i in range(1, n + 1)] + [f"u{i}" for i in range(1, n + 1)]
+    try:
+        with path.open(newline="", encoding="utf-8-sig") as handle:
+            rows = list(csv.reader(handle))
+    except OSError as error:
+        raise LogError(f"{path}: cannot open ({error.strerror or error})") from None
+    except (UnicodeDecodeError, csv.Error) as error:
+        raise LogError(f"{path}: not a readable UTF-8 CSV file ({error})") from None
+    if not rows:
+        raise LogError(f"{path}: empty file")
+    header = [name.strip() for name in rows[0]]
+    positions = [k for k in header if k.startswith("q") and k[1:].isdigit()]
+    indices = []
+    for name in wanted:
+        column = mapping.get(name, name)
+        if column not in header:
+            hint = (f"; the file has {len(positions)} position columns but the robot has {n} "
+                    f"joints" if positions and len(positions) != n else "")
+            raise LogError(f"{path}: no column {column!r} (needed: {', '.join(wanted)}; "
+                           f"found: {', '.join(header)}){hint}")
+        indices.append(header.index(column))
+    if len(positions) > n and not mapping:
+        raise LogError(f"{path}: {len(positions)} position columns for a robot of {n} joints")
+    data = np.empty((len(rows) - 1, len(indices)))
+    for line, row in enumerate(rows[1:], start=2):
+        try:
+            data[line - 2] = [float(row[k]) for k in indices]
+        except (ValueError, IndexError):
+            raise LogError(f"{path} line {line}: a missing or non-numeric value") from None
+        if not np.all(np.isfinite(data[line - 2])):
+            bad = [wanted[k] for k in range(len(wanted)) if not np.isfinite(data[line - 2, k])]
+            raise LogError(f"{path} line {line}: {', '.join(bad)} is NaN or infinite")
+    if len(data) < 10:
+        raise LogError(f"{path}: {len(data)} samples; identification needs many more")
+    t = data[:, 0]
+    steps = np.diff(t)
+    if not np.all(steps > 0) or np.ptp(steps) > relative_tolerance * steps.mean() + 1e-12:
+        raise LogError(f"{path}: t must increase by a constant step (steps from "
+                       f"{steps.min():g} to {steps.max():g} s)")
+    return JointLog(t, data[:, 1:1 + n], data[:, 1 + n:])
+
+
+def _odd(count: int) -> int:
+    return count if count % 2 else count + 1
+
+
+def savitzky_golay(log: JointLog, window: float, order: int = 4):
+    """(q, q', q'', u) smoothed by one zero-phase Savitzky-Golay filter of `window` s."""
+    length = _odd(max(order + 2, round(window / log.step)))
+    if length > len(log.t):
+        raise LogError(f"the Savitzky-Golay window ({length} samples) is longer than the log")
+    smooth = [savgol_filter(x, length, order, deriv=d, delta=log.step, axis=0)
+              for x, d in ((log.q, 0), (log.q, 1), (log.q, 2), (log.u, 0))]
+    return tuple(smooth)
+
+
+def observer(log: JointLog, acceleration_bound: np.ndarray, tau: float):
+    """(q, q', q'', u) with q' by the super-twisting observer (C core, causal) and q''
+    its filtered injection; q, q' and u pass through the same first-order filter as q''
+    so that every signal of the regression carries the same lag."""
+    from .native import observe_velocities
+    velocity, acceleration = observe_velocities(log.q, log.step, acceleration_bound, tau)
+    gain = -np.expm1(-log.step / tau)
+    lag = lambda x: lfilter([gain], [1.0, gain - 1.0], x - x[0], axis=0) + x[0]  # noqa: E731
+    return lag(log.q), lag(velocity), acceleration, lag(log.u)
+
+
+@dataclass
+class Identification:
+    base: BaseParameters
+    fit: Fit
+    pi: np.ndarray                # consistent standard parameters (12 n)
+    velocity: np.ndarray          # (N, n)
+    used: np.ndarray              # indices of the samples used in the regression
+
+
+def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: str = "sg",
+                   window: float = 0.05, tau: float = 0.005, max_samples: int = 20000,
+                   skip: float = 0.5) -> Identification:
+    """Identify the unknown parameters ("all" or "payload") from the log.
+
+    The first `skip` seconds (observer convergence, filter edges) and the last window
+    are not used; at most max_samples evenly spaced samples enter the regression."""
+    if log.q.shape[1] != robot.n:
+        raise LogError(f"the log has {log.q.shape[1]} joints, the robot {robot.n}")
+    if method == "sg":
+        q, qd, qdd, u = savitzky_golay(log, window)
+    elif method == "observer":
+        bound = 1.5 * np.abs(savitzky_golay(log, max(window, 0.05))[2]).max(axis=0) + 1e-3
+        q, qd, qdd, u = observer(log, bound, tau)
+    else:
+        raise ValueError(f"unknown method {method!r}: 'sg' or 'observer'")
+    first, last = int(skip / log.step), len(log.t) - int(window / log.step) - 1
+    if last - first < 10:
+        raise LogError(f"the log ({log.t[-1] - log.t[0]:g} s) is too short")
+    stride = max(1, (last - first) // max_samples)
+    used = np.arange(first, last, stride)
+    body = robot.rigid_body()
+    types = robot.arrays()["types"]
+    base = base_parameters(body, types, robot.joint_names, unknown)
+    Y = body.regressor(q[used], qd[used], qdd[used])
+    # the known part of the model (all but the unknown columns) moves to the left side
+    known = np.setdiff1d(np.arange(12 * robot.n), np.union1d(base.base, base.dependent))
+    nominal = robot.parameters()
+    z = u[used] - Y[:, :, known] @ nominal[known]
+    correlation = max(1, int(np.ceil(2 * max(window, tau) / (stride * log.step))))
+    mask = away_from_reversals(qd, log.step, max(window, 4 * tau))[used]
+    fit = torque_least_squares(base.regressor(Y), z, batch=correlation, mask=mask)
+    pi = consistent_parameters(robot, base, fit.beta, fit.std_error)
+    return Identification(base, fit, pi, qd, used)
+
+
+def away_from_reversals(velocity: np.ndarray, h: float, margin: float) -> np.ndarray:
+    """(N, n) True where joint i's velocity keeps its sign for `margin` s on both sides.
+
+    Filtering does not commute with the Coulomb term f_c sign(q'): near a reversal
+    the filtered torque and the friction of the filtered velocity differ, so those
+    joint equations are left out (the other joints' equations of the sample stay)."""
+    half = max(1, int(round(margin / h)))
+    flips = np.zeros(velocity.shape, dtype=bool)
+    flips[1:] = np.signbit(velocity[1:]) != np.signbit(velocity[:-1])
+    # a sample is near a reversal if a flip lies within +-half samples
+    counts = np.cumsum(np.vstack([np.zeros((1, velocity.shape[1])), flips]), axis=0)
+    index = np.arange(len(velocity))
+    upper = counts[np.minimum(index + half + 1, len(velocity))]
+    lower = counts[np.maximum(index - half, 0)]
+    return (upper - lower) == 0
+
+
+def torque_prediction_error(robot: Robot, pi: np.ndarray, q, qd, qdd, u) -> float:
+    """The field's metric: RMS of the torque prediction error over RMS of the torque."""
+    n = robot.n
+    body = robot.rigid_body(link=pi[:10 * n].reshape(n, 10), friction=pi[10 * n:].reshape(n, 2))
+    error = body.inverse_dynamics(q, qd, qdd) - u
+    return float(np.sqrt(np.mean(error ** 2)) / np.sqrt(np.mean(u ** 2)))
+
+
+def write_results(out: Path, robot: Robot, log: JointLog, result: Identification,
+                  data_name: str) -> list[Path]:
+    """velocities.csv, parameters.csv, identified.urdf, summary.json and a plot."""
+    out.mkdir(parents=True, exist_ok=True)
+    names = robot.joint_names
+    velocities = out / "velocities.csv"
+    np.savetxt(velocities, np.column_stack([log.t, result.velocity]), delimiter=",",
+               header=",".join(["t"] + [f"qd{i + 1}" for i in range(robot.n)]), comments="")
+    parameters = out / "parameters.csv"
+    nominal_beta = result.base.project(robot.parameters())
+    consistent_beta = result.base.project(result.pi)
+    with parameters.open("w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(["parameter", "urdf", "estimate", "std_error", "consistent", "definition"])
+        for k in range(result.base.count):
+            writer.writerow([result.base.names[k], f"{nominal_beta[k]:.10g}",
+                             f"{result.fit.beta[k]:.10g}", f"{result.fit.std_error[k]:.3g}",
+                             f"{consistent_beta[k]:.10g}", result.base.description(k)])
+    urdf = out / "identified.urdf"
+    write_identified_urdf(robot, result.pi, urdf,
+                          f"inertials and joint dynamics identified from {data_name} by "
+                          f"python -m harness identify")
+    summary = out / "summary.json"
+    n = robot.n
+    summary.write_text(json.dumps({
+        "joints": names,
+        "viscous": dict(zip(names, result.pi[10 * n::2].tolist())),
+        "coulomb": dict(zip(names, result.pi[10 * n + 1::2].tolist())),
+        "masses": dict(zip([j.child_link for j in robot.joints], result.pi[:10 * n:10].tolist())),
+        "residual_rms": dict(zip(names, result.fit.residual_rms.tolist())),
+        "condition_number": result.fit.condition,
+        "base_parameters": result.base.count,
+        "samples_used": int(len(result.used)),
+    }, indent=2) + "\n")
+    plot = out / "velocities.png"
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    figure, axes = plt.subplots(n, 1, sharex=True, figsize=(8, 1.6 * n + 1), squeeze=False)
+    for i in range(n):
+        axes[i, 0].plot(log.t, result.velocity[:, i], lw=0.8)
+        axes[i, 0].set_ylabel(f"qd{i + 1}")
+    axes[-1, 0].set_xlabel("t [s]")
+    figure.tight_layout()
+    figure.savefig(plot, dpi=90)
+    plt.close(figure)
+    return [velocities, parameters, urdf, summary, plot]

@@ -1,0 +1,310 @@
+"""Reading a robot's URDF into the flat arrays of the C rigid-body model (rigid_body.h).
+
+A URDF is accepted when it describes a serial chain of at most 7 revolute,
+continuous or prismatic joints from a fixed base: fixed joints (and joints the
+caller locks, at position 0) are merged into the moving body they hang from, and
+branches that carry no moving joint (sensors, tool frames) are allowed.  Every
+problem is a UrdfError whose message names the file and the joint or link.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from lxml import etree
+
+MAX_JOINTS = 7
+MOVING_TYPES = {"revolute": 0, "continuous": 0, "prismatic": 1}  # -> RbJointType
+DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
+
+
+class UrdfError(ValueError):
+    """The URDF cannot be used; the message names the file and what is wrong."""
+
+
+@dataclass
+class ChainJoint:
+    """One moving joint of the chain and the body it moves (all fixed links merged).
+
+    xyz, rpy: the joint frame in the previous joint's frame (the base's for the
+    first) at q = 0; link: the body's 10 standard parameters in the joint frame
+    (m, m c, inertia about the frame origin: xx, xy, yy, xz, yz, zz)."""
+    name: str
+    kind: str                      # "revolute" or "prismatic" (continuous is revolute)
+    child_link: str
+    axis: np.ndarray
+    xyz: np.ndarray
+    rpy: np.ndarray
+    link: np.ndarray
+    damping: float = 0.0           # URDF <dynamics damping>: viscous
+    friction: float = 0.0          # URDF <dynamics friction>: Coulomb
+    merged_links: list[str] = field(default_factory=list)  # links fixed to the body
+
+
+@dataclass
+class Robot:
+    """A serial chain read from a URDF."""
+    name: str
+    source: Path
+    base_link: str
+    joints: list[ChainJoint]
+    locked: tuple[str, ...] = ()
+    gravity: np.ndarray = field(default_factory=lambda: np.array(DEFAULT_GRAVITY))
+
+    @property
+    def n(self) -> int:
+        return len(self.joints)
+
+    @property
+    def joint_names(self) -> list[str]:
+        return [j.name for j in self.joints]
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The flat arrays of rb_load (as FMU parameters would hold them)."""
+        return {"types": np.array([MOVING_TYPES[j.kind] for j in self.joints], dtype=np.int32),
+                "axis": np.array([j.axis for j in self.joints]),
+                "xyz": np.array([j.xyz for j in self.joints]),
+                "rpy": np.array([j.rpy for j in self.joints]),
+                "link": np.array([j.link for j in self.joints]),
+                "friction": np.array([[j.damping, j.friction] for j in self.joints]),
+                "gravity": np.asarray(self.gravity, dtype=float)}
+
+    def parameters(self) -> np.ndarray:
+        """The nominal parameter vector pi (12 n) of the regressor."""
+        a = self.arrays()
+        return np.concatenate([a["link"].ravel(), a["friction"].ravel()])
+
+    def rigid_body(self, link: np.ndarray | None = None, friction: np.ndarray | None = None,
+                   coulomb_velocity: float = 0.0):
+        """The C model, with the URDF's parameters or the given ones."""
+        from .native import RigidBody
+        a = self.arrays()
+        return RigidBody(a["types"], a["axis"], a["xyz"], a["rpy"],
+                         a["link"] if link is None else link,
+                         a["friction"] if friction is None else friction,
+                         a["gravity"], coulomb_velocity)
+
+
+# ---- geometry ------------------------------------------------------------------------
+
+def rpy_matrix(rpy) -> np.ndarray:
+    """URDF rotation: Rz(yaw) Ry(pitch) Rx(roll)."""
+    r, p, y = rpy
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
+def matrix_rpy(R: np.ndarray) -> np.ndarray:
+    """The inverse of rpy_matrix (roll = 0 at pitch = +-90 degrees)."""
+    cos_pitch = np.hypot(R[0, 0], R[1, 0])
+    pitch = np.arctan2(-R[2, 0], cos_pitch)
+    if cos_pitch < 1e-12:
+        return np.array([0.0, pitch, np.arctan2(-R[0, 1], R[1, 1])])
+    return np.array([np.arctan2(R[2, 1], R[2, 2]), pitch, np.arctan2(R[1, 0], R[0, 0])])
+
+
+def _skew(v) -> np.ndarray:
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def standard_parameters(mass: float, com: np.ndarray, inertia_com: np.ndarray) -> np.ndarray:
+    """(m, m c, I about the origin as xx, xy, yy, xz, yz, zz) from mass, centre of
+    mass and the 3x3 inertia about the centre of mass, all in one frame."""
+    I = inertia_com - mass * _skew(com) @ _skew(com)
+    return np.array([mass, *(mass * com), I[0, 0], I[0, 1], I[1, 1], I[0, 2], I[1, 2], I[2, 2]])
+
+
+def inertia_matrix(six) -> np.ndarray:
+    xx, xy, yy, xz, yz, zz = six
+    return np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+
+
+def body_inertial(link: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    """(mass, centre of mass, 3x3 inertia about it) from 10 standard parameters (m > 0)."""
+    mass = float(link[0])
+    com = link[1:4] / mass
+    return mass, com, inertia_matrix(link[4:]) + mass * _skew(com) @ _skew(com)
+
+
+# ---- parsing ----------------------------------------------------------------------------
+
+def _floats(element, attribute: str, count: int, default: str, where: str) -> np.ndarray:
+    text = element.get(attribute, default) if element is not None else default
+    try:
+        values = np.array([float(x) for x in text.split()])
+    except ValueError:
+        raise UrdfError(f"{where}: {attribute}={text!r} is not {count} numbers") from None
+    if values.size != count or not np.all(np.isfinite(values)):
+        raise UrdfError(f"{where}: {attribute}={text!r} is not {count} finite numbers")
+    return values
+
+
+def _origin(element, where: str) -> tuple[np.ndarray, np.ndarray]:
+    """(R, p) of an <origin> child (identity if absent)."""
+    origin = element.find("origin")
+    return (rpy_matrix(_floats(origin, "rpy", 3, "0 0 0", where)),
+            _floats(origin, "xyz", 3, "0 0 0", where))
+
+
+def _link_inertial(link, source: Path) -> tuple[float, np.ndarray, np.ndarray] | None:
+    """(mass, centre of mass, inertia about it) in the link frame, validated; None if absent."""
+    inertial = link.find("inertial")
+    if inertial is None:
+        return None
+    where = f"{source}: link {link.get('name')!r} <inertial>"
+    mass_element = inertial.find("mass")
+    mass = _floats(mass_element, "value", 1, "", where)[0] if mass_element is not None else 0.0
+    if mass < 0:
+        raise UrdfError(f"{where}: negative mass {mass}")
+    R, com = _origin(inertial, where)
+    element = inertial.find("inertia")
+    six = [_floats(element, key, 1, "0", where)[0]
+           for key in ("ixx", "ixy", "iyy", "ixz", "iyz", "izz")]
+    inertia = inertia_matrix(six)
+    check_inertia(inertia, where)
+    return mass, com, R @ inertia @ R.T
+
+
+def check_inertia(inertia: np.ndarray, where: str, tolerance: float = 1e-9) -> None:
+    """Raise UrdfError unless the inertia about the centre of mass is positive
+    semi-definite and its principal moments satisfy the triangle inequalities."""
+    moments = np.linalg.eigvalsh(inertia)
+    scale = max(abs(moments).max(), 1e-300)
+    if moments[0] < -tolerance * scale:
+        raise UrdfError(f"{where}: the inertia is not positive definite (principal moments "
+                        f"{', '.join(f'{m:.6g}' for m in moments)})")
+    if moments[0] + moments[1] < moments[2] - tolerance * scale:
+        raise UrdfError(f"{where}: the principal moments {', '.join(f'{m:.6g}' for m in moments)} "
+                        f"violate the triangle inequality (a + b >= c): no rigid body has them")
+
+
+def read_urdf(path: str | Path, locked: tuple[str, ...] | list[str] = (),
+              gravity=DEFAULT_GRAVITY) -> Robot:
+    """Read and validate a URDF as a serial chain; `locked` joints are fixed at 0."""
+    source = Path(path)
+    try:
+        root = etree.parse(str(source), etree.XMLParser(resolve_entities=False)).getroot()
+    except OSError as error:
+        raise UrdfError(f"{source}: cannot read ({error})") from None
+    except etree.XMLSyntaxError as error:
+        raise UrdfError(f"{source}: does not parse as XML ({error})") from None
+    if root.tag != "robot":
+        raise UrdfError(f"{source}: not a URDF (the root element is <{root.tag}>, not <robot>)")
+    links = {}
+    for link in root.findall("link"):
+        name = link.get("name")
+        if not name or name in links:
+            raise UrdfError(f"{source}: a link without a name or a duplicate link {name!r}")
+        links[name] = link
+    joints, parent_joint = {}, {}
+    for joint in root.findall("joint"):
+        name, kind = joint.get("name"), joint.get("type")
+        parent, child = joint.find("parent"), joint.find("child")
+        if not name or name in joints:
+            raise UrdfError(f"{source}: a joint without a name or a duplicate joint {name!r}")
+        if parent is None or child is None or parent.get("link") not in links \
+                or child.get("link") not in links:
+            raise UrdfError(f"{source}: joint {name!r} does not name an existing parent and "
+                            f"child link")
+        if kind not in MOVING_TYPES and kind != "fixed":
+            raise UrdfError(f"{source}: joint {name!r} is of type {kind!r}; only revolute, "
+                            f"continuous, prismatic and fixed joints are supported")
+        if child.get("link") in parent_joint:
+            raise UrdfError(f"{source}: link {child.get('link')!r} has two parent joints "
+                            f"({parent_joint[child.get('link')].get('name')!r}, {name!r})")
+        joints[name] = joint
+        parent_joint[child.get("link")] = joint
+    unknown = [name for name in locked if name not in joints]
+    if unknown:
+        raise UrdfError(f"{source}: locked joint(s) {', '.join(map(repr, unknown))} not in the "
+                        f"URDF (its joints: {', '.join(joints)})")
+    roots = [name for name in links if name not in parent_joint]
+    if len(roots) != 1:
+        raise UrdfError(f"{source}: expected one root link, found {len(roots)} "
+                        f"({', '.join(roots[:5])})")
+    chain = _Chain(source, links, joints, set(locked))
+    chain.walk(roots[0])
+    if not chain.joints:
+        raise UrdfError(f"{source}: no revolute, continuous or prismatic joint")
+    if len(chain.joints) > MAX_JOINTS:
+        raise UrdfError(f"{source}: {len(chain.joints)} moving joints; at most {MAX_JOINTS} are "
+                        f"supported (lock some with --lock)")
+    return Robot(root.get("name", source.stem), source, roots[0], chain.joints, tuple(locked),
+                 np.asarray(gravity, dtype=float))
+
+
+class _Chain:
+    """Walks the kinematic tree from the root, merging fixed links into their body."""
+
+    def __init__(self, source: Path, links: dict, joints: dict, locked: set[str]):
+        self.source, self.links, self.locked = source, links, locked
+        self.children: dict[str, list] = {}
+        for joint in joints.values():
+            self.children.setdefault(joint.find("parent").get("link"), []).append(joint)
+        self.joints: list[ChainJoint] = []
+
+    def moving(self, joint) -> bool:
+        return joint.get("type") in MOVING_TYPES and joint.get("name") not in self.locked
+
+    def reaches_moving(self, joint) -> bool:
+        """The joint moves, or a joint below it does."""
+        if self.moving(joint):
+            return True
+        return any(self.reaches_moving(j) for j in self.children.get(joint.find("child").get("link"), []))
+
+    def walk(self, root: str) -> None:
+        # (link, the body it belongs to (None: the base), R, p of its frame in the body frame)
+        stack: list[tuple[str, ChainJoint | None, np.ndarray, np.ndarray]] = \
+            [(root, None, np.eye(3), np.zeros(3))]
+        while stack:
+            name, body, R, p = stack.pop()
+            if body is not None:
+                self._merge(body, self.links[name], R, p)
+            onward = [j for j in self.children.get(name, []) if self.reaches_moving(j)]
+            if len(onward) > 1:
+                raise UrdfError(f"{self.source}: not a serial chain: link {name!r} branches into "
+                                f"joints {', '.join(repr(j.get('name')) for j in onward)} that "
+                                f"both lead to moving joints (lock the joints of all but one "
+                                f"branch)")
+            for joint in self.children.get(name, []):
+                where = f"{self.source}: joint {joint.get('name')!r}"
+                Rj, pj = _origin(joint, where)
+                R_child, p_child = R @ Rj, R @ pj + p
+                child = joint.find("child").get("link")
+                if self.moving(joint):
+                    moved = self._moving_joint(joint, child, R_child, p_child, where)
+                    stack.append((child, moved, np.eye(3), np.zeros(3)))
+                else:
+                    stack.append((child, body, R_child, p_child))
+
+    def _moving_joint(self, joint, child: str, R: np.ndarray, p: np.ndarray,
+                      where: str) -> ChainJoint:
+        """The chain joint at (R, p) in the previous body's frame, appended to the chain."""
+        axis = _floats(joint.find("axis"), "xyz", 3, "1 0 0", where)
+        if np.linalg.norm(axis) == 0:
+            raise UrdfError(f"{where}: the axis is zero")
+        dynamics = joint.find("dynamics")
+        damping, friction = (_floats(dynamics, key, 1, "0", where)[0]
+                             for key in ("damping", "friction"))
+        if damping < 0 or friction < 0:
+            raise UrdfError(f"{where}: negative damping or friction in <dynamics>")
+        if joint.find("mimic") is not None:
+            raise UrdfError(f"{where}: mimics another joint; lock it (--lock {joint.get('name')})")
+        kind = "prismatic" if joint.get("type") == "prismatic" else "revolute"
+        body = ChainJoint(joint.get("name"), kind, child, axis / np.linalg.norm(axis), p,
+                          matrix_rpy(R), np.zeros(10), damping, friction)
+        self.joints.append(body)
+        return body
+
+    def _merge(self, body: ChainJoint, link, R: np.ndarray, p: np.ndarray) -> None:
+        """Add the link's inertial (its frame at (R, p) in the body frame) to the body."""
+        inertial = _link_inertial(link, self.source)
+        if link.get("name") != body.child_link:
+            body.merged_links.append(link.get("name"))
+        if inertial is None:
+            return
+        mass, com, inertia = inertial
+        body.link = body.link + standard_parameters(mass, R @ com + p, R @ inertia @ R.T)

@@ -1,0 +1,117 @@
+"""`python -m harness identify DATA.csv --robot ROBOT.urdf`: a two-link arm with an
+unknown tip payload, logged by 17-bit encoders, and the errors for bad input."""
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from harness.cli import main
+from harness.robot.examples import example_urdf
+from harness.robot.urdf import read_urdf
+
+PAYLOAD, TIP = 0.3, np.array([0.0, 0.0, 0.2])
+FRICTION = np.array([[0.05, 0.2], [0.04, 0.1]])
+
+
+def payload_link(link: np.ndarray) -> np.ndarray:
+    """Link 2's standard parameters with a point mass PAYLOAD at TIP."""
+    out = link.copy()
+    skew = np.array([[0, -TIP[2], TIP[1]], [TIP[2], 0, -TIP[0]], [-TIP[1], TIP[0], 0]])
+    I = -PAYLOAD * skew @ skew
+    out[1] += [PAYLOAD, *(PAYLOAD * TIP), I[0, 0], I[0, 1], I[1, 1], I[0, 2], I[1, 2], I[2, 2]]
+    return out
+
+
+def write_log(path, robot, seconds: float = 12.0, h: float = 1e-3, bits: int = 17):
+    """Torques of the true arm along an analytic multi-sine (no integration error)."""
+    t = np.arange(0.0, seconds, h)
+    f = np.array([0.2, 0.45, 0.8, 1.3])
+    rng = np.random.default_rng(0)
+    phase, amplitude = rng.uniform(0, 2 * np.pi, (2, 4)), np.array([[0.5], [0.4]]) / np.sqrt(f)
+    angle = 2 * np.pi * f[None, None, :] * t[:, None, None] + phase[None]
+    w = 2 * np.pi * f
+    q = (amplitude * np.sin(angle)).sum(-1) / 2
+    qd = (amplitude * w * np.cos(angle)).sum(-1) / 2
+    qdd = -(amplitude * w ** 2 * np.sin(angle)).sum(-1) / 2
+    truth = robot.rigid_body(link=payload_link(robot.arrays()["link"]), friction=FRICTION)
+    tau = truth.inverse_dynamics(q, qd, qdd)
+    resolution = 2 * np.pi / 2 ** bits
+    q = np.round(q / resolution) * resolution
+    np.savetxt(path, np.column_stack([t, q, tau]), delimiter=",", header="t,q1,q2,u1,u2",
+               comments="")
+    return path
+
+
+@pytest.fixture(scope="module")
+def arm():
+    path, _ = example_urdf("double_pendulum")
+    return path, read_urdf(path)
+
+
+def test_payload_and_friction_from_17_bit_encoders(tmp_path, arm):
+    urdf, robot = arm
+    data = write_log(tmp_path / "arm.csv", robot)
+    out = tmp_path / "out"
+    assert main(["identify", str(data), "--robot", str(urdf), "--unknown", "payload",
+                 "--out", str(out)]) == 0
+    for name in ["velocities.csv", "parameters.csv", "identified.urdf", "summary.json",
+                 "velocities.png"]:
+        assert (out / name).stat().st_size > 0
+    identified = read_urdf(out / "identified.urdf")  # validates: physically consistent
+    nominal_mass = robot.arrays()["link"][1, 0]
+    mass = identified.arrays()["link"][1, 0]
+    assert abs(mass - nominal_mass - PAYLOAD) / PAYLOAD < 0.005
+    friction = identified.arrays()["friction"]
+    assert np.all(np.abs(friction - FRICTION) / FRICTION < 0.03), friction
+    # Pinocchio reads it too, with the identified joint damping
+    model = pin.buildModelFromUrdf(str(out / "identified.urdf"))
+    assert np.allclose(model.damping, friction[:, 0])
+    velocity = np.loadtxt(out / "velocities.csv", delimiter=",", skiprows=1)
+    assert velocity.shape[1] == 3
+
+
+def test_the_observer_velocities(tmp_path, arm):
+    urdf, robot = arm
+    data = write_log(tmp_path / "arm.csv", robot, seconds=6.0, bits=30)
+    out = tmp_path / "out"
+    assert main(["identify", str(data), "--robot", str(urdf), "--unknown", "payload",
+                 "--velocity", "observer", "--out", str(out)]) == 0
+    identified = read_urdf(out / "identified.urdf")
+    mass = identified.arrays()["link"][1, 0] - robot.arrays()["link"][1, 0]
+    assert abs(mass - PAYLOAD) / PAYLOAD < 0.05
+
+
+def _nan_time(lines: list[str]) -> list[str]:
+    lines[2] = "nan," + lines[2].split(",", 1)[1]
+    return lines
+
+
+def _one_position_column(lines: list[str]) -> list[str]:
+    return ["t,q1,u1,u2,x"] + lines[1:]
+
+
+def _three_position_columns(lines: list[str]) -> list[str]:
+    return [lines[0] + ",q3"] + [line + ",0" for line in lines[1:]]
+
+
+@pytest.mark.parametrize("change, message", [
+    (_nan_time, "line 3: t is NaN"),
+    (_one_position_column, "no column 'q2'"),
+    (_three_position_columns, "3 position columns for a robot of 2 joints"),
+])
+def test_bad_logs(tmp_path, arm, capsys, change, message):
+    urdf, robot = arm
+    data = write_log(tmp_path / "arm.csv", robot, seconds=1.0)
+    data.write_text("\n".join(change(data.read_text().strip().split("\n"))) + "\n")
+    assert main(["identify", str(data), "--robot", str(urdf), "--out", str(tmp_path / "o")]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_bad_urdf(tmp_path, arm, capsys):
+    urdf, robot = arm
+    data = write_log(tmp_path / "arm.csv", robot, seconds=1.0)
+    bad = tmp_path / "bad.urdf"
+    bad.write_text("<robot><link name='a'>")
+    assert main(["identify", str(data), "--robot", str(bad), "--out", str(tmp_path / "o")]) == 2
+    assert "does not parse as XML" in capsys.readouterr().err
