@@ -68,7 +68,9 @@ failed ones).  A run that fails (an FMU error, a rejected parameter value, a
 NaN metric) is recorded as failed with its message; the sweep goes on.
 If the FMUs are rebuilt with different behaviour, sweep into a new DIR.
 
-Limits (harness.sweep_spec): at most 100000 runs per spec (counted from its
+The spec's shape is checked against a JSON Schema (harness.sweep_schema; print it
+with python -m harness.sweep_schema), then its names and values.  Limits
+(harness.sweep_spec): at most 100000 runs per spec (counted from its
 sizes before anything is built), stop_time at most 10^4 s; every value is
 checked first (finite, Integers integral and in range, never wrapped).  One
 sweep at a time writes DIR (a lock, harness.sweep_lock); a second one is

@@ -1,8 +1,9 @@
 """A sweep specification read into its runs (see harness.sweep for the format).
 
 :func:`load_spec` reads a JSON or TOML file, :func:`parse_spec` checks it --
-every name against the scenarios and the FMUs' model descriptions and every
-value (harness.sweep_spec) -- and
+its shape against the JSON Schema (harness.sweep_schema), then every name
+against the scenarios and the FMUs' model descriptions and every value
+(harness.sweep_spec) -- and
 gives a :class:`SweepSpec`, whose :meth:`SweepSpec.runs` lists the runs, each
 identified by a hash of everything that determines its result.
 """
@@ -18,6 +19,7 @@ from typing import Any
 
 from .fmus import Value, Variable, variables_of
 from .paths import default_fmu_dir
+from .sweep_schema import METHODS, check_shape
 from .sweep_spec import (MAX_STOP_TIME, PSEUDO, RandomSampling, Range, SpecError,
                          check_run_count, convert_value, count, mapping, positive, pseudo_value,
                          run_count_bound, sampling_seed, value_range)
@@ -26,7 +28,6 @@ from .sweep_spec import transient as check_transient
 DEFAULT_FMU_DIR = default_fmu_dir()
 FMU_FILES = {"plant": "Pendulum.fmu", "controller": "TwistingController.fmu",
              "observer": "SuperTwistingObserver.fmu"}
-METHODS = ("paper", "improved")
 METRICS_WINDOW = 1.0  # harness.metrics.score: max_e2_after_1s etc. use t >= 1 s
 
 
@@ -138,18 +139,13 @@ def _parameter(name: str, variables: Mapping[str, Mapping[str, Variable]]) -> Va
 
 
 def parse_spec(data: Mapping[str, Any], fmu_dir: Path = DEFAULT_FMU_DIR) -> SweepSpec:
-    """Validates a spec (a dict as read from JSON/TOML) against the scenarios and FMUs
-    (every value, and the number of runs: harness.sweep_spec)."""
+    """Validates a spec (a dict as read from JSON/TOML): its shape against the schema
+    (harness.sweep_schema), then against the scenarios and FMUs (every value, and the
+    number of runs: harness.sweep_spec)."""
     from .scenarios import SCENARIOS
 
-    known = {"scenario", "stop_time", "transient", "method", "fixed", "grid", "random", "points",
-             "seeds", "description"}
-    unknown = set(data) - known
-    if unknown:
-        raise SpecError(f"unknown spec keys {sorted(unknown)}; known: {sorted(known)}")
-    name = data.get("scenario")
-    if not isinstance(name, str) or name not in SCENARIOS:
-        raise SpecError(f"scenario {name!r} is not one of {', '.join(SCENARIOS)}")
+    check_shape(data)
+    name = data["scenario"]
     scenario = SCENARIOS[name]
     stop_time = positive(data.get("stop_time", scenario.stop_time), "stop_time", MAX_STOP_TIME)
     transient = check_transient(data.get("transient", scenario.transient))
@@ -158,9 +154,7 @@ def parse_spec(data: Mapping[str, Any], fmu_dir: Path = DEFAULT_FMU_DIR) -> Swee
         raise SpecError(f"stop_time = {stop_time:g} s: the metrics need a run longer than "
                         f"{METRICS_WINDOW:g} s (their fixed window t >= 1 s) and than the "
                         f"transient ({transient:g} s; override it with \"transient\")")
-    method = data.get("method", "paper")
-    if not isinstance(method, str) or method not in METHODS:
-        raise SpecError(f"method {method!r} is not one of {', '.join(METHODS)}")
+    method = data.get("method", METHODS[0])
 
     variables = parameter_types(fmu_dir)
     declared: dict[str, Variable] = {}
@@ -176,50 +170,31 @@ def parse_spec(data: Mapping[str, Any], fmu_dir: Path = DEFAULT_FMU_DIR) -> Swee
         except SpecError as error:
             raise SpecError(f"{where}: {error}") from None
 
-    fixed = {k: typed(k, v, "fixed") for k, v in mapping(data.get("fixed", {}), "fixed").items()}
-    grid: dict[str, list[Value]] = {}
-    for k, values in mapping(data.get("grid", {}), "grid").items():
-        if not isinstance(values, list) or not values:
-            raise SpecError(f"grid: {k!r} needs a non-empty list of values")
-        grid[k] = [typed(k, v, "grid") for v in values]
+    fixed = {k: typed(k, v, "fixed") for k, v in data.get("fixed", {}).items()}
+    grid = {k: [typed(k, v, "grid") for v in values] for k, values in data.get("grid", {}).items()}
 
     random = None
     if "random" in data:
-        r = mapping(data["random"], "random")
-        extra = set(r) - {"method", "n", "seed", "ranges"}
-        if extra:
-            raise SpecError(f"random: unknown keys {sorted(extra)}")
-        sampling = r.get("method", "lhs")
-        if sampling not in ("lhs", "uniform"):
-            raise SpecError(f"random: method {sampling!r} is not 'lhs' or 'uniform'")
-        n = count(r.get("n"), "random: n")
+        r = data["random"]
+        n = count(r["n"], "random.n")
         ranges: dict[str, Range] = {}
-        for k, spec in mapping(r.get("ranges", {}), "random.ranges").items():
+        for k, spec in r["ranges"].items():
             var = declared.setdefault(k, _parameter(k, variables))
             if var.type == "Boolean":
                 raise SpecError(f"random.ranges: {k!r} is a Boolean; put it in the grid")
             if k in grid:
                 raise SpecError(f"{k!r} is both in the grid and in random.ranges")
             ranges[k] = value_range(k, spec, var.type, var.min, var.max)
-        if not ranges:
-            raise SpecError("random: ranges is empty")
-        random = RandomSampling(sampling, n, sampling_seed(r.get("seed", 0)), ranges)
+        random = RandomSampling(r.get("method", "lhs"), n, sampling_seed(r.get("seed", 0)), ranges)
 
-    raw_points = data.get("points", []) or []
-    if not isinstance(raw_points, list):
-        raise SpecError("points: give a list of tables/objects")
-    points = []
-    for i, point in enumerate(raw_points):
-        point = mapping(point, f"points[{i}]")
-        points.append({k: typed(k, v, f"points[{i}]") for k, v in point.items()})
+    points = [{k: typed(k, v, f"points[{i}]") for k, v in point.items()}
+              for i, point in enumerate(data.get("points", []))]
 
     seeds = None
     if "seeds" in data:
         raw = data["seeds"]
         if isinstance(raw, int) and not isinstance(raw, bool):
             raw = list(range(count(raw, "seeds")))  # a count: checked before the list is made
-        if not isinstance(raw, list) or not raw:
-            raise SpecError("seeds: give a non-empty list of integers or a count")
         seeds = [int(typed("seed", s, "seeds")) for s in raw]
         if "seed" in grid or (random and "seed" in random.ranges):
             raise SpecError("give the noise seeds either as 'seeds' or as a 'seed' parameter")
