@@ -54,17 +54,21 @@ swept ones.  The runs are (grid x random samples) + points, each x seeds;
 a noise-free run (noise_std = 0) does not depend on the seed and runs once.
 
 Outputs in DIR:
-  results.csv   one row per run: key, status (ok/failed), message, wall_time [s],
+  results.parquet  one row per run: key, status (ok/failed), message, wall_time [s],
                 worker, scenario, stop_time, method, every run parameter, every metric
+                (pandas.read_parquet; columns keep their types)
+  results.csv   the same table as CSV
+  runs/         while a sweep runs: one Parquet file per finished run
   summary.json  counts, runs per second, the best run per headline metric
   sweep_<parameter>.png   headline metrics against each swept parameter
   spec.json     the spec of the last sweep into DIR
 
 A run is identified by ``key``, a hash of the scenario, stop time, transient,
-method and all its parameter values.  Rows are appended as runs complete, so an
-interrupted sweep keeps what it finished; re-running with the same --out skips
-every run whose key is already in results.csv (``--retry-failed`` redoes the
-failed ones).  A run that fails (an FMU error, a rejected parameter value, a
+method and all its parameter values.  Each run's row is written to runs/ as it
+completes, so an interrupted or killed sweep keeps what it finished; at the end
+the rows go into results.parquet and results.csv (harness.sweep_table).
+Re-running with the same --out skips every run already in the table
+(``--retry-failed`` redoes the failed ones).  A run that fails (an FMU error, a rejected parameter value, a
 NaN metric) is recorded as failed with its message; the sweep goes on.
 If the FMUs are rebuilt with different behaviour, sweep into a new DIR.
 
@@ -75,7 +79,7 @@ sizes before anything is built), stop_time at most 10^4 s; every value is
 checked first (finite, Integers integral and in range, never wrapped).  One
 sweep at a time writes DIR (a lock, harness.sweep_lock); a second one is
 refused.  Exit status: 0 every run of the spec ok, 1 some failed (see
-results.csv), 2 a bad spec or no cluster, 3 DIR is locked by another sweep.
+the table), 2 a bad spec or no cluster, 3 DIR is locked by another sweep.
 """
 from __future__ import annotations
 
@@ -97,7 +101,7 @@ from .sweep_plan import (DEFAULT_FMU_DIR, FMU_FILES, METHODS, Run, SweepSpec, lo
 from .sweep_report import ProgressLine, headline_metrics, metric_unit, plot_summary, write_summary
 from .sweep_simulation import SimulationPool, prepare, run_in_process, simulate
 from .sweep_spec import SpecError
-from .sweep_table import TABLE, ResultsTable, result_row, typed_rows
+from .sweep_table import CSV_EXPORT, TABLE, ResultsTable, result_row
 from .tempdirs import remove_stale
 from .values import argparse_type, integer, real
 
@@ -133,7 +137,8 @@ def run_sweep(spec: SweepSpec, out: str | Path, fmu_dir: Path = DEFAULT_FMU_DIR,
               scheduler: str | None = None, client=None, n_workers: int | None = None,
               retry_failed: bool = False, plots: bool = True, progress: bool = True,
               stream=None, connect_timeout: float = CONNECT_TIMEOUT) -> SweepResult:
-    """Runs the spec's missing runs on Dask and appends them to DIR/results.csv.
+    """Runs the spec's missing runs on Dask and records them in DIR's results table
+    (harness.sweep_table: DIR/results.parquet, DIR/results.csv).
 
     ``client``: an existing dask.distributed Client (else ``scheduler`` or a
     LocalCluster with ``n_workers`` workers is used and closed afterwards)."""
@@ -147,7 +152,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, fmu_dir: Path = DEFAULT_FMU_DIR,
 def _run_sweep(spec: SweepSpec, out: Path, fmu_dir: Path, *, scheduler, client, n_workers,
                retry_failed, plots, progress, stream, connect_timeout) -> SweepResult:
     stream = stream or sys.stderr
-    table = ResultsTable(out / TABLE)
+    table = ResultsTable(out)
     (out / "spec.json").write_text(json.dumps(spec.source, indent=2, default=str) + "\n")
     runs = spec.runs()
     done = table.status()
@@ -186,9 +191,9 @@ def _run_sweep(spec: SweepSpec, out: Path, fmu_dir: Path, *, scheduler, client, 
                 client.close()
                 if cluster is not None:
                     cluster.close()
-    table.reorder([r.key for r in runs])
+    table.consolidate([r.key for r in runs])
     written: list[Path] = []
-    rows = typed_rows(table, {r.key for r in runs})
+    rows = table.rows({r.key for r in runs})
     if plots and rows:
         written = plot_summary(spec, rows, out)
     write_summary(spec, rows, out, resumed=resumed, executed=len(todo), wall=wall,
@@ -245,7 +250,7 @@ def cmd_sweep(args) -> int:
     runs = spec.runs()
     if args.dry_run:
         try:
-            done = ResultsTable(out / TABLE).status() if (out / TABLE).exists() else {}
+            done = ResultsTable(out).status()
         except SpecError as error:
             print(f"harness sweep: {error}", file=sys.stderr)
             return 2
@@ -269,7 +274,7 @@ def cmd_sweep(args) -> int:
         print(f"harness sweep: {out}: {error.strerror or error}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print(f"\nharness sweep: interrupted; the finished runs are in {out / TABLE}: run the "
+        print(f"\nharness sweep: interrupted; the finished runs are in {out}: run the "
               f"same command again to resume", file=sys.stderr)
         return 130
     print(f"sweep {spec.scenario}: {result.total} runs, {result.resumed} already done, "
@@ -277,7 +282,7 @@ def cmd_sweep(args) -> int:
           + (f", {result.wall_time:.1f} s on {result.workers} "
              f"worker{'s' if result.workers != 1 else ''} "
              f"({result.runs_per_second:.2f} runs/s)" if result.executed else ""))
-    print(f"wrote {result.table}, {out / 'summary.json'}"
+    print(f"wrote {result.table}, {CSV_EXPORT}, summary.json"
           + "".join(f", {p.name}" for p in result.plots))
     for key, message in result.failures[:10]:
         print(f"  failed {key}: {message}")

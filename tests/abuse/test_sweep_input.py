@@ -371,7 +371,7 @@ def test_the_next_sweep_removes_what_killed_ones_left(tmp_path, monkeypatch):
     out.mkdir()
     # a table that already holds the run: the sweep needs no cluster, only its start-up
     row = sweep.result_row(spec, spec.runs()[0], {"status": "ok", "metrics": {}})
-    sweep.ResultsTable(out / "results.csv").append(row)
+    sweep.ResultsTable(out).append(row)
     result = sweep.run_sweep(spec, out, FMU_DIR, progress=False, plots=False)
     assert result.executed == 0
     assert not any(p.exists() for p in stale)
