@@ -93,14 +93,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .paths import default_fmu_dir
-from .sweep_dask import (CONNECT_TIMEOUT, MAX_WORKERS, ClusterError, FMUWorkerPlugin,
-                         execute, fmu_payload, start_client)
 from .sweep_lock import OutputLocked, locked_output
 from .sweep_plan import (DEFAULT_FMU_DIR, FMU_FILES, METHODS, Run, SweepSpec, load_spec,
                          parse_spec, run_key)
 from .sweep_report import ProgressLine, headline_metrics, metric_unit, plot_summary, write_summary
 from .sweep_simulation import SimulationPool, prepare, run_in_process, simulate
-from .sweep_spec import SpecError
+from .sweep_spec import CONNECT_TIMEOUT, MAX_WORKERS, ClusterError, SpecError
 from .sweep_table import CSV_EXPORT, TABLE, ResultsTable, result_row
 from .tempdirs import remove_stale
 from .values import argparse_type, integer, real
@@ -163,6 +161,9 @@ def _run_sweep(spec: SweepSpec, out: Path, fmu_dir: Path, *, scheduler, client, 
     ok = failed = workers = 0
     wall = 0.0
     if todo:
+        # Dask is imported only here: the command line starts without it.
+        from .sweep_dask import FMUWorkerPlugin, execute, fmu_payload, start_client
+
         own = client is None
         cluster = None
         if own:

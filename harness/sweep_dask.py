@@ -14,11 +14,10 @@ from typing import Any
 from .sweep_plan import FMU_FILES, Run, SweepSpec
 from .sweep_report import ProgressLine
 from .sweep_simulation import SimulationPool, prepare, simulate
+from .sweep_spec import CONNECT_TIMEOUT, MAX_WORKERS, ClusterError
 from .sweep_table import ResultsTable, result_row
 from .tempdirs import owned_temp_dir, remove_stale
 
-MAX_WORKERS = 1024  # --workers: LocalCluster processes on this machine
-CONNECT_TIMEOUT = 30.0  # s: to reach a scheduler, and for its first worker
 
 
 def fmu_payload(fmu_dir: Path) -> tuple[dict[str, bytes], str]:
@@ -78,10 +77,6 @@ def _worker_run(plugin_name: str, scenario, noise_std: float, seed: int) -> dict
     result = simulate(plugin.pool, scenario, noise_std, seed)
     result["worker"] = str(worker.name)
     return result
-
-class ClusterError(RuntimeError):
-    """No Dask cluster to run on: the scheduler cannot be reached or has no workers."""
-
 
 def start_client(scheduler: str | None, n_workers: int | None,
                  connect_timeout: float = CONNECT_TIMEOUT):
