@@ -30,7 +30,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from harness import sweep  # noqa: E402
+from harness import sweep, sweep_dask  # noqa: E402
 
 FMU_DIR = REPO / "build" / "fmus"
 
@@ -58,17 +58,17 @@ def serial(spec: sweep.SweepSpec) -> float:
 
 def warm(client, spec: sweep.SweepSpec, workers: int) -> float:
     """Runs per second on workers that already hold their instances."""
-    payload, digest = sweep._fmu_payload(FMU_DIR)
+    payload, digest = sweep_dask.fmu_payload(FMU_DIR)
     name = f"bench-fmus-{digest}"
     client.register_plugin(sweep.FMUWorkerPlugin(payload, name), name=name)
     try:
         with tempfile.TemporaryDirectory() as folder:
             warmup = make_spec(4 * workers, spec.stop_time, offset=10_000)
-            table = sweep.ResultsTable(Path(folder) / "warmup.csv")
-            sweep._execute(client, name, warmup, warmup.runs(), table, None)
-            table = sweep.ResultsTable(Path(folder) / "results.csv")
+            table = sweep.ResultsTable(Path(folder) / "warmup")
+            sweep_dask.execute(client, name, warmup, warmup.runs(), table, None)
+            table = sweep.ResultsTable(Path(folder) / "results")
             start = time.perf_counter()
-            ok, failed, _ = sweep._execute(client, name, spec, spec.runs(), table, None)
+            ok, failed, _ = sweep_dask.execute(client, name, spec, spec.runs(), table, None)
             rate = len(spec.runs()) / (time.perf_counter() - start)
             assert failed == 0
             return rate

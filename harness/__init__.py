@@ -8,7 +8,9 @@ the ``sto-harness`` command (``python -m harness``) and this Python API:
 - `harness.identify`: a recorded log through the observer (``identify`` in memory,
   ``identify_file`` streaming a CSV of any length), read by `harness.recording`;
 - `harness.compare`: the paper's method against the FMU's defaults;
-- `harness.sweep`: parameter and noise sweeps on Dask;
+- `harness.sweep`: parameter and noise sweeps on Dask (its parts: `harness.sweep_plan`
+  the spec and its runs, `harness.sweep_simulation` one run, `harness.sweep_dask` the
+  cluster, `harness.sweep_table` the results, `harness.sweep_report` summary and figures);
 - `harness.ssp`: the closed loop as an SSP file for other tools;
 - `harness.master` and `harness.fmus`: the co-simulation master and FMU access
   underneath; `harness.plots`: the figures; `harness.tables`: the CSV files.

@@ -1,7 +1,7 @@
 """One writer per sweep output folder.
 
 Two ``harness sweep`` processes writing to the same --out would each rewrite
-results.csv from their own copy and lose the other's rows.  A sweep holds an
+the results table from their own copy and lose the other's rows.  A sweep holds an
 exclusive lock on DIR/.sweep.lock (filelock: an OS file lock, released by the
 kernel when the process ends, so a killed sweep never leaves a stale lock)
 while it reads and writes DIR; a second sweep into DIR is refused at once with

@@ -28,10 +28,16 @@ MAX_RUNS = 100_000
 MAX_STOP_TIME = 10_000.0
 SEED_MAX = 2**63 - 1  # numpy's generators take any non-negative integer; keep it 64-bit
 PSEUDO = ("noise_std", "seed")
+MAX_WORKERS = 1024  # --workers: LocalCluster processes on this machine
+CONNECT_TIMEOUT = 30.0  # s: to reach a scheduler, and for its first worker
 
 
 class SpecError(ValueError):
     """The sweep specification is invalid (says where and why)."""
+
+
+class ClusterError(RuntimeError):
+    """No Dask cluster to run on: the scheduler cannot be reached or has no workers."""
 
 
 @dataclass(frozen=True)

@@ -57,7 +57,10 @@ class CsvStream:
             if self.path.suffix == ".parquet":
                 import pyarrow.parquet as pq
 
-                self._writer = pq.ParquetWriter(str(self.path), table.schema)
+                # no dictionary encoding: measured values rarely repeat, and trying it
+                # made writing 4x slower (bench/identify_long_log.py)
+                self._writer = pq.ParquetWriter(str(self.path), table.schema,
+                                                use_dictionary=False)
             else:
                 self._writer = pacsv.CSVWriter(str(self.path), table.schema,
                                                write_options=_options())

@@ -13,6 +13,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 from distributed import Client, LocalCluster
 
@@ -177,26 +178,35 @@ def test_sweep_on_a_local_cluster_records_failures_and_resumes(client, fmu_dir, 
     out = tmp_path / "out"
     result = sweep.run_sweep(spec, out, fmu_dir, client=client, progress=False)
     assert (result.total, result.executed, result.ok, result.failed) == (5, 5, 4, 1)
-    rows = read_table(out / "results.csv")
-    assert len(rows) == 5
-    failed = [r for r in rows if r["status"] == "failed"]
+    assert result.table == out / "results.parquet"
+    assert not (out / "runs").exists()  # every run file went into the table
+    table = pd.read_parquet(out / "results.parquet")
+    assert len(table) == 5 and table["key"].is_unique
+    # the CSV export holds the same table
+    exported = pd.read_csv(out / "results.csv", dtype={"message": str, "worker": str},
+                           keep_default_na=False,
+                           na_values={c: [""] for c in table.columns if c != "message"})
+    pd.testing.assert_frame_equal(exported, table, check_dtype=False)
+    failed = table[table["status"] == "failed"]
     assert len(failed) == 1
-    assert failed[0]["observer.h"] == "-1.0"
-    assert "h = -1 is out of range" in failed[0]["message"]
+    assert failed["observer.h"].iloc[0] == -1.0
+    assert "h = -1 is out of range" in failed["message"].iloc[0]
+    assert table["seed"].dtype == np.int64 and table["noise_std"].dtype == np.float64
     workers = set(client.scheduler_info()["workers"][a]["name"]
                   for a in client.scheduler_info()["workers"])
+    rows = table.to_dict("records")
     for r in rows:
         assert r["worker"] in {str(w) for w in workers}
-        assert float(r["wall_time"]) > 0
+        assert r["wall_time"] > 0
         if r["status"] == "ok":
-            assert np.isfinite(float(r["max_e2_after_1s"]))
-            assert 0 <= float(r["rms_perturbation"]) < 1
+            assert np.isfinite(r["max_e2_after_1s"])
+            assert 0 <= r["rms_perturbation"] < 1
     # a worker's result equals the in-process run of the same parameters
-    noisy = next(r for r in rows if r["status"] == "ok" and float(r["noise_std"]) > 0)
+    noisy = next(r for r in rows if r["status"] == "ok" and r["noise_std"] > 0)
     scenario = dataclasses.replace(SCENARIOS["6.1-sine"], stop_time=STOP)
     fresh = score(scenario, run_scenario(scenario, fmu_dir, noise_std=1e-4, seed=5,
-                                         observer_overrides={"alpha1[1]": float(noisy["observer.alpha1[1]"])}))
-    assert {k: float(noisy[k]) for k in fresh} == fresh
+                                         observer_overrides={"alpha1[1]": noisy["observer.alpha1[1]"]}))
+    assert {k: noisy[k] for k in fresh} == fresh
     assert sorted(p.name for p in result.plots) == ["sweep_noise_std.png",
                                                     "sweep_observer.alpha1_1.png"]
     summary = json.loads((out / "summary.json").read_text())
@@ -205,16 +215,21 @@ def test_sweep_on_a_local_cluster_records_failures_and_resumes(client, fmu_dir, 
     # The same sweep again: nothing to do.
     again = sweep.run_sweep(spec, out, fmu_dir, client=client, progress=False, plots=False)
     assert (again.resumed, again.executed) == (5, 0)
-    assert read_table(out / "results.csv") == rows
+    pd.testing.assert_frame_equal(pd.read_parquet(out / "results.parquet"), table)
 
-    # An interrupted sweep: two rows lost, the last line half written.
-    text = (out / "results.csv").read_text().splitlines(keepends=True)
-    (out / "results.csv").write_text("".join(text[:4]) + text[4][:20])
+    # A killed sweep: the table holds two runs, a third finished run is only in its run
+    # file, a fourth run's file was never renamed into place.
+    table.iloc[:2].to_parquet(out / "results.parquet")
+    (out / "runs").mkdir()
+    table.iloc[2:3].to_parquet(out / "runs" / f"{table['key'].iloc[2]}.parquet")
+    (out / "runs" / f".{table['key'].iloc[3]}.parquet.123.tmp").write_bytes(b"PAR1 half")
+    (out / "runs" / "junk.parquet").write_bytes(b"not parquet")
     resumed = sweep.run_sweep(spec, out, fmu_dir, client=client, progress=False, plots=False)
     assert (resumed.resumed, resumed.executed) == (3, 2)
-    after = read_table(out / "results.csv")
-    assert len(after) == 5
-    assert [r for r in after if r["key"] in {x["key"] for x in rows[:3]}] == rows[:3]
+    after = pd.read_parquet(out / "results.parquet")
+    assert len(after) == 5 and after["key"].is_unique
+    pd.testing.assert_frame_equal(after.iloc[:3], table.iloc[:3])
+    assert not (out / "runs" / "junk.parquet").exists()
 
     # A wider grid runs only the new points; --retry-failed redoes the failed run only.
     wider = sweep.parse_spec({**SPEC, "grid": {"noise_std": [0.0, 1e-5, 1e-4]}}, fmu_dir)
@@ -223,7 +238,32 @@ def test_sweep_on_a_local_cluster_records_failures_and_resumes(client, fmu_dir, 
     retried = sweep.run_sweep(wider, out, fmu_dir, client=client, progress=False, plots=False,
                               retry_failed=True)
     assert (retried.executed, retried.failed) == (1, 1)
+    assert len(pd.read_parquet(out / "results.parquet")) == 7
     assert len(read_table(out / "results.csv")) == 7
+
+
+def test_rows_are_on_disk_as_each_run_completes(fmu_dir, tmp_path):
+    """Each appended row is a file of its own at once; a new table reads them back with
+    their types, a retried run's row replacing the older one."""
+    spec = sweep.parse_spec(SPEC, fmu_dir)
+    runs = spec.runs()
+    table = sweep.ResultsTable(tmp_path)
+    table.append(sweep.result_row(spec, runs[0], {"status": "failed", "message": "x, y"}))
+    table.append(sweep.result_row(spec, runs[1], {"status": "ok", "wall_time": 0.5,
+                                                  "metrics": {"delay": 0.01}}))
+    table.append(sweep.result_row(spec, runs[0], {"status": "ok", "metrics": {"delay": 0.02}}))
+    assert sorted(p.name for p in (tmp_path / "runs").iterdir()) == sorted(
+        f"{r.key}.parquet" for r in runs[:2])
+    again = sweep.ResultsTable(tmp_path)
+    assert again.status() == {runs[0].key: "ok", runs[1].key: "ok"}
+    rows = {r["key"]: r for r in again.rows({runs[0].key, runs[1].key})}
+    first, second = rows[runs[0].key], rows[runs[1].key]
+    assert first["delay"] == 0.02 and "wall_time" not in first and second["wall_time"] == 0.5
+    assert second["observer.alpha1[1]"] == runs[1].params["observer.alpha1[1]"]
+    again.consolidate([runs[1].key, runs[0].key])
+    assert list(pd.read_parquet(tmp_path / "results.parquet")["key"]) == [runs[1].key,
+                                                                          runs[0].key]
+    assert not (tmp_path / "runs").exists()
 
 
 def test_command_line_with_a_running_scheduler(client, fmu_dir, tmp_path, capsys):
@@ -239,6 +279,7 @@ def test_command_line_with_a_running_scheduler(client, fmu_dir, tmp_path, capsys
     printed = capsys.readouterr()
     assert "2 run now: 2 ok, 0 failed" in printed.out
     assert "2/2 runs" in printed.err  # the progress counter
+    assert len(pd.read_parquet(tmp_path / "cli" / "results.parquet")) == 2
     assert len(read_table(tmp_path / "cli" / "results.csv")) == 2
     # the worker plugin is gone again: the shared cluster keeps no FMU instances
     plugins = client.run(lambda dask_worker: sorted(dask_worker.plugins))
@@ -248,3 +289,13 @@ def test_command_line_with_a_running_scheduler(client, fmu_dir, tmp_path, capsys
     args = parser.parse_args(["sweep", str(spec), "--out", str(tmp_path / "cli"), "--dry-run"])
     assert args.func(args) == 0
     assert capsys.readouterr().out.count("  ok  ") == 2
+
+
+def test_a_folder_of_an_earlier_version_resumes_from_its_csv(fmu_dir, tmp_path):
+    spec = sweep.parse_spec(SPEC, fmu_dir)
+    run = spec.runs()[0]
+    (tmp_path / "results.csv").write_text(f"key,status,message,observer.alpha1[1]\n"
+                                          f"{run.key},ok,,{run.params['observer.alpha1[1]']!r}\n")
+    table = sweep.ResultsTable(tmp_path)
+    assert table.status() == {run.key: "ok"}
+    assert table.rows({run.key})[0]["observer.alpha1[1]"] == run.params["observer.alpha1[1]"]
