@@ -39,39 +39,59 @@ MODELS=(
     "TwistingController|models/twisting_controller.c||fmu/bench/TwistingController/modelDescription.xml"
 )
 
-build_fmu() {
-    local id=$1 model=$2 core=$3 xml=$4
-    local fmi_include src=fmu/src out=$BUILD/$id
-    fmi_include=$("$PY" -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))')
-    local sources=(fmi2/fmi2_layer.c "$model")
-    local f
-    for f in $core; do sources+=("$f"); done
-    local model_files=()   # the model and its core files, without the FMI layer
-    for f in "${sources[@]:1}"; do model_files+=("$src/$f"); done
-    rm -rf "$out" && mkdir -p "$out/binaries/linux64" "$out/sources"
+# Sources of one FMU, relative to fmu/src: the API file, the instance core, the model
+# and its core files (the model files are everything after the first two).
+fmu_sources() { # fmi_version model core
+    echo "fmi$1/fmi$1_functions.c instance/instance.c $2 $3"
+}
 
-    # The XML is generated from the C variable table and must match the committed one.
+fmi_include() {
+    "$PY" -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))'
+}
+
+# The XML is generated from the C variable table and must match the committed one.
+describe_fmu() { # out xml sources...
+    local out=$1 xml=$2; shift 2
+    local src=fmu/src f model_files=()
+    for f in "${@:3}"; do model_files+=("$src/$f"); done
     "$CC" "${CFLAGS[@]}" -o "$out/describe_model" fmu/tools/describe_model.c "${model_files[@]}" -lm
-    "$out/describe_model" "${sources[@]}" > "$out/modelDescription.xml"
+    "$out/describe_model" "$@" > "$out/modelDescription.xml"
     if ! cmp -s "$out/modelDescription.xml" "$xml"; then
         diff -u "$xml" "$out/modelDescription.xml" | head -40 || true
-        echo "build.sh: $xml is out of date with the variable table in $src/$model." >&2
+        echo "build.sh: $xml is out of date with the variable table in $src/${3}." >&2
         echo "          Regenerate it: cp $out/modelDescription.xml $xml" >&2
         exit 1
     fi
+}
 
-    "$CC" "${CFLAGS[@]}" -shared -I "$fmi_include" -o "$out/binaries/linux64/$id.so" \
-        "$src/fmi2/fmi2_layer.c" "${model_files[@]}" -lm
-    # Only the fmi2 functions may be exported.
+# Only the FMI functions of the given version may be exported.
+check_exports() { # binary fmi_version
     local extra
-    extra=$(nm -D --defined-only "$out/binaries/linux64/$id.so" | awk '{print $3}' | grep -v '^fmi2' || true)
-    if [ -n "$extra" ]; then echo "build.sh: $id exports non-FMI symbols: $extra" >&2; exit 1; fi
+    extra=$(nm -D --defined-only "$1" | awk '{print $3}' | grep -v "^fmi$2" || true)
+    if [ -n "$extra" ]; then echo "build.sh: $1 exports non-FMI symbols: $extra" >&2; exit 1; fi
+}
 
-    # Sources keep their layout under sources/ so that `fmpy compile` can rebuild them.
-    for f in "${sources[@]}" fmi2/model_interface.h $(cd "$src" && echo core/*.h); do
+# Sources keep their layout under sources/ so that `fmpy compile` can rebuild them.
+copy_sources() { # out sources...
+    local out=$1 src=fmu/src f; shift
+    for f in "$@" instance/instance.h instance/model_interface.h $(cd "$src" && echo core/*.h); do
         mkdir -p "$out/sources/$(dirname "$f")"
         cp "$src/$f" "$out/sources/$f"
     done
+}
+
+build_fmu() { # id model core xml
+    local id=$1 model=$2 core=$3 xml=$4
+    local src=fmu/src out=$BUILD/$id f sources
+    read -r -a sources <<< "$(fmu_sources 2 "$model" "$core")"
+    rm -rf "$out" && mkdir -p "$out/binaries/linux64" "$out/sources"
+    describe_fmu "$out" "$xml" "${sources[@]}"
+    local paths=()
+    for f in "${sources[@]}"; do paths+=("$src/$f"); done
+    "$CC" "${CFLAGS[@]}" -shared -I "$(fmi_include)" -o "$out/binaries/linux64/$id.so" \
+        "${paths[@]}" -lm
+    check_exports "$out/binaries/linux64/$id.so" 2
+    copy_sources "$out" "${sources[@]}"
     "$PY" -m harness.package "$out" "$BUILD/fmus/$id.fmu"
 }
 

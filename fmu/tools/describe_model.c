@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "../src/fmi2/model_interface.h"
+#include "../src/instance/model_interface.h"
 
 #define MD MODEL_DESCRIPTOR
 
@@ -159,7 +159,8 @@ int main(int argc, char **argv)
     puts("\"\n  generationTool=\"sto-fmu describe_model\" variableNamingConvention=\"structured\" "
          "numberOfEventIndicators=\"0\">");
     printf("  <CoSimulation modelIdentifier=\"%s\" canHandleVariableCommunicationStepSize=\"true\"\n"
-           "    canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\">\n", MD.model_identifier);
+           "    canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\"\n"
+           "    canNotUseMemoryManagementFunctions=\"true\">\n", MD.model_identifier);
     puts("    <SourceFiles>");
     for (int i = 1; i < argc; ++i) printf("      <File name=\"%s\"/>\n", argv[i]);
     puts("    </SourceFiles>");

@@ -15,7 +15,7 @@
 #include "../core/noise_adaptive.h"
 #include "../core/small_loops.h"
 #include "../core/super_twisting.h"
-#include "../fmi2/model_interface.h"
+#include "../instance/model_interface.h"
 
 #define MAX_N STO_MAX_DOF
 #define MAX_L ID_MAX_REGRESSORS
