@@ -49,17 +49,30 @@ fmi_include() {
     "$PY" -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))'
 }
 
-# The XML is generated from the C variable table and must match the committed one.
-describe_fmu() { # out xml sources...
-    local out=$1 xml=$2; shift 2
+# Where one FMU is laid out and packed: FMI 2 as before (build/<id>, whose sources
+# tools/abuse/ recompiles; build/fmus/<id>.fmu), FMI 3 in build/fmi3/.
+fmu_dir() { if [ "$1" = 2 ]; then echo "$BUILD/$2"; else echo "$BUILD/fmi3/$2"; fi; }
+fmu_file() { if [ "$1" = 2 ]; then echo "$BUILD/fmus/$2.fmu"; else echo "$BUILD/fmi3/$2.fmu"; fi; }
+# The committed FMI 3 description sits in fmi3/ next to the FMI 2 one.
+committed_xml() { # fmi_version fmi2_xml
+    if [ "$1" = 2 ]; then echo "$2"; else echo "$(dirname "$2")/fmi3/modelDescription.xml"; fi
+}
+# The binaries folder of this machine's build (FMI 2 platform name, FMI 3 platform tuple).
+host_platform() { if [ "$1" = 2 ]; then echo linux64; else echo x86_64-linux; fi; }
+
+# The XML is generated from the C variable table and must match the committed one;
+# sources/buildDescription.xml lists the same sources.
+describe_fmu() { # fmi_version out xml sources...
+    local fmi=$1 out=$2 xml=$3; shift 3
     local src=fmu/src f model_files=()
     for f in "${@:3}"; do model_files+=("$src/$f"); done
     "$CC" "${CFLAGS[@]}" -o "$out/describe_model" fmu/tools/describe_model.c "${model_files[@]}" -lm
-    "$out/describe_model" "$@" > "$out/modelDescription.xml"
+    "$out/describe_model" "fmi$fmi" "$@" > "$out/modelDescription.xml"
+    "$out/describe_model" build "$@" > "$out/sources/buildDescription.xml"
     if ! cmp -s "$out/modelDescription.xml" "$xml"; then
         diff -u "$xml" "$out/modelDescription.xml" | head -40 || true
         echo "build.sh: $xml is out of date with the variable table in $src/${3}." >&2
-        echo "          Regenerate it: cp $out/modelDescription.xml $xml" >&2
+        echo "          Regenerate it: mkdir -p $(dirname "$xml") && cp $out/modelDescription.xml $xml" >&2
         exit 1
     fi
 }
@@ -80,32 +93,37 @@ copy_sources() { # out sources...
     done
 }
 
-build_fmu() { # id model core xml
-    local id=$1 model=$2 core=$3 xml=$4
-    local src=fmu/src out=$BUILD/$id f sources
-    read -r -a sources <<< "$(fmu_sources 2 "$model" "$core")"
-    rm -rf "$out" && mkdir -p "$out/binaries/linux64" "$out/sources"
-    describe_fmu "$out" "$xml" "${sources[@]}"
-    local paths=()
-    for f in "${sources[@]}"; do paths+=("$src/$f"); done
-    "$CC" "${CFLAGS[@]}" -shared -I "$(fmi_include)" -o "$out/binaries/linux64/$id.so" \
+build_fmu() { # fmi_version id model core xml
+    local fmi=$1 id=$2 model=$3 core=$4
+    local xml out platform f sources paths=()
+    xml=$(committed_xml "$fmi" "$5")
+    out=$(fmu_dir "$fmi" "$id")
+    platform=$(host_platform "$fmi")
+    read -r -a sources <<< "$(fmu_sources "$fmi" "$model" "$core")"
+    rm -rf "$out" && mkdir -p "$out/binaries/$platform" "$out/sources"
+    describe_fmu "$fmi" "$out" "$xml" "${sources[@]}"
+    for f in "${sources[@]}"; do paths+=("fmu/src/$f"); done
+    "$CC" "${CFLAGS[@]}" -shared -I "$(fmi_include)" -o "$out/binaries/$platform/$id.so" \
         "${paths[@]}" -lm
-    check_exports "$out/binaries/linux64/$id.so" 2
+    check_exports "$out/binaries/$platform/$id.so" "$fmi"
     copy_sources "$out" "${sources[@]}"
-    "$PY" -m harness.package "$out" "$BUILD/fmus/$id.fmu"
+    "$PY" -m harness.package "$out" "$(fmu_file "$fmi" "$id")"
 }
 
 build_all() {
-    mkdir -p "$BUILD/fmus"
-    for entry in "${MODELS[@]}"; do
-        IFS='|' read -r id model core xml <<< "$entry"
-        log "building $id.fmu"
-        build_fmu "$id" "$model" "$core" "$xml"
+    local fmi entry id model core xml
+    mkdir -p "$BUILD/fmus" "$BUILD/fmi3"
+    for fmi in 2 3; do
+        for entry in "${MODELS[@]}"; do
+            IFS='|' read -r id model core xml <<< "$entry"
+            log "building $id.fmu (FMI $fmi)"
+            build_fmu "$fmi" "$id" "$model" "$core" "$xml"
+        done
     done
     log "reference results of the default experiments (FMI-LS-REF)"
-    "$PY" tools/importers/make_reference.py "$BUILD"/fmus/*.fmu
+    "$PY" tools/importers/make_reference.py "$BUILD"/fmus/*.fmu "$BUILD"/fmi3/*.fmu
     log "validating with fmpy"
-    "$PY" -m harness.package --validate "$BUILD"/fmus/*.fmu
+    "$PY" -m harness.package --validate "$BUILD"/fmus/*.fmu "$BUILD"/fmi3/*.fmu
     log "writing the closed loop as SSP"
     "$PY" -m harness.ssp "$BUILD/fmus" "$BUILD/ClosedLoop.ssp"
 }
