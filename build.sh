@@ -4,9 +4,13 @@
 #   ./build.sh            build the FMUs, then run the closed-loop demonstration
 #   ./build.sh test       build the FMUs, install the importers (FMI4j, fmi-sim), run the tests
 #   ./build.sh fmus       build the FMUs only
+#   ./build.sh dist       build the FMUs, then the distribution FMUs with binaries for
+#                         Linux (x86_64, aarch64), Windows (x86_64) and macOS (x86_64,
+#                         aarch64), installing the cross toolchains (cached; tools/dist/)
 #
 # On a fresh machine it first creates .venv from the pinned requirements.txt.
-# Outputs go to build/ (FMUs in build/fmus/).
+# Outputs go to build/: FMI 2.0 FMUs in build/fmus/, FMI 3.0 FMUs in build/fmi3/,
+# distribution FMUs in build/dist/fmi2/ and build/dist/fmi3/.
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -139,5 +143,6 @@ case "${1:-demo}" in
         log "running tests"
         "$PY" -m pytest -q tests ;;
     demo) log "closed-loop demonstration"; "$PY" -m harness demo --out "$BUILD/demo" ;;
-    *) echo "usage: $0 [demo|test|fmus]" >&2; exit 2 ;;
+    dist) bash tools/dist/build_dist.sh ;;
+    *) echo "usage: $0 [demo|test|fmus|dist]" >&2; exit 2 ;;
 esac
