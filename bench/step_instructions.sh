@@ -4,7 +4,7 @@
 #
 #   bench/step_instructions.sh [STEPS]        (default 10000)
 #
-# Builds bench/step_driver.c with the observer's sources (fmi2_layer.c,
+# Builds bench/step_driver.c with the observer's sources (fmi2/fmi2_functions.c, instance/instance.c,
 # models/observer.c, core/*.c; -O2 -g, FMI headers from the installed fmpy)
 # into build/bench/, then for each configuration runs
 #     valgrind --tool=callgrind --toggle-collect=fmi2DoStep step_driver CONFIG SCHEME STEPS
@@ -32,9 +32,9 @@ command -v valgrind >/dev/null || { echo "step_instructions.sh: valgrind is not 
 FMI_INCLUDE=$("$PY" -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))')
 mkdir -p "$OUT"
 # shellcheck disable=SC2086
-"$CC" -std=c11 -Wall -Wextra -O2 -g ${CFLAGS_EXTRA:-} -I "$FMI_INCLUDE" -I "$SRC/fmi2" \
-    -o "$OUT/step_driver" bench/step_driver.c "$SRC/fmi2/fmi2_layer.c" "$SRC/models/observer.c" \
-    "$SRC"/core/*.c -lm
+"$CC" -std=c11 -Wall -Wextra -O2 -g ${CFLAGS_EXTRA:-} -I "$FMI_INCLUDE" -I "$SRC/instance" \
+    -o "$OUT/step_driver" bench/step_driver.c "$SRC/fmi2/fmi2_functions.c" \
+    "$SRC/instance/instance.c" "$SRC/models/observer.c" "$SRC"/core/*.c -lm
 
 # config | scheme | description
 CONFIGS=(

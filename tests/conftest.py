@@ -7,11 +7,13 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 FMU_DIR = REPO / "build" / "fmus"
+FMI3_DIR = REPO / "build" / "fmi3"
+MODEL_IDENTIFIERS = ("SuperTwistingObserver", "Pendulum", "TwistingController")
 
 
-def fmu_path(model_identifier: str) -> Path:
+def fmu_path(model_identifier: str, fmi_version: int = 2) -> Path:
     """Path of a built FMU; fails (never skips) with a hint if it is missing."""
-    path = FMU_DIR / f"{model_identifier}.fmu"
+    path = (FMU_DIR if fmi_version == 2 else FMI3_DIR) / f"{model_identifier}.fmu"
     if not path.exists():
         pytest.fail(f"{path} is missing: run ./build.sh fmus (./build.sh test builds it first)")
     return path
@@ -30,3 +32,14 @@ def pendulum_fmu() -> Path:
 @pytest.fixture(scope="session")
 def controller_fmu() -> Path:
     return fmu_path("TwistingController")
+
+
+@pytest.fixture(scope="session", params=MODEL_IDENTIFIERS)
+def fmi3_fmu(request) -> Path:
+    """Each FMI 3.0 FMU in turn (build/fmi3/)."""
+    return fmu_path(request.param, 3)
+
+
+@pytest.fixture(scope="session")
+def observer_fmi3() -> Path:
+    return fmu_path("SuperTwistingObserver", 3)

@@ -1,15 +1,17 @@
-/* Prints the modelDescription.xml of the model it is linked with, so that
- * the C variable table is the single source of truth.  build.sh compares the
- * output with the committed XML and stops if they differ.
+/* Prints the modelDescription.xml (FMI 2.0 or 3.0) or the sources'
+ * buildDescription.xml of the model it is linked with, so that the C variable
+ * table is the single source of truth.  build.sh compares the model
+ * descriptions with the committed XML and stops if they differ.
  *
- * usage: describe_model SOURCE_FILE... > modelDescription.xml
- * (the source files are listed in <SourceFiles>, relative to sources/) */
+ * usage: describe_model fmi2|fmi3|build SOURCE_FILE... > OUT.xml
+ * (source files relative to sources/: FMI 2 lists them in <SourceFiles>,
+ * buildDescription.xml in its <SourceFileSet>) */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "../src/fmi2/model_interface.h"
+#include "../src/instance/model_interface.h"
 
 #define MD MODEL_DESCRIPTOR
 
@@ -135,23 +137,27 @@ static void print_variable(const ModelVariable *var, size_t e)
     puts("    </ScalarVariable>");
 }
 
-int main(int argc, char **argv)
+static void print_log_categories(void)
 {
-    /* The default experiment's step is the model's internal step at its start values. */
-    void *data = calloc(1, MD.data_size);
-    if (!data) return 1;
-    for (size_t v = 0; v < MD.n_variables; ++v) {
-        const ModelVariable *var = &MD.variables[v];
-        for (size_t e = 0; e < model_variable_count(var); ++e) {
-            double start = var->starts ? var->starts[e] : var->start;
-            char *slot = (char *)data + var->offset;
-            if (var->type == TYPE_REAL) ((double *)slot)[e] = start;
-            else ((int *)slot)[e] = (int)start;
-        }
-    }
-    const double h = MD.internal_step(data);
-    free(data);
+    puts("  <LogCategories>");
+    puts("    <Category name=\"logStatusWarning\" description=\"Warnings\"/>");
+    puts("    <Category name=\"logStatusError\" description=\"Errors\"/>");
+    puts("    <Category name=\"logAll\" description=\"Everything, including debug messages\"/>");
+    puts("  </LogCategories>");
+}
 
+static void print_default_experiment(double h)
+{
+    char stop[40], tolerance[40], step[40];
+    printf("  <DefaultExperiment startTime=\"0\" stopTime=\"%s\" tolerance=\"%s\" stepSize=\"%s\"/>\n",
+           real_text(MD.default_stop_time, stop, sizeof stop),
+           real_text(MD.default_tolerance, tolerance, sizeof tolerance), real_text(h, step, sizeof step));
+}
+
+/* ---- FMI 2.0: one ScalarVariable per element (value reference vr + e) -------- */
+
+static void print_fmi2(double h, int n_files, char **files)
+{
     puts("<?xml version=\"1.0\" encoding=\"UTF-8\"?>");
     printf("<fmiModelDescription fmiVersion=\"2.0\" modelName=\"%s\" guid=\"%s\"\n", MD.model_name, MD.guid);
     fputs("  description=\"", stdout);
@@ -159,33 +165,26 @@ int main(int argc, char **argv)
     puts("\"\n  generationTool=\"sto-fmu describe_model\" variableNamingConvention=\"structured\" "
          "numberOfEventIndicators=\"0\">");
     printf("  <CoSimulation modelIdentifier=\"%s\" canHandleVariableCommunicationStepSize=\"true\"\n"
-           "    canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\">\n", MD.model_identifier);
+           "    canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\"\n"
+           "    canNotUseMemoryManagementFunctions=\"true\">\n", MD.model_identifier);
     puts("    <SourceFiles>");
-    for (int i = 1; i < argc; ++i) printf("      <File name=\"%s\"/>\n", argv[i]);
+    for (int i = 0; i < n_files; ++i) printf("      <File name=\"%s\"/>\n", files[i]);
     puts("    </SourceFiles>");
     puts("  </CoSimulation>");
     print_units();
-    puts("  <LogCategories>");
-    puts("    <Category name=\"logStatusWarning\" description=\"Warnings\"/>");
-    puts("    <Category name=\"logStatusError\" description=\"Errors\"/>");
-    puts("    <Category name=\"logAll\" description=\"Everything, including debug messages\"/>");
-    puts("  </LogCategories>");
-    char stop[40], tolerance[40], step[40];
-    printf("  <DefaultExperiment startTime=\"0\" stopTime=\"%s\" tolerance=\"%s\" stepSize=\"%s\"/>\n",
-           real_text(MD.default_stop_time, stop, sizeof stop),
-           real_text(MD.default_tolerance, tolerance, sizeof tolerance), real_text(h, step, sizeof step));
+    print_log_categories();
+    print_default_experiment(h);
     puts("  <ModelVariables>");
-    size_t index = 0;
     for (size_t v = 0; v < MD.n_variables; ++v)
         for (size_t e = 0; e < model_variable_count(&MD.variables[v]); ++e)
-            print_variable(&MD.variables[v], e), ++index;
+            print_variable(&MD.variables[v], e);
     puts("  </ModelVariables>");
 
     /* Outputs, then every output and calculated parameter as an initial unknown. */
     puts("  <ModelStructure>");
     for (int pass = 0; pass < 2; ++pass) {
         puts(pass == 0 ? "    <Outputs>" : "    <InitialUnknowns>");
-        index = 0;
+        size_t index = 0;
         for (size_t v = 0; v < MD.n_variables; ++v) {
             const ModelVariable *var = &MD.variables[v];
             for (size_t e = 0; e < model_variable_count(var); ++e) {
@@ -199,5 +198,139 @@ int main(int argc, char **argv)
     }
     puts("  </ModelStructure>");
     puts("</fmiModelDescription>");
+}
+
+/* ---- FMI 3.0 -------------------------------------------------------------- */
+
+static const char *fmi3_type_name(VariableType type)
+{
+    return type == TYPE_REAL ? "Float64" : type == TYPE_INTEGER ? "Int32" : "Boolean";
+}
+
+static void print_start_value(const ModelVariable *var, size_t e)
+{
+    const double start = var->starts ? var->starts[e] : var->start;
+    char text[40];
+    if (var->type == TYPE_REAL) fputs(real_text(start, text, sizeof text), stdout);
+    else if (var->type == TYPE_INTEGER) printf("%d", (int)start);
+    else fputs(start != 0.0 ? "true" : "false", stdout);
+}
+
+/* One variable, vectors and matrices as arrays (row-major, like the data block). */
+static void print_variable3(const ModelVariable *var)
+{
+    const char *type = fmi3_type_name(var->type);
+    printf("    <%s name=\"%s\" valueReference=\"%u\" causality=\"%s\" variability=\"%s\"", type,
+           var->name, (unsigned)var->vr, causality_name(var->causality),
+           variability_name(var->variability));
+    if (var->description) {
+        fputs(" description=\"", stdout);
+        print_escaped(var->description);
+        putchar('"');
+    }
+    char text[40];
+    if (var->unit) printf(" unit=\"%s\"", var->unit);
+    if (var->type != TYPE_BOOLEAN) {
+        if (!isnan(var->min)) printf(" min=\"%s\"", real_text(var->min, text, sizeof text));
+        if (!isnan(var->max)) printf(" max=\"%s\"", real_text(var->max, text, sizeof text));
+    }
+    if (has_start(var)) {
+        fputs(" start=\"", stdout);
+        for (size_t e = 0; e < model_variable_count(var); ++e) {
+            if (e) putchar(' ');
+            print_start_value(var, e);
+        }
+        putchar('"');
+    }
+    if (!var->rows) {
+        puts("/>");
+        return;
+    }
+    puts(">");
+    printf("      <Dimension start=\"%u\"/>\n", (unsigned)var->rows);
+    if (var->cols) printf("      <Dimension start=\"%u\"/>\n", (unsigned)var->cols);
+    printf("    </%s>\n", type);
+}
+
+static void print_fmi3(double h)
+{
+    puts("<?xml version=\"1.0\" encoding=\"UTF-8\"?>");
+    printf("<fmiModelDescription fmiVersion=\"3.0\" modelName=\"%s\" instantiationToken=\"%s\"\n",
+           MD.model_name, MD.guid);
+    fputs("  description=\"", stdout);
+    print_escaped(MD.description);
+    puts("\"\n  generationTool=\"sto-fmu describe_model\" variableNamingConvention=\"structured\">");
+    printf("  <CoSimulation modelIdentifier=\"%s\" canHandleVariableCommunicationStepSize=\"true\"\n"
+           "    canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\"/>\n",
+           MD.model_identifier);
+    print_units();
+    print_log_categories();
+    print_default_experiment(h);
+    puts("  <ModelVariables>");
+    puts("    <Float64 name=\"time\" valueReference=\"0\" causality=\"independent\" "
+         "variability=\"continuous\" description=\"Simulation time\"/>");
+    for (size_t v = 0; v < MD.n_variables; ++v) print_variable3(&MD.variables[v]);
+    puts("  </ModelVariables>");
+    /* Outputs, then every output and calculated parameter as an initial unknown. */
+    puts("  <ModelStructure>");
+    for (int pass = 0; pass < 2; ++pass) {
+        for (size_t v = 0; v < MD.n_variables; ++v) {
+            const ModelVariable *var = &MD.variables[v];
+            int listed = var->causality == CAUSALITY_OUTPUT ||
+                         (pass == 1 && var->causality == CAUSALITY_CALCULATED_PARAMETER);
+            if (listed)
+                printf("    <%s valueReference=\"%u\"/>\n", pass == 0 ? "Output" : "InitialUnknown",
+                       (unsigned)var->vr);
+        }
+    }
+    puts("  </ModelStructure>");
+    puts("</fmiModelDescription>");
+}
+
+/* ---- sources/buildDescription.xml (FMI 3.0 schema, shipped in both FMUs) ---- */
+
+static void print_build_description(int n_files, char **files)
+{
+    puts("<?xml version=\"1.0\" encoding=\"UTF-8\"?>");
+    puts("<fmiBuildDescription fmiVersion=\"3.0\">");
+    printf("  <BuildConfiguration modelIdentifier=\"%s\">\n", MD.model_identifier);
+    puts("    <SourceFileSet language=\"C11\">");
+    for (int i = 0; i < n_files; ++i) printf("      <SourceFile name=\"%s\"/>\n", files[i]);
+    puts("    </SourceFileSet>");
+    puts("    <Library name=\"m\" external=\"true\" description=\"C math library (libm on Linux; "
+         "part of the C runtime elsewhere)\"/>");
+    puts("  </BuildConfiguration>");
+    puts("</fmiBuildDescription>");
+}
+
+/* The default experiment's step is the model's internal step at its start values. */
+static double default_step(void)
+{
+    void *data = calloc(1, MD.data_size);
+    if (!data) exit(1);
+    for (size_t v = 0; v < MD.n_variables; ++v) {
+        const ModelVariable *var = &MD.variables[v];
+        for (size_t e = 0; e < model_variable_count(var); ++e) {
+            double start = var->starts ? var->starts[e] : var->start;
+            char *slot = (char *)data + var->offset;
+            if (var->type == TYPE_REAL) ((double *)slot)[e] = start;
+            else ((int *)slot)[e] = (int)start;
+        }
+    }
+    const double h = MD.internal_step(data);
+    free(data);
+    return h;
+}
+
+int main(int argc, char **argv)
+{
+    const char *what = argc > 1 ? argv[1] : "";
+    if (strcmp(what, "fmi2") == 0) print_fmi2(default_step(), argc - 2, argv + 2);
+    else if (strcmp(what, "fmi3") == 0) print_fmi3(default_step());
+    else if (strcmp(what, "build") == 0) print_build_description(argc - 2, argv + 2);
+    else {
+        fputs("usage: describe_model fmi2|fmi3|build SOURCE_FILE... > OUT.xml\n", stderr);
+        return 2;
+    }
     return 0;
 }

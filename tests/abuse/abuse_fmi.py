@@ -241,7 +241,7 @@ def assert_usable_after_reset(fmu: Raw):
 
 # ---- serialized states ---------------------------------------------------------------------
 
-# fmi2_layer.c: magic[8] u32 version u32 reserved u64 size u64 guid hash u64 checksum,
+# fmu/src/instance/instance.c: magic[8] u32 version u32 reserved u64 size u64 guid hash u64 checksum,
 # then the Snapshot (Clock, model data); the checksum covers everything after the header.
 HEADER_SIZE = 40
 CHECKSUM_OFFSET = 32

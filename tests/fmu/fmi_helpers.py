@@ -1,10 +1,11 @@
-"""Raw FMI 2.0 access to a built FMU for the FMI-behaviour tests: a logger that
-records messages, status codes instead of exceptions, and NULL pointers."""
+"""Raw FMI 2.0 and FMI 3.0 access to a built FMU for the FMI-behaviour tests: a
+logger that records messages, status codes instead of exceptions, and NULL pointers."""
 from __future__ import annotations
 
 import ctypes
 from pathlib import Path
 
+import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import (
     FMU2Slave,
@@ -108,4 +109,93 @@ class RawFMU:
     def free(self):
         if self.c:
             self.f["fmi2FreeInstance"](self.c)
+            self.c = None
+
+
+class RawFMU3:
+    """One FMI 3.0 Co-Simulation instance with status codes instead of exceptions.
+
+    ``call(name, *args)`` calls fmi3<name> on the instance and returns the fmi3Status;
+    ``log`` holds (status, message) of everything the FMU logged; ``vr`` maps names to
+    value references and ``size`` to element counts (arrays have one reference each)."""
+
+    _extracted: dict[Path, str] = {}
+
+    def __init__(self, fmu: Path, name: str = "instance", instantiate: bool = True):
+        from fmpy.fmi3 import FMU3Slave, fmi3LogMessageCallback
+
+        self.md = read_model_description(str(fmu))
+        if fmu not in RawFMU3._extracted:
+            RawFMU3._extracted[fmu] = extract(str(fmu))
+        self.slave = FMU3Slave(guid=self.md.guid, unzipDirectory=RawFMU3._extracted[fmu],
+                               modelIdentifier=self.md.coSimulation.modelIdentifier,
+                               instanceName=name)
+        self.f = self.slave._functions
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.size = {v.name: int(np.prod(v.shape)) if v.shape else 1
+                     for v in self.md.modelVariables}
+        self.log: list[tuple[int, str]] = []
+        self._logger = fmi3LogMessageCallback(self._log)
+        self.c = None
+        if instantiate:
+            self.instantiate(name)
+
+    def _log(self, env, status, category, message):
+        self.log.append((status, message.decode() if message else ""))
+
+    def instantiate(self, name="instance", token=None, event_mode=False, n_required=0):
+        required = (ctypes.c_uint * max(1, n_required))()
+        self.c = self.f["fmi3InstantiateCoSimulation"](
+            name.encode() if name is not None else None, (token or self.md.guid).encode(),
+            None, False, False, event_mode, False, required, n_required, None, self._logger,
+            self.f["fmi3InstantiateCoSimulation"].argtypes[-1]())  # no intermediate update
+        return self.c
+
+    def call(self, function: str, *args) -> int:
+        return self.f["fmi3" + function](self.c, *args)
+
+    def messages(self) -> str:
+        return "\n".join(m for _, m in self.log)
+
+    def _values(self, names, c_type, values=None):
+        vrs = (ctypes.c_uint * len(names))(*[self.vr[n] for n in names])
+        n = sum(self.size[name] for name in names)
+        array = (c_type * n)(*(values or []))
+        return vrs, array, n
+
+    def get(self, kind: str, names: list[str]) -> list:
+        """Flat list of the values of the named variables (kind: Float64, Int32, Boolean)."""
+        c_type = {"Float64": ctypes.c_double, "Int32": ctypes.c_int32, "Boolean": ctypes.c_bool}
+        vrs, array, n = self._values(names, c_type[kind])
+        status = self.call("Get" + kind, vrs, len(names), array, n)
+        assert status == OK, self.messages()
+        return list(array)
+
+    def set(self, kind: str, values: dict[str, list]) -> int:
+        """Sets the named variables to flat lists of values; returns the fmi3Status."""
+        c_type = {"Float64": ctypes.c_double, "Int32": ctypes.c_int32, "Boolean": ctypes.c_bool}
+        flat = [x for value in values.values() for x in value]
+        vrs, array, n = self._values(list(values), c_type[kind], flat)
+        return self.call("Set" + kind, vrs, len(values), array, n)
+
+    def initialize(self, start: float = 0.0, stop: float | None = None, reals=None) -> int:
+        """Enter (with the experiment) and exit initialization mode; the worst status."""
+        statuses = [self.call("EnterInitializationMode", False, 0.0, start, stop is not None,
+                              stop or 0.0)]
+        if reals:
+            statuses.append(self.set("Float64", reals))
+        statuses.append(self.call("ExitInitializationMode"))
+        return max(statuses)
+
+    def do_step(self, t: float, h: float) -> tuple[int, bool, bool, bool, float]:
+        """(status, eventHandlingNeeded, terminateSimulation, earlyReturn, lastSuccessfulTime)"""
+        flags = [ctypes.c_bool(True) for _ in range(3)]
+        last = ctypes.c_double(float("nan"))
+        status = self.call("DoStep", t, h, True, *(ctypes.byref(f) for f in flags),
+                           ctypes.byref(last))
+        return (status, *(f.value for f in flags), last.value)
+
+    def free(self):
+        if self.c:
+            self.f["fmi3FreeInstance"](self.c)
             self.c = None

@@ -68,7 +68,7 @@ def test_reference_embedding_is_idempotent_and_read_back_exactly(tmp_path, contr
     desc = mr.read_description(fmu)
     times, columns = mr.simulate(fmu, desc)
     every = desc.experiment.decimation
-    assert ref.header == ["time"] + [name for name, _ in desc.outputs]
+    assert ref.header == ["time"] + [label for label, _, _, _ in desc.columns]
     assert len(ref.times) == desc.experiment.steps // every + 1
     for name, values in ref.columns.items():
         np.testing.assert_array_equal(values, columns[name][::every])  # bit-exact round trip
@@ -88,3 +88,18 @@ def test_comparison_catches_a_one_step_offset():
     assert missing.problems == ["no column 'y'"]
     short = check.compare(ref, t[:500], {"y": signal[:500]}, step, 1e-9)
     assert short.problems and "covers" in short.problems[0]
+
+
+def test_fmi3_fmus_ship_the_same_reference_as_their_fmi2_variants(fmi3_fmu):
+    """Same model files, same numbers: the FMI 3 result (arrays as element columns) is the
+    FMI 2 result, to the last bit."""
+    from tests.conftest import fmu_path
+
+    fmi2 = mr.read_reference(fmu_path(fmi3_fmu.stem, 2))
+    fmi3 = mr.read_reference(fmi3_fmu)
+    assert fmi3.header == fmi2.header and len(fmi3.header) > 3
+    np.testing.assert_array_equal(fmi3.times, fmi2.times)
+    for name in fmi2.header[1:]:
+        np.testing.assert_array_equal(fmi3.columns[name], fmi2.columns[name], err_msg=name)
+    with zipfile.ZipFile(fmi3_fmu) as archive:
+        assert "fmi3DoStep" in archive.read(mr.DOC).decode()

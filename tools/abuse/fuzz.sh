@@ -9,7 +9,7 @@
 #
 # Targets: fuzz_deserialize (fmi2DeSerializeFMUstate of arbitrary bytes) and
 # fuzz_calls (random FMI call sequences); each is linked statically with
-# fmi2_layer.c and the model's sources as build.sh ships them.  A crash leaves
+# the FMI 2 API file, the instance core and the model's sources as build.sh ships them.  A crash leaves
 # its input in build/fuzz/artifacts/ and fails the script.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -59,7 +59,7 @@ for target in "${TARGETS[@]}"; do
         mapfile -t sources < <(find "$src" -name '*.c' | sort)
         binary=$OUT/$target-$id
         "$CLANG" -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all \
-            -fno-omit-frame-pointer "${DEFINES[@]}" -I "$FMI_INCLUDE" -I "$src/fmi2" \
+            -fno-omit-frame-pointer "${DEFINES[@]}" -I "$FMI_INCLUDE" -I "$src/instance" \
             -o "$binary" "tools/abuse/$target.c" "${sources[@]}" -lm
         corpus=$OUT/corpus/$target/$id
         rm -rf "$corpus" && mkdir -p "$corpus"

@@ -1,5 +1,5 @@
 /* Shared by the libFuzzer targets fuzz_deserialize.c and fuzz_calls.c: they are
- * linked statically with fmi2_layer.c and one model (tools/abuse/fuzz.sh), so
+ * linked statically with the FMI 2 API file, the instance core and one model (tools/abuse/fuzz.sh), so
  * MODEL_DESCRIPTOR tells them the model's variables.
  *
  * A failed invariant prints why and abort()s, which libFuzzer reports as a
@@ -130,7 +130,7 @@ static int step_is_affordable(fmi2Component c, double H)
     return !(h > 0.0) || H / h <= FUZZ_MAX_STEPS || H / h >= 9007199254740992.0;
 }
 
-/* ---- serialized states (fmi2_layer.c's layout) ----------------------------------- */
+/* ---- serialized states (instance.c's layout) ----------------------------------- */
 
 #define STATE_HEADER_SIZE 40
 #define STATE_CHECKSUM_OFFSET 32

@@ -9,7 +9,7 @@
  *      MAC; anyone can do this).  Compiled out with -DFUZZ_NO_FORGED.
  *   2  a valid state whose first bytes (the header) are replaced
  *   3  the bytes, padded or cut to the size of a valid state
- * Built by tools/abuse/fuzz.sh with fmi2_layer.c and one model. */
+ * Built by tools/abuse/fuzz.sh with the FMI 2 API file, the instance core and one model. */
 #include "fuzz_common.h"
 
 static uint8_t *template_state;

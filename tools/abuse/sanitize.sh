@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Builds the three FMUs' shared libraries with AddressSanitizer and
+# Builds the three FMUs' shared libraries (FMI 2 and FMI 3) with AddressSanitizer and
 # UndefinedBehaviorSanitizer (any report aborts) and runs the FMI, abuse and
 # master-loop tests against them.
 #
@@ -35,24 +35,29 @@ log "building the FMUs (build.sh fmus)"
 ./build.sh fmus >/dev/null
 
 FMI_INCLUDE=$("$PY" -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))')
-rm -rf "$OUT" && mkdir -p "$OUT/fmus"
-for id in "${MODELS[@]}"; do
-    src=build/$id
+rm -rf "$OUT" && mkdir -p "$OUT/fmus" "$OUT/fmi3"
+# FMI 2 layouts in build/<id> (binaries/linux64), FMI 3 in build/fmi3/<id> (binaries/x86_64-linux)
+for fmi in 2 3; do
+  for id in "${MODELS[@]}"; do
+    if [ "$fmi" = 2 ]; then src=build/$id dst=$OUT/$id fmu=$OUT/fmus/$id.fmu platform=linux64
+    else src=build/fmi3/$id dst=$OUT/fmi3/$id fmu=$OUT/fmi3/$id.fmu platform=x86_64-linux; fi
     [ -f "$src/modelDescription.xml" ] && [ -d "$src/sources" ] || die "$src is not an FMU layout"
-    log "sanitized $id"
-    cp -r "$src" "$OUT/$id"
-    rm -f "$OUT/$id/describe_model"
-    mapfile -t sources < <(cd "$OUT/$id/sources" && find . -name '*.c' | sort)
-    (cd "$OUT/$id/sources" && "$CC" "${CFLAGS[@]}" "${SANITIZE[@]}" -shared -I "$FMI_INCLUDE" \
-        -o "$OUT/$id/binaries/linux64/$id.so" "${sources[@]}" -lm)
-    symbols=$(nm -D "$OUT/$id/binaries/linux64/$id.so")
-    grep -q ' T fmi2DoStep$' <<< "$symbols" || die "$id.so does not export fmi2DoStep"
+    log "sanitized $id (FMI $fmi)"
+    cp -r "$src" "$dst"
+    rm -f "$dst/describe_model"
+    mapfile -t sources < <(cd "$dst/sources" && find . -name '*.c' | sort)
+    (cd "$dst/sources" && "$CC" "${CFLAGS[@]}" "${SANITIZE[@]}" -shared -I "$FMI_INCLUDE" \
+        -o "$dst/binaries/$platform/$id.so" "${sources[@]}" -lm)
+    symbols=$(nm -D "$dst/binaries/$platform/$id.so")
+    grep -q " T fmi${fmi}DoStep\$" <<< "$symbols" || die "$id.so does not export fmi${fmi}DoStep"
     grep -q ' U __asan_report_load8$' <<< "$symbols" || die "$id.so is not instrumented"
-    "$PY" -m harness.package "$OUT/$id" "$OUT/fmus/$id.fmu"
+    "$PY" -m harness.package "$dst" "$fmu"
+  done
 done
 
 log "tests against the sanitized FMUs"
 export STO_FMU_DIR=$OUT/fmus
+export STO_FMI3_DIR=$OUT/fmi3
 export STO_EXPECT_SANITIZED=1
 export PYTHONPATH=$REPO/tools/abuse${PYTHONPATH:+:$PYTHONPATH}
 # Python itself leaks by design at exit: leaks are memcheck.sh's business.

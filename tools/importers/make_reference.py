@@ -18,7 +18,9 @@ the Modelica Reference FMUs (``BouncingBall_out.csv``, role ``result``):
     documentation/fmi-ls-ref.txt                            what the result is (recommended by the standard)
 
 CSV: header ``time,<output names in modelDescription order>`` (names quoted when
-they contain a comma, RFC 4180), one row per output point, values as the shortest
+they contain a comma, RFC 4180; an FMI 3 array output as one column per element,
+named as FMI 2 names the elements: ``x[2]``, ``A[1,3]``, row-major, so that the
+FMI 2 and FMI 3 variants of a model have the same columns), one row per output point, values as the shortest
 decimal that reads back to the same double (Python repr), Booleans as 1/0.
 Rows: the state after initialization and every ``decimation``-th communication
 point up to and including stopTime, ``decimation = ceil(steps / MAX_INTERVALS)``,
@@ -80,8 +82,21 @@ class Experiment:
 @dataclass
 class Description:
     model_name: str
-    outputs: list[tuple[str, str]]  # (name, type) in modelDescription order
+    fmi_version: str  # "2.0" or "3.0"
+    outputs: list[tuple[str, str, tuple[int, ...]]]  # (name, type, array shape) in order
     experiment: Experiment
+
+    @property
+    def columns(self) -> list[tuple[str, str, str, tuple[int, ...]]]:
+        """(column name, type, variable name, element index) of every output element."""
+        import itertools
+
+        result = []
+        for name, type_, shape in self.outputs:
+            for index in itertools.product(*(range(n) for n in shape)):
+                label = f"{name}[{','.join(str(i + 1) for i in index)}]" if shape else name
+                result.append((label, type_, name, index))
+        return result
 
 
 def read_description(fmu: Path) -> Description:
@@ -94,12 +109,13 @@ def read_description(fmu: Path) -> Description:
         raise SystemExit(f"{fmu}: the DefaultExperiment needs stopTime and stepSize")
     exp = Experiment(float(de.startTime or 0.0), float(de.stopTime), float(de.stepSize),
                      float(de.tolerance) if de.tolerance is not None else None)
-    outputs = [(v.name, v.type) for v in md.modelVariables if v.causality == "output"]
+    outputs = [(v.name, v.type, tuple(v.shape or ())) for v in md.modelVariables
+               if v.causality == "output"]
     if not outputs:
         raise SystemExit(f"{fmu}: no outputs to record")
     if md.coSimulation is None:
         raise SystemExit(f"{fmu}: no Co-Simulation interface")
-    return Description(md.modelName, outputs, exp)
+    return Description(md.modelName, md.fmiVersion, outputs, exp)
 
 
 def result_name(desc: Description) -> str:
@@ -115,16 +131,16 @@ def simulate(fmu: Path, desc: Description):
     result = simulate_fmu(str(fmu), fmi_type="CoSimulation", start_time=exp.start,
                           stop_time=exp.stop, output_interval=exp.step,
                           relative_tolerance=exp.tolerance,
-                          output=[name for name, _ in desc.outputs])
+                          output=[name for name, _, _ in desc.outputs])
     if len(result) != exp.steps + 1:
         raise SystemExit(f"{fmu}: fmpy returned {len(result)} rows for {exp.steps} steps")
-    columns = {name: np.asarray(result[name], dtype=float) for name, _ in desc.outputs}
+    columns = {name: np.asarray(result[name], dtype=float) for name, _, _ in desc.outputs}
     return np.asarray(result["time"], dtype=float), columns
 
 
 def format_value(x, type_: str) -> str:
     """Shortest text that reads back to the same double; Integer and Boolean as integers."""
-    if type_ in ("Integer", "Boolean", "Enumeration"):
+    if type_ in ("Integer", "Boolean", "Enumeration") or "Int" in type_:
         return str(int(x))
     return repr(float(x))
 
@@ -138,10 +154,11 @@ def reference_csv(desc: Description, times, columns) -> str:
         rows.append(n)
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(["time"] + [name for name, _ in desc.outputs])
+    writer.writerow(["time"] + [label for label, _, _, _ in desc.columns])
     for k in rows:
         t = exp.stop if k == n else exp.start + k * exp.step
-        writer.writerow([f"{t:.15g}"] + [format_value(columns[name][k], type_) for name, type_ in desc.outputs])
+        writer.writerow([f"{t:.15g}"] + [format_value(columns[name][k][index], type_)
+                                         for _, type_, name, index in desc.columns])
     return out.getvalue()
 
 
@@ -174,17 +191,22 @@ def manifest_xml(desc: Description) -> str:
 
 def documentation(desc: Description) -> str:
     exp = desc.experiment
+    if desc.fmi_version.startswith("2"):
+        setup = f"setupExperiment(startTime = {exp.start:g}, stopTime = {exp.stop:g}),\nthen fmi2DoStep"
+    else:
+        setup = (f"fmi3EnterInitializationMode(startTime = {exp.start:g}, stopTime = {exp.stop:g}),"
+                 f"\nthen fmi3DoStep")
     return f"""Reference result of {desc.model_name} (FMI-LS-REF {LS_VERSION})
 
 {LS_REF_DIR}/{result_name(desc)} is the output of this FMU's default experiment:
-FMI 2.0 Co-Simulation, setupExperiment(startTime = {exp.start:g}, stopTime = {exp.stop:g}),
-then fmi2DoStep at the communication points startTime + k * {exp.step:g} s
+FMI {desc.fmi_version} Co-Simulation, {setup} at the communication points startTime + k * {exp.step:g} s
 ({exp.steps} steps, the last one ending exactly at stopTime), no inputs set (start values),
 computed with fmpy's simulate_fmu.
 
 Rows: after initialization, then every {exp.decimation}th communication point
-(every {exp.output_interval:g} s) and stopTime. Columns: time, then the {len(desc.outputs)} outputs
-in modelDescription.xml order; Booleans as 1/0; values printed to round-trip exactly.
+(every {exp.output_interval:g} s) and stopTime. Columns: time, then the {len(desc.columns)} output
+elements in modelDescription.xml order (an array output as one column per element, x[i] or
+A[i,j], row-major); Booleans as 1/0; values printed to round-trip exactly.
 
 The FMU is deterministic with a fixed internal step, so any importer that communicates
 at these points should reproduce every value to rounding: the project's CI
@@ -248,7 +270,7 @@ def make_reference(fmu: Path, csv_out: Path | None = None) -> str:
         embed_in_archive(fmu, new)
     rows = text.count("\n") - 1
     return (f"{fmu}: reference {LS_REF_DIR}/{result_name(desc)} ({rows} rows x "
-            f"{len(desc.outputs)} outputs, every {desc.experiment.output_interval:g} s)")
+            f"{len(desc.columns)} outputs, every {desc.experiment.output_interval:g} s)")
 
 
 # ---- reading, for check.py -----------------------------------------------------------

@@ -15,7 +15,7 @@
 #include "../core/noise_adaptive.h"
 #include "../core/small_loops.h"
 #include "../core/super_twisting.h"
-#include "../fmi2/model_interface.h"
+#include "../instance/model_interface.h"
 
 #define MAX_N STO_MAX_DOF
 #define MAX_L ID_MAX_REGRESSORS
@@ -621,7 +621,7 @@ static ModelStatus check_restored(const void *data, const ModelLogger *log)
     for (int j = 0; ok && j < d->m; ++j) ok = d->selected[j] >= 0 && d->selected[j] < regressors;
     if (!ok) {
         log->log(log->context, MODEL_ERROR,
-                 "fmi2DeSerializeFMUstate: the observer's internal counts are inconsistent "
+                 "deserialized FMU state: the observer's internal counts are inconsistent "
                  "(n = %d, observer n = %d, m = %d); state refused", d->n, d->obs.n, d->m);
         return MODEL_ERROR;
     }

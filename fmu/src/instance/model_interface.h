@@ -1,5 +1,6 @@
-/* The contract between the model-independent FMI 2.0 layer (fmi2_layer.c)
- * and one model (observer, plant, controller).  No FMI types appear here:
+/* The contract between the model-independent instance core (instance.c,
+ * under the FMI 2 and FMI 3 API files) and one model (observer, plant,
+ * controller).  No FMI types appear here:
  * a model is a plain-C variable table plus a few hooks over a plain struct
  * ("model data") that holds every parameter, input, output and state.
  *
@@ -13,7 +14,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-/* Same numbering as fmi2Status so the layer can pass it through. */
+/* Same numbering as fmi2Status and fmi3Status so the API files can pass it through. */
 typedef enum { MODEL_OK = 0, MODEL_WARNING = 1, MODEL_ERROR = 3 } ModelStatus;
 
 typedef enum { TYPE_REAL, TYPE_INTEGER, TYPE_BOOLEAN } VariableType;
@@ -63,13 +64,20 @@ typedef struct {
 #define OUTPUT(...) .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_CONTINUOUS, \
                     UNBOUNDED, __VA_ARGS__
 
+/* printf-style format checking.  MinGW's "printf" means Microsoft's runtime
+ * (no %zu); the instance core formats with MinGW's C99 printf instead. */
+#if defined(__MINGW32__)
+#define PRINTF_LIKE(format_index, first_arg) \
+    __attribute__((format(gnu_printf, format_index, first_arg)))
+#elif defined(__GNUC__)
+#define PRINTF_LIKE(format_index, first_arg) __attribute__((format(printf, format_index, first_arg)))
+#else
+#define PRINTF_LIKE(format_index, first_arg)
+#endif
+
 /* Messages go through this; the model never sees the FMI logger. */
 typedef struct {
-    void (*log)(void *context, ModelStatus status, const char *format, ...)
-#if defined(__GNUC__)
-        __attribute__((format(printf, 3, 4)))
-#endif
-        ;
+    void (*log)(void *context, ModelStatus status, const char *format, ...) PRINTF_LIKE(3, 4);
     void *context;
 } ModelLogger;
 
@@ -84,12 +92,12 @@ typedef struct {
     double default_stop_time;
     double default_tolerance;
 
-    /* Cross-parameter checks and derived quantities, at fmi2ExitInitializationMode.
+    /* Cross-parameter checks and derived quantities, when initialization mode is left.
      * May log warnings; returns MODEL_ERROR (after logging why) to refuse. */
     ModelStatus (*initialize)(void *data, double start_time, const ModelLogger *log);
     /* The fixed internal step h of this instance (valid after initialize). */
     double (*internal_step)(const void *data);
-    /* The most internal steps one fmi2DoStep may take (the model's parameter
+    /* The most internal steps one doStep may take (the model's parameter
      * max_internal_steps, MODEL_MAX_INTERNAL_STEPS_VARIABLE): the layer refuses
      * a longer communication step before doing any work, so that no call runs
      * for hours and cannot be cancelled. */
@@ -119,8 +127,8 @@ typedef struct {
     {.name = "max_internal_steps", .vr = MAX_INTERNAL_STEPS_VR, .type = TYPE_INTEGER,             \
      PARAM(.offset = (field_offset), .start = MAX_INTERNAL_STEPS_DEFAULT, .min = 1,               \
            .max = 2147483647,                                                                     \
-           .description = "Most internal steps one fmi2DoStep may take (10^7: about 0.1 to 2 "   \
-                          "s of work); a longer communication step is refused with fmi2Error "   \
+           .description = "Most internal steps one doStep may take (10^7: about 0.1 to 2 "       \
+                          "s of work); a longer communication step is refused with an error "    \
                           "before any work. Raise it for longer steps (docs/observer.md, Limits)")}
 
 /* Each model file defines exactly one of these (read-only, not state). */
