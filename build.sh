@@ -134,9 +134,12 @@ build_all() {
 
 # ---- the Python package: FMUs as package data, a wheel, the API documentation ----
 package_python() {
-    log "packaging the harness: FMUs into harness/data, wheel into $BUILD/wheel, API docs"
+    log "packaging the harness: FMUs into harness/data, C core into harness/robot/core, wheel into $BUILD/wheel, API docs"
     rm -rf harness/data && mkdir -p harness/data
     cp "$BUILD"/fmus/*.fmu harness/data/
+    # the C core that harness.robot.native compiles, for an installed package
+    rm -rf harness/robot/core && mkdir -p harness/robot/core
+    cp fmu/src/core/*.c fmu/src/core/*.h harness/robot/core/
     rm -rf "$BUILD/wheel" "$BUILD/api"
     "$PY" -m pip wheel --quiet --disable-pip-version-check --no-deps --no-build-isolation \
         --wheel-dir "$BUILD/wheel" .

@@ -23,12 +23,14 @@ import ctypes
 import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
 from . import native
 from .fmus import FMUError, FMUInstance, Value
+from .user_dynamics import AttachedDynamics, StepHook
 
 CALLS = ("fmi2DoStep", "fmi2GetReal", "fmi2SetReal")
 
@@ -192,8 +194,9 @@ def _run_native(plan: _Plan, records: np.ndarray, row: int, t0: float, H: float,
 
 
 def _run_python(plan: _Plan, records: np.ndarray, row: int, t0: float, H: float, k_begin: int,
-                k_end: int, decimation: int) -> int:
-    """The same loop as native/master_loop.c in plain Python.
+                k_end: int, decimation: int, hook: StepHook | None = None) -> int:
+    """The same loop as native/master_loop.c in plain Python; ``hook`` (user dynamics)
+    is called just before its FMU's doStep, after that FMU's links are set.
 
     Calls are batched (one fmi2GetReal per source FMU and one fmi2SetReal per
     target FMU and step); reads have no side effects, so the values and the
@@ -229,6 +232,7 @@ def _run_python(plan: _Plan, records: np.ndarray, row: int, t0: float, H: float,
     probe_vrs = [(fmu, (ctypes.c_uint * 1)(vr)) for fmu, vr in plan.probes]
     probe_value = (ctypes.c_double * 1)()
     one = ctypes.c_size_t(1)
+    hook_fmu = plan.index[hook.observer_name] if hook is not None else -1
     for k in range(k_begin, k_end):
         t = t0 + k * H
         for f, reads, from_signals, noises, targets, n, values in steps:
@@ -241,6 +245,8 @@ def _run_python(plan: _Plan, records: np.ndarray, row: int, t0: float, H: float,
                 values[i] = values[i] + signals[noise][k]
             if n.value and set_real[f](components[f], targets, n, values) >= 3:
                 raise plan.failure(k, f, 2, t0, H)
+            if f == hook_fmu:
+                hook(k, t)
             if do_step[f](components[f], c_double(t), step, no) >= 3:
                 raise plan.failure(k, f, 0, t0, H)
         if (k + 1) % decimation == 0:
@@ -257,12 +263,15 @@ def _run_python(plan: _Plan, records: np.ndarray, row: int, t0: float, H: float,
 def run(sim: CoSimulation, start_time: float, stop_time: float, step: float, probes: Sequence[str],
         *, decimation: int = 1, signals: Mapping[str, np.ndarray] | None = None,
         use_native: bool | None = None,
-        progress: Callable[[float], None] | None = None) -> Records:
+        progress: Callable[[float], None] | None = None,
+        dynamics: AttachedDynamics | None = None) -> Records:
     """Run the initialized co-simulation from start_time to stop_time.
 
     ``signals`` are sampled at t_k = start_time + k*step, k = 0 .. n_steps-1.
     ``use_native``: True forces the native loop, False the Python loop, None
     picks native when it can be compiled.  ``progress`` receives the fraction done.
+    ``dynamics``: user dynamics computing the observer's F and phi at each step
+    (harness.user_dynamics); they run in the Python loop only.
     """
     if not step > 0:
         raise ValueError(f"communication step {step} must be > 0")
@@ -277,8 +286,12 @@ def run(sim: CoSimulation, start_time: float, stop_time: float, step: float, pro
         fmu, variable = sim._split(probe)
         records[0, p + 1] = float(sim.fmus[fmu].get([variable])[0])
 
-    runner = _run_python
-    if use_native is None or use_native:
+    hook = StepHook(sim, dynamics, signals) if dynamics is not None else None
+    if hook is not None and use_native:
+        raise ValueError("user dynamics run in the Python loop only: use_native must be "
+                         "None or False")
+    runner = _run_python if hook is None else partial(_run_python, hook=hook)
+    if hook is None and (use_native is None or use_native):
         try:
             native.load()
             runner = _run_native

@@ -2,55 +2,29 @@
 
 The shared library is compiled on first use from the core sources and
 native/robot_native.c (batch entry points) with the project's C flags, and cached
-like the native master loop (harness.native.cache_dir), keyed by a hash of the sources.
+like the native master loop (harness.native.compile_library).  The core sources are
+the checkout's fmu/src/core; an installed package has its copy in core/ (made by
+./build.sh, package_python).
 """
 from __future__ import annotations
 
 import ctypes
-import hashlib
-import os
-import shutil
-import subprocess
 from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 
-from ..native import NativeUnavailable, cache_dir
+from ..native import compile_library
 
 HERE = Path(__file__).resolve().parent
-CORE = HERE.parents[1] / "fmu" / "src" / "core"
+CHECKOUT_CORE = HERE.parents[1] / "fmu" / "src" / "core"
+# the checkout's sources win, so that an edit is compiled without rebuilding the package
+CORE = CHECKOUT_CORE if CHECKOUT_CORE.is_dir() else HERE / "core"
 CORE_SOURCES = ("rigid_body.c", "regressor_identifier.c", "super_twisting.c",
                 "implicit_twisting.c", "noise_adaptive.c", "gains.c")
 WRAPPER = HERE / "native" / "robot_native.c"
-CFLAGS = ["-std=c11", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2", "-fPIC", "-shared"]
-
 _double_p = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
 _int_p = np.ctypeslib.ndpointer(dtype=np.int32, flags="C_CONTIGUOUS")
-
-
-def compile_library(name: str, sources: list[Path], include: Path) -> Path:
-    """Compile `sources` into a cached shared library (rebuilt when a source changes)."""
-    missing = [str(s) for s in sources if not s.exists()]
-    if missing:
-        raise NativeUnavailable(f"C sources not found: {', '.join(missing)} (the harness needs "
-                                f"the repository's fmu/src/core next to it)")
-    digest = hashlib.sha256(b"".join(s.read_bytes() for s in sources) +
-                            b"".join(h.read_bytes() for h in sorted(include.glob("*.h"))) +
-                            " ".join(CFLAGS).encode()).hexdigest()[:16]
-    library = cache_dir() / f"{name}-{digest}.so"
-    if not library.exists():
-        compiler = os.environ.get("CC", "gcc")
-        if shutil.which(compiler) is None:
-            raise NativeUnavailable(f"C compiler {compiler!r} not found")
-        library.parent.mkdir(parents=True, exist_ok=True)
-        partial = library.with_suffix(f".{os.getpid()}.tmp")
-        result = subprocess.run([compiler, *CFLAGS, f"-I{include}", "-o", str(partial),
-                                 *map(str, sources), "-lm"], capture_output=True, text=True)
-        if result.returncode != 0:
-            raise NativeUnavailable(f"compiling {name} failed:\n{result.stderr}")
-        partial.replace(library)  # atomic: concurrent runs never load a half-written file
-    return library
 
 
 @lru_cache(maxsize=1)
