@@ -132,7 +132,6 @@ def cmd_identify(args) -> int:
         return identify_command(args, _output_folder(args.out, "identify"))
     from .fmus import check_parameters
     from .identify import DataError, ReadOptions, identify_file
-    from .plots import plot_identification
     from .recording import parse_columns
 
     fmu = _fmu_dir(args) / "SuperTwistingObserver.fmu"
@@ -159,6 +158,8 @@ def cmd_identify(args) -> int:
         print(f"note: samples {summary.step:g} s apart are more than the observer's largest "
               f"internal step: h = {summary.h:g} s ({round(summary.step / summary.h)} internal "
               f"steps per sample); set it with --param h=...")
+    from .plots import plot_identification  # matplotlib: imported once the log is through
+
     plot = plot_identification(summary.figure_rows["t"], summary.figure_rows, out,
                                nominal=_nominal(fmu, parameters))
     (out / "estimates.json").write_text(json.dumps(

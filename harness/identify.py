@@ -155,11 +155,12 @@ def identify_file(path: str | Path, observer_fmu: Path, parameters: Mapping[str,
     """Streams the recording at ``path`` through the observer: writes t (as written in
     the file), y, u and the outputs of every ``decimation``-th sample to ``out_csv``
     and returns the Summary (with at most 2 * PLOT_POINTS rows kept for a figure)."""
+    from .background import WriteBehind, read_ahead
     from .tables import CsvStream
 
     if decimation < 1:
         raise ValueError(f"decimation {decimation} must be >= 1")
-    blocks = read_blocks(path, options)
+    blocks = read_ahead(read_blocks(path, options))
     first = next(blocks)
     observer = None
     kept = _Thinned(PLOT_POINTS)
@@ -167,19 +168,16 @@ def identify_file(path: str | Path, observer_fmu: Path, parameters: Mapping[str,
     last: dict[str, float] = {}
     step = _block_step(first)
     try:
-        with CsvStream(out_csv) if out_csv else _NoStream() as stream:
+        with CsvStream(out_csv) if out_csv else _NoStream() as stream, \
+                WriteBehind(stream.write) as writer:
             for block in _chain(first, blocks):
                 if observer is None:
                     observer = _Run(Path(observer_fmu), parameters, step, input_hold)
                 outputs = observer.feed(block.y, block.u)
-                columns = {"t": block.time, "y": block.y, "u": block.u, **outputs}
-                rows = np.arange(index, index + len(block.y))
-                chosen = rows % decimation == 0
-                stream.write({"t": block.stamps.filter(chosen) if not chosen.all()
-                              else block.stamps,
-                              **{k: v[chosen] for k, v in columns.items() if k != "t"}})
-                kept.add(rows, columns)
-                last = {k: float(v[-1]) for k, v in columns.items()}
+                columns = {"y": block.y, "u": block.u, **outputs}
+                writer.put(_every(decimation, index, block.stamps, columns))
+                kept.add(index, {"t": block.time, **columns})
+                last = {k: float(v[-1]) for k, v in (("t", block.time), *columns.items())}
                 index += len(block.y)
             flags = observer.flags()
             warnings = observer.observer.warnings()
@@ -191,6 +189,16 @@ def identify_file(path: str | Path, observer_fmu: Path, parameters: Mapping[str,
     return Summary(estimates["final"], estimates["standard_error"], estimates["noise_std"],
                    last["excitation"], flags["converged"], flags["identifier_active"], index,
                    step, h, str(first.stamps[0].as_py()), warnings, kept.columns())
+
+
+def _every(decimation: int, index: int, stamps, columns: Mapping[str, np.ndarray]
+           ) -> dict[str, object]:
+    """The rows of a block (its first one the recording's row ``index``) whose row number
+    is a multiple of ``decimation``: t (the stamps as written) and the columns."""
+    if decimation == 1:
+        return {"t": stamps, **columns}
+    chosen = np.arange(-index % decimation, len(stamps), decimation)
+    return {"t": stamps.take(chosen), **{k: v[chosen] for k, v in columns.items()}}
 
 
 def _block_step(block: Block) -> float:
@@ -225,10 +233,12 @@ class _Thinned:
         self.parts: list[dict[str, np.ndarray]] = []
         self.count = 0
 
-    def add(self, rows: np.ndarray, columns: Mapping[str, np.ndarray]) -> None:
-        chosen = rows % self.stride == 0
-        self.parts.append({k: np.asarray(v)[chosen] for k, v in columns.items()})
-        self.count += int(chosen.sum())
+    def add(self, start: int, columns: Mapping[str, np.ndarray]) -> None:
+        """The next rows of the series, the first one its row ``start``."""
+        first = -start % self.stride  # the first row of these that is a multiple of stride
+        part = {k: np.asarray(v)[first::self.stride].copy() for k, v in columns.items()}
+        self.parts.append(part)
+        self.count += len(next(iter(part.values())))
         if self.count > 2 * self.limit:
             merged = self.columns()
             self.stride *= 2

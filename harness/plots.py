@@ -10,6 +10,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
+from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
 
 from .master import Records
@@ -24,6 +25,7 @@ COEFFICIENTS = [("a1 = MgL/(2J)", "1/s²"), ("a2 = Vs/J", "1/s"), ("a3 = Ps/J", 
                 ("c4", "1/s²"), ("c5", "rad/s²")]
 TRUE_STYLE = {"color": "k", "ls": "--", "lw": 1.0, "zorder": 3}
 NOMINAL_STYLE = {"color": "0.5", "ls": ":", "lw": 1.2, "zorder": 2}
+_FAINT_C0 = tuple(0.3 * c + 0.7 for c in to_rgb("C0"))  # C0 at alpha 0.3 on white (see save)
 
 
 def _title(s: Scenario, what: str, text: str) -> str:
@@ -32,8 +34,16 @@ def _title(s: Scenario, what: str, text: str) -> str:
 
 
 def save(fig: Figure, path: Path, dpi: int = 110) -> Path:
-    """Lays the figure out (nothing clipped) and writes it."""
-    fig.savefig(path, dpi=dpi, bbox_inches="tight")
+    """Lays the figure out (nothing clipped) and writes it.
+
+    Agg draws a line of many points in pieces of 5000: drawn whole, a dense line
+    (an oscillating estimate over a 10^4 s log) took 180 MB (bench/identify_long_log.py).
+    The joints of the pieces are invisible on opaque lines; a translucent line would
+    show them darker, so the faint lines are drawn in their blended colour instead."""
+    from matplotlib import rc_context
+
+    with rc_context({"agg.path.chunksize": 5000}):
+        fig.savefig(path, dpi=dpi, bbox_inches="tight")
     return path
 
 
@@ -141,7 +151,7 @@ def plot_identification(t: np.ndarray, columns: Mapping[str, np.ndarray], out: P
     # with its mean over 1 % of the record on top, and the axis fitted to that mean
     z = np.asarray(columns["z_eq_filtered"])
     smooth = _moving_mean(z, max(1, len(z) // 100))
-    axes[1].plot(t, z, lw=0.4, color="C0", alpha=0.3, label="filtered z_eq")
+    axes[1].plot(t, z, lw=0.4, color=_FAINT_C0, label="filtered z_eq")
     axes[1].plot(t, smooth, lw=1.0, color="C0", label="its moving mean (1 % of the record)")
     axes[1].set_ylim(*_robust_limits(smooth))
     axes[1].set_ylabel("perturbation [rad/s²]")

@@ -13,10 +13,10 @@ clock jitter of a logger); anything else is refused unless ``resample`` puts the
 recording on a uniform grid first (linear interpolation of y; u held or
 interpolated, see :func:`harness.identify.held_input`).
 
-Long logs are read in blocks (pyarrow's streaming CSV reader): memory does not
-grow with the length of the file.  A file the fast reader refuses is read again
-by a careful line-by-line parser (:func:`_exact_error`) only to name the line
-and the problem.
+Long logs are read in blocks of whole lines, each parsed by pyarrow's CSV
+reader: memory does not grow with the length of the file.  A file the fast
+reader refuses is read again by a careful line-by-line parser
+(:func:`_exact_error`) only to name the line and the problem.
 """
 from __future__ import annotations
 
@@ -34,7 +34,7 @@ if TYPE_CHECKING:
 
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9, "min": 60.0}
 DEFAULT_TOLERANCE = 0.01  # of the sampling step
-BLOCK_BYTES = 1 << 22  # 4 MB of CSV text per block (about 10^5 rows of t, y, u)
+BLOCK_BYTES = 1 << 20  # 1 MB of CSV text per block (about 2 10^4 rows of t, y, u)
 
 
 class DataError(ValueError):
@@ -148,32 +148,52 @@ def read_blocks(path: str | Path, options: ReadOptions | None = None) -> Iterato
     return checked
 
 
+def _line_blocks(path: Path, size: int) -> Iterator[bytes]:
+    """The file's bytes in blocks of whole lines: each block is what is left of the
+    previous one after its last newline plus the next ``size`` bytes, cut after its last
+    newline (the blocks of pyarrow's streaming reader).  Read here one at a time: that
+    reader reads up to 32 blocks ahead of a slow consumer (128 MB at 4 MB a block)."""
+    rest = b""
+    with path.open("rb") as handle:
+        while chunk := handle.read(size):
+            text = rest + chunk
+            end = text.rfind(b"\n") + 1
+            if end:
+                rest = text[end:]
+                yield text[:end]
+            else:
+                rest = text
+    if rest:
+        yield rest
+
+
 def _fast_blocks(path: Path, header: list[str], index: dict[str, int], options: ReadOptions
                  ) -> Iterator[tuple["pa.StringArray", np.ndarray, np.ndarray, np.ndarray,
                                      np.ndarray]]:
-    """(stamps as text, stamps as numbers, stamps since the first one, y, u) blocks from
-    pyarrow; any complaint of pyarrow (or a value that is missing or not finite) is turned
-    into the exact message by _exact_error."""
+    """(stamps as text, stamps as numbers, stamps since the first one, y, u) blocks parsed
+    by pyarrow; any complaint of pyarrow (or a value that is missing or not finite) is
+    turned into the exact message by _exact_error."""
     import pyarrow as pa
     import pyarrow.compute as pc
     import pyarrow.csv as pacsv
 
     names = [f"c{i}" for i in range(len(header))]
     wanted = {role: names[i] for role, i in index.items()}
+    convert = pacsv.ConvertOptions(
+        include_columns=list(dict.fromkeys(wanted.values())),
+        column_types={wanted["t"]: pa.string(), wanted["y"]: pa.float64(),
+                      wanted["u"]: pa.float64()})
     origin = None
     try:
-        reader = pacsv.open_csv(
-            path,
-            read_options=pacsv.ReadOptions(column_names=names, skip_rows=1,
-                                           block_size=BLOCK_BYTES),
-            convert_options=pacsv.ConvertOptions(
-                include_columns=list(dict.fromkeys(wanted.values())),
-                column_types={wanted["t"]: pa.string(), wanted["y"]: pa.float64(),
-                              wanted["u"]: pa.float64()}))
-        for batch in reader:
-            stamps = pc.utf8_trim_whitespace(batch.column(wanted["t"]))
-            y = batch.column(wanted["y"]).to_numpy(zero_copy_only=False)
-            u = batch.column(wanted["u"]).to_numpy(zero_copy_only=False)
+        for number, text in enumerate(_line_blocks(path, BLOCK_BYTES)):
+            table = pacsv.read_csv(pa.py_buffer(text), read_options=pacsv.ReadOptions(
+                column_names=names, skip_rows=1 if number == 0 else 0,
+                block_size=len(text) + 1, use_threads=False), convert_options=convert)
+            if not table.num_rows:
+                continue
+            stamps = pc.utf8_trim_whitespace(table.column(wanted["t"]).combine_chunks())
+            y = table.column(wanted["y"]).to_numpy()
+            u = table.column(wanted["u"]).to_numpy()
             values = pc.cast(stamps, pa.float64()).to_numpy(zero_copy_only=False)
             if not (np.isfinite(values).all() and np.isfinite(y).all()
                     and np.isfinite(u).all()):
