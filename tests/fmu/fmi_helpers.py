@@ -19,6 +19,21 @@ from fmpy import calloc, free
 OK, WARNING, DISCARD, ERROR = 0, 1, 2, 3
 
 
+def instances(raw_class, fmu: Path):
+    """A pytest fixture body: yields a factory of ``raw_class`` (RawFMU or RawFMU3)
+    instances of ``fmu`` and frees every one it made when the test ends."""
+    made = []
+
+    def factory(name: str = "instance", instantiate: bool = True):
+        instance = raw_class(fmu, name, instantiate=instantiate)
+        made.append(instance)
+        return instance
+
+    yield factory
+    for instance in made:
+        instance.free()
+
+
 class RawFMU:
     """One instance; ``call(name, *args)`` returns the fmi2Status, ``log`` holds messages."""
 

@@ -16,7 +16,7 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.model_description import read_build_description
 from fmpy.validation import validate_fmu
 
-from .fmi_helpers import ERROR, OK, RawFMU3
+from .fmi_helpers import ERROR, OK, RawFMU3, instances
 
 FMI2_OBSERVER_ELEMENTS = {"y": 4, "x2_hat": 4, "theta_hat": 32}
 
@@ -24,16 +24,7 @@ FMI2_OBSERVER_ELEMENTS = {"y": 4, "x2_hat": 4, "theta_hat": 32}
 @pytest.fixture
 def make(observer_fmi3):
     """Observer instances on demand, all freed at the end of the test."""
-    made = []
-
-    def factory(name="instance", instantiate=True):
-        instance = RawFMU3(observer_fmi3, name, instantiate=instantiate)
-        made.append(instance)
-        return instance
-
-    yield factory
-    for instance in made:
-        instance.free()
+    yield from instances(RawFMU3, observer_fmi3)
 
 
 # ---- description ---------------------------------------------------------------------

@@ -17,7 +17,7 @@ import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
-from .fmi_helpers import ERROR, OK, WARNING, RawFMU
+from .fmi_helpers import ERROR, OK, WARNING, RawFMU, instances
 
 LAST_SUCCESSFUL_TIME = 2  # fmi2StatusKind fmi2LastSuccessfulTime
 
@@ -32,16 +32,7 @@ def fmu(observer_fmu):
 @pytest.fixture
 def make(observer_fmu):
     """Instances on demand, all freed at the end of the test."""
-    made = []
-
-    def factory(name="instance", instantiate=True):
-        instance = RawFMU(observer_fmu, name, instantiate=instantiate)
-        made.append(instance)
-        return instance
-
-    yield factory
-    for instance in made:
-        instance.free()
+    yield from instances(RawFMU, observer_fmu)
 
 
 def _drive(fmu: RawFMU, steps: int, h: float = 1e-4, t0: float = 0.0, H: float | None = None):
