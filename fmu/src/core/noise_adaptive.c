@@ -119,8 +119,8 @@ static void start_member(AdaptiveMember *m, const StoTrace *trace, int i, int k,
     m->mid = trace->mid_velocity[i][k];
     m->xi = 0.0; /* the saturated injection would be a transient of +-alpha1 */
     m->x2_now = trace->velocity[i][k];
-    m->a_current = sto_acceleration(a, m->x2_now, trace->velocity_sign[i][k]);
-    m->a_mean = m->a_current;
+    m->a_free = a.held - a.viscous * m->x2_now;
+    m->a_mean = sto_acceleration(a, m->x2_now, trace->velocity_sign[i][k]);
     m->averaged = m->published = trace->z_filtered[i][k]; /* the published perturbation */
 }
 
@@ -133,10 +133,7 @@ static inline double member_step(AdaptiveMember *m, const AdaptiveGains *g, doub
     m->mid += h * (m->a_mean + m->xi) + g->k2 * r;
     m->xi += g->k3 * r;
     m->z1 = y - (1.0 - g->k1) * r;
-    m->x2_now = m->mid + 0.5 * h * (m->a_current + m->xi);
-    const double acceleration = sto_acceleration(a, m->x2_now, sto_sign(m->x2_now));
-    m->a_mean = 0.5 * (m->a_current + acceleration);
-    m->a_current = acceleration;
+    m->x2_now = implicit_advance(m->mid, m->xi, a, h, &m->a_free, &m->a_mean);
     return r;
 }
 
@@ -303,10 +300,8 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
         for (int k = 0; k < count; ++k) {
             if (bank->started[i]) {
                 const unsigned age = bank->age[i]++;
-                const double x2 = trace->velocity[i][k], v = trace->z_eq[i][k];
-                /* saturated: the injection is +-alpha1, outside the sliding set */
-                bank->sta_saturation[i] +=
-                    gain * ((fabs(v) >= o->alpha1[i] ? 1.0 : 0.0) - bank->sta_saturation[i]);
+                const double x2 = trace->velocity[i][k];
+                bank->sta_saturation[i] += gain * (trace->saturated[i][k] - bank->sta_saturation[i]);
                 const double a_sta = sto_acceleration(a[i], x2, trace->velocity_sign[i][k]);
                 weigh(&bank->sta[i].mean_square, &bank->sta[i].samples,
                       trace->innovation[i][k] * trace->innovation[i][k], gain);
@@ -381,8 +376,8 @@ void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank)
         bank->bandwidth[i] = 1.0 / h;
         if (selected != ADAPTIVE_SUPER_TWISTING && o->primed) {
             const AdaptiveMember *m = &bank->member[i][selected];
-            implicit_predict(m->z1, m->mid, m->a_mean, m->a_current, m->xi, h, &o->x1_hat[i],
-                             &o->x2_hat[i]);
+            implicit_predict(m->z1, m->mid, m->a_mean, m->a_free, o->coulomb[i], m->xi, h,
+                             &o->x1_hat[i], &o->x2_hat[i]);
             mean_square = m->stats.mean_square;
             variance = bank->gains[selected].innovation_variance;
             bank->bandwidth[i] = bank->gains[selected].omega;

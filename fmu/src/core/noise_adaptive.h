@@ -145,7 +145,7 @@ typedef struct {
 
 /* One member's state for one DOF. */
 typedef struct {
-    double z1, mid, xi, a_current, a_mean, x2_now;
+    double z1, mid, xi, a_free, a_mean, x2_now; /* as in implicit_twisting.c */
     double averaged, published; /* xi after the first and the second averaging stage */
     AdaptiveStatistics stats;
 } AdaptiveMember;

@@ -35,8 +35,15 @@ typedef struct {
     int primed;                  /* a corrected sample exists */
     double z1[STO_MAX_DOF];      /* corrected position at the last sample */
     double mid_velocity[STO_MAX_DOF]; /* velocity at the middle of the last interval */
-    double a_current[STO_MAX_DOF]; /* nominal acceleration of the interval that starts at the sample */
-    double a_mean[STO_MAX_DOF];  /* mean of it and the previous interval's */
+    double a_free[STO_MAX_DOF];  /* nominal acceleration of the interval that starts at the
+                                  * sample, without its Coulomb term (implicit_advance) */
+    double coulomb[STO_MAX_DOF]; /* the nominal Coulomb level of the last run */
+    double injection[STO_MAX_DOF]; /* the corrector's injection (z_eq: relative to the nominal) */
+    double x2_previous[STO_MAX_DOF]; /* velocity estimate at the sample before */
+    double coulomb_learned[STO_MAX_DOF]; /* added to the nominal Coulomb level (implicit_twisting.h) */
+    double reversal_injection[STO_MAX_DOF]; /* the injection before the reversal measured ... */
+    int reversal_age[STO_MAX_DOF];           /* ... this many samples ago; -1: none */
+    double a_mean[STO_MAX_DOF];  /* nominal mean acceleration over the leapfrog interval */
     double x2_now[STO_MAX_DOF];  /* velocity estimate at the current sample */
 } SuperTwistingObserver;
 
@@ -73,6 +80,7 @@ typedef struct {
     double position[STO_MAX_DOF][STO_RUN_MAX];       /* corrected position at the sample */
     double mid_velocity[STO_MAX_DOF][STO_RUN_MAX];   /* velocity of the interval just ended */
     double switching_rate[STO_MAX_DOF][STO_RUN_MAX]; /* the convergence detector's rate */
+    double saturated[STO_MAX_DOF][STO_RUN_MAX];      /* 1: the injection is +-alpha1 */
     /* Adaptive scheme: the injection of the observer the identifier follows. */
     double z_identify[STO_MAX_DOF][STO_RUN_MAX];
 } StoTrace;

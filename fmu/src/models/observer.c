@@ -10,6 +10,7 @@
 
 #include "../core/gains.h"
 #include "../core/identifier.h"
+#include "../core/implicit_twisting.h"
 #include "../core/information_identifier.h"
 #include "../core/joint_model.h"
 #include "../core/noise_adaptive.h"
@@ -62,11 +63,14 @@ typedef struct {
     double phi_filtered[MAX_L]; /* selected regressors through the z_eq filter */
     double z_identifier[MAX_N]; /* z_eq through the same filter, started with phi_filtered */
     double phi_previous[MAX_L]; /* selected regressors of the previous sample (implicit scheme) */
+    double velocity_before[2];  /* the joint's velocity two samples and one sample back */
+    double input_before;        /* the joint's input two samples back */
     int reset_seen;             /* identifier_reset value at the last step */
     /* the selected regressors held over a communication step (hold_inputs) */
     double phi_now[MAX_L + 1];  /* selected regressors at this sample; [MAX_L] is a scratch slot */
     int slot_velocity, slot_velocity_sign; /* joint: where x2, sign(x2) go in phi_now (MAX_L:
                                             * not selected) */
+    int slot_input;             /* joint: where u goes in phi_now (MAX_L: not identified) */
 } ObserverData;
 
 #define OFF(field) offsetof(ObserverData, field)
@@ -358,7 +362,11 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
             d->slot_velocity_sign = d->m;
         d->selected[d->m++] = k;
     }
-    if (d->nominal_model == NOMINAL_JOINT && d->identify_b) d->selected[d->m++] = JOINT_INPUT;
+    d->slot_input = MAX_L;
+    if (d->nominal_model == NOMINAL_JOINT && d->identify_b) {
+        d->slot_input = d->m;
+        d->selected[d->m++] = JOINT_INPUT;
+    }
     if (d->identifier != IDENTIFIER_OFF && d->m == 0) {
         log->log(log->context, MODEL_ERROR,
                  "identifier = %d but no regressor is selected (identify[1..%d] are all false)",
@@ -388,6 +396,8 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
               d->mff_drift);
     memset(d->phi_filtered, 0, sizeof d->phi_filtered);
     memset(d->phi_previous, 0, sizeof d->phi_previous);
+    memset(d->velocity_before, 0, sizeof d->velocity_before);
+    d->input_before = d->u;
     memset(d->phi_now, 0, sizeof d->phi_now);
     memset(d->z_identifier, 0, sizeof d->z_identifier);
     d->identifier_active = 0;
@@ -441,11 +451,33 @@ static void hold_inputs(ObserverData *d, StoAcceleration acceleration[MAX_N])
         for (int j = 0; j < d->m; ++j) d->phi_now[j] = regressor[d->selected[j]];
 }
 
-/* The regressor of step k of a trace: the joint's velocity entries. */
+/* The regressor of step k of a trace: the joint's velocity entries.  The
+ * implicit schemes take the previous sample's regressor, to match the
+ * injection, a second difference over the two intervals around that sample:
+ * - its Coulomb entry becomes the mean sign around it (implicit_mean_sign)
+ *   once the velocity after it is known, where the sign is hard (a smoothed
+ *   expected sign of a linear member is left as it is);
+ * - its input entry becomes the mean of the inputs held over the two
+ *   intervals, as the nominal acceleration takes them: the input held after
+ *   the sample alone leads the injection by half a sample, which leaked
+ *   (b - bbar) h/2 u' into the other estimates (1 kHz, noise-free, J -10 %
+ *   and +10 %: the viscous estimate 2.9 % and 0.02 % off, now 1.4 % and 1.2 %). */
 static void take_velocity(ObserverData *d, const StoTrace *trace, int k)
 {
-    d->phi_now[d->slot_velocity] = trace->velocity[0][k];
+    const double v = trace->velocity[0][k];
+    d->phi_now[d->slot_velocity] = v;
     d->phi_now[d->slot_velocity_sign] = trace->velocity_sign[0][k];
+    if (d->scheme == STO_SCHEME_PAPER) return;
+    const int slot = d->slot_velocity_sign;
+    if (slot < MAX_L && fabs(d->phi_previous[slot]) == 1.0)
+        d->phi_previous[slot] = implicit_mean_sign(d->velocity_before[0], d->velocity_before[1], v);
+    d->velocity_before[0] = d->velocity_before[1];
+    d->velocity_before[1] = v;
+    if (d->slot_input < MAX_L) {
+        const double input = d->phi_previous[d->slot_input];
+        d->phi_previous[d->slot_input] = 0.5 * (d->input_before + input);
+        d->input_before = input;
+    }
 }
 
 /* Whether the identifier starts at this sample (time t); restarts its filters if so. */
