@@ -9,6 +9,8 @@ typedef struct {
     double learned;            /* the Coulomb level learned from the injection (see the header) */
     double reversal_injection; /* the injection before the reversal being measured */
     int reversal_age;          /* samples since that reversal; -1: none */
+    double v1, v2;             /* the injections one and two samples before */
+    int smooth;                /* samples in the sliding set without a reversal */
 } DofState;
 
 /* The corrector at sample y: completes the interval that ends there, and
@@ -95,7 +97,8 @@ void implicit_run(SuperTwistingObserver *o, const double y[], const StoAccelerat
         DofState s = {o->z1[i], o->mid_velocity[i], o->a_free[i], o->a_mean[i], o->injection[i],
                       o->z_filtered[i], o->switching_rate[i], o->previous_sign[i], o->x2_now[i],
                       o->x2_previous[i], learning ? o->coulomb_learned[i] : 0.0,
-                      o->reversal_injection[i], o->reversal_age[i]};
+                      o->reversal_injection[i], o->reversal_age[i],
+                      o->injection_before[i][0], o->injection_before[i][1], o->smooth_samples[i]};
         int k = 0;
         if (!o->primed) { /* the initial estimates; the leapfrog starts half a step back */
             s.z1 = o->x1_hat[i];
@@ -116,6 +119,10 @@ void implicit_run(SuperTwistingObserver *o, const double y[], const StoAccelerat
             trace->innovation[i][k] = correct(&s, y[i], ai, h, h2, inverse_h2, reach, b, alpha1,
                                               rate_gain);
             if (learning) learn_coulomb(&s, v_before, ai.coulomb, alpha1);
+            s.v2 = s.v1;
+            s.v1 = v_before;
+            const int steady = fabs(s.v) < alpha1 && sto_sign(s.x2_now) == sto_sign(s.x2_previous);
+            s.smooth = steady ? (s.smooth < IMPLICIT_SMOOTH_SAMPLES ? s.smooth + 1 : s.smooth) : 0;
             trace->position[i][k] = s.z1;
             trace->mid_velocity[i][k] = s.mid;
             trace->switching_rate[i][k] = s.rate;
@@ -136,6 +143,9 @@ void implicit_run(SuperTwistingObserver *o, const double y[], const StoAccelerat
         o->coulomb_learned[i] = s.learned;
         o->reversal_injection[i] = s.reversal_injection;
         o->reversal_age[i] = s.reversal_age;
+        o->injection_before[i][0] = s.v1;
+        o->injection_before[i][1] = s.v2;
+        o->smooth_samples[i] = s.smooth;
     }
     o->primed = 1;
 }
@@ -145,8 +155,12 @@ void implicit_outputs(SuperTwistingObserver *o)
     if (!o->primed) return; /* still the initial estimates */
     const double h = o->h;
     for (int i = 0; i < o->n; ++i) {
+        const double v = o->injection[i];
+        const double dv = o->smooth_samples[i] >= IMPLICIT_SMOOTH_SAMPLES
+                              ? 0.5 * (v - o->injection_before[i][1])
+                              : 0.0;
         implicit_predict(o->z1[i], o->mid_velocity[i], o->a_mean[i], o->a_free[i],
-                         o->coulomb[i] + o->coulomb_learned[i], o->injection[i], h, &o->x1_hat[i],
+                         o->coulomb[i] + o->coulomb_learned[i], v, dv, h, &o->x1_hat[i],
                          &o->x2_hat[i]);
     }
 }

@@ -43,6 +43,9 @@ typedef struct {
     double coulomb_learned[STO_MAX_DOF]; /* added to the nominal Coulomb level (implicit_twisting.h) */
     double reversal_injection[STO_MAX_DOF]; /* the injection before the reversal measured ... */
     int reversal_age[STO_MAX_DOF];           /* ... this many samples ago; -1: none */
+    double injection_before[STO_MAX_DOF][2]; /* the injections one and two samples before */
+    int smooth_samples[STO_MAX_DOF];          /* in the sliding set without a reversal, up to
+                                               * IMPLICIT_SMOOTH_SAMPLES */
     double a_mean[STO_MAX_DOF];  /* nominal mean acceleration over the leapfrog interval */
     double x2_now[STO_MAX_DOF];  /* velocity estimate at the current sample */
 } SuperTwistingObserver;
