@@ -106,8 +106,8 @@ void implicit_run(SuperTwistingObserver *o, const double y[], const StoAccelerat
             const double a0 = sto_acceleration(ai, s.x2_now, sto_sign(s.x2_now));
             s.mid = s.x2_now - 0.5 * h * a0;
             s.a_free = ai.held - ai.viscous * s.x2_now;
-            s.a_mean = 0.5 * (a0 + coulomb_mean_acceleration(s.x2_now, s.a_free + s.v, ai.coulomb,
-                                                             0.5 * h) - s.v);
+            s.a_mean = 0.5 * (a0 + coulomb_mean_acceleration(s.x2_now, s.a_free + ai.point + s.v,
+                                                             ai.coulomb, 0.5 * h) - s.v);
             trace->innovation[i][k] = 0.0;
             trace->position[i][k] = s.z1;
             trace->mid_velocity[i][k] = s.mid;
@@ -132,6 +132,7 @@ void implicit_run(SuperTwistingObserver *o, const double y[], const StoAccelerat
         o->mid_velocity[i] = s.mid;
         o->a_free[i] = s.a_free;
         o->coulomb[i] = ai.coulomb;
+        o->point[i] = ai.point;
         o->a_mean[i] = s.a_mean;
         o->injection[i] = s.v;
         o->z_eq[i] = trace->z_eq[i][count - 1];
@@ -159,7 +160,7 @@ void implicit_outputs(SuperTwistingObserver *o)
         const double dv = o->smooth_samples[i] >= IMPLICIT_SMOOTH_SAMPLES
                               ? 0.5 * (v - o->injection_before[i][1])
                               : 0.0;
-        implicit_predict(o->z1[i], o->mid_velocity[i], o->a_mean[i], o->a_free[i],
+        implicit_predict(o->z1[i], o->mid_velocity[i], o->a_mean[i], o->a_free[i] + o->point[i],
                          o->coulomb[i] + o->coulomb_learned[i], v, dv, h, &o->x1_hat[i],
                          &o->x2_hat[i]);
     }

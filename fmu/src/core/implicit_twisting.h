@@ -111,18 +111,18 @@ static inline double coulomb_mean_acceleration(double v0, double other, double c
 
 /* The leapfrog prediction for the end of the next interval from the
  * corrected position z1 and mid-interval velocity mid (shared with the
- * linear members of noise_adaptive.c).  a_free: the nominal acceleration of
+ * linear members of noise_adaptive.c).  a_rest: the nominal acceleration of
  * the interval without its Coulomb term.  The injection v holds the
  * perturbation at the sample before; with its change per sample dv the
  * perturbation is taken at the samples it is used for: one sample on over
  * the next interval, 1.75 samples on over its second half (dv = 0: held). */
-static inline void implicit_predict(double z1, double mid, double a_mean, double a_free,
+static inline void implicit_predict(double z1, double mid, double a_mean, double a_rest,
                                     double coulomb, double v, double dv, double h, double *x1,
                                     double *x2)
 {
     const double mid_next = mid + h * (a_mean + v + dv);
     *x1 = z1 + h * mid_next;
-    *x2 = mid_next + 0.5 * h * coulomb_mean_acceleration(mid_next, a_free + v + 1.75 * dv,
+    *x2 = mid_next + 0.5 * h * coulomb_mean_acceleration(mid_next, a_rest + v + 1.75 * dv,
                                                          coulomb, 0.5 * h);
 }
 
@@ -130,15 +130,17 @@ static inline void implicit_predict(double z1, double mid, double a_mean, double
  * mid-interval velocity, and the mean of the nominal accelerations of its
  * second half and of the first half of the interval that starts (the
  * leapfrog's next velocity increment).  *a_free gets the new interval's
- * acceleration without its Coulomb term; v is the injection. */
+ * acceleration without its Coulomb and position terms (the position term is
+ * the sample's over both halves); v is the injection. */
 static inline double implicit_advance(double mid, double v, StoAcceleration a, double h,
                                       double *a_free, double *a_mean)
 {
     const double half = 0.5 * h;
-    const double second = coulomb_mean_acceleration(mid, *a_free + v, a.coulomb, half);
+    const double rest = a.point + v;
+    const double second = coulomb_mean_acceleration(mid, *a_free + rest, a.coulomb, half);
     const double x2 = mid + half * second;
     *a_free = a.held - a.viscous * x2;
-    const double first = coulomb_mean_acceleration(x2, *a_free + v, a.coulomb, half);
+    const double first = coulomb_mean_acceleration(x2, *a_free + rest, a.coulomb, half);
     *a_mean = 0.5 * (second + first) - v;
     return x2;
 }

@@ -34,13 +34,15 @@ static inline void joint_position_basis(double x1, double psi[JOINT_BASIS_SIZE])
 }
 
 /* The acceleration as the observer takes it over a communication step:
- * affine in x2 (viscous and Coulomb terms), everything else held. */
+ * affine in x2 (viscous and Coulomb terms), the input held over each
+ * interval, the position terms a value at the sample (StoAcceleration). */
 static inline StoAcceleration joint_acceleration(double b, const double c[JOINT_BASIS_SIZE], double u,
                                                  const double psi[JOINT_BASIS_SIZE])
 {
     const StoAcceleration a = {
-        .held = b * u - c[JOINT_SIN] * psi[JOINT_SIN] - c[JOINT_POSITION] * psi[JOINT_POSITION] -
-                c[JOINT_CONSTANT] * psi[JOINT_CONSTANT],
+        .held = b * u,
+        .point = -c[JOINT_SIN] * psi[JOINT_SIN] - c[JOINT_POSITION] * psi[JOINT_POSITION] -
+                 c[JOINT_CONSTANT] * psi[JOINT_CONSTANT],
         .viscous = c[JOINT_VELOCITY],
         .coulomb = c[JOINT_VELOCITY_SIGN]};
     return a;

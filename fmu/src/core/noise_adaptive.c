@@ -376,8 +376,8 @@ void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank)
         bank->bandwidth[i] = 1.0 / h;
         if (selected != ADAPTIVE_SUPER_TWISTING && o->primed) {
             const AdaptiveMember *m = &bank->member[i][selected];
-            implicit_predict(m->z1, m->mid, m->a_mean, m->a_free, o->coulomb[i], m->xi, 0.0, h,
-                             &o->x1_hat[i], &o->x2_hat[i]);
+            implicit_predict(m->z1, m->mid, m->a_mean, m->a_free + o->point[i], o->coulomb[i],
+                             m->xi, 0.0, h, &o->x1_hat[i], &o->x2_hat[i]);
             mean_square = m->stats.mean_square;
             variance = bank->gains[selected].innovation_variance;
             bank->bandwidth[i] = bank->gains[selected].omega;

@@ -437,7 +437,8 @@ static void nominal_model(const ObserverData *d, StoAcceleration acceleration[MA
         for (int i = 0; i < d->n; ++i) {
             double a = d->F[i];
             for (int k = 0; k < d->l; ++k) a += d->theta_nominal[i][k] * d->phi[k];
-            acceleration[i] = (StoAcceleration){.held = a, .viscous = 0.0, .coulomb = 0.0};
+            acceleration[i] = (StoAcceleration){.held = a, .point = 0.0, .viscous = 0.0,
+                                                .coulomb = 0.0};
         }
         memcpy(regressor, d->phi, MAX_L * sizeof *regressor);
     }
@@ -593,12 +594,12 @@ static void explain_divergence(const ObserverData *d, double t, int i, const Mod
     double regressor[MAX_L];
     nominal_model(d, acceleration, regressor);
     const StoAcceleration a = acceleration[i];
-    if (!(fabs(a.held) < 1e300) || !isfinite(a.viscous) || !isfinite(a.coulomb)) {
+    if (!(fabs(a.held + a.point) < 1e300) || !isfinite(a.viscous) || !isfinite(a.coulomb)) {
         if (d->nominal_model == NOMINAL_JOINT)
             log->log(log->context, MODEL_ERROR,
                      "observer: the nominal acceleration b u - c psi(y) = %g at t = %g is out of "
                      "floating-point range (b = %g, u = %g, y[1] = %g): the input or the nominal "
-                     "parameters are too large", a.held, t, d->b, d->u, d->y[0]);
+                     "parameters are too large", a.held + a.point, t, d->b, d->u, d->y[0]);
         else
             log->log(log->context, MODEL_ERROR,
                      "observer: the nominal acceleration F[%d] + theta_nominal phi = %g at t = %g "
