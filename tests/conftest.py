@@ -8,7 +8,7 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 FMU_DIR = REPO / "build" / "fmus"
 FMI3_DIR = REPO / "build" / "fmi3"
-MODEL_IDENTIFIERS = ("SuperTwistingObserver", "Pendulum", "TwistingController")
+MODEL_IDENTIFIERS = ("SuperTwistingObserver", "Pendulum", "TwistingController", "RobotObserver")
 
 
 def fmu_path(model_identifier: str, fmi_version: int = 2) -> Path:
