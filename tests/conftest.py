@@ -34,6 +34,11 @@ def controller_fmu() -> Path:
     return fmu_path("TwistingController")
 
 
+@pytest.fixture(scope="session")
+def robot_fmu() -> Path:
+    return fmu_path("RobotObserver")
+
+
 @pytest.fixture(scope="session", params=MODEL_IDENTIFIERS)
 def fmi3_fmu(request) -> Path:
     """Each FMI 3.0 FMU in turn (build/fmi3/)."""

@@ -29,14 +29,15 @@ SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
 def fmu_parameters(robot: Robot, unknown: str = "all", h: float = 1e-3, f_plus=10.0,
                    identifier: str = "lsm", tau: float = 0.005, rho: float = 1e-6,
                    R: float = 0.1, t_id: float = 0.2, torque_scale=None,
-                   coulomb_velocity: float = 0.0, pi: np.ndarray | None = None
-                   ) -> dict[str, object]:
+                   coulomb_velocity: float = 0.0, pi: np.ndarray | None = None,
+                   alpha1=0.0, alpha2=0.0) -> dict[str, object]:
     """The RobotObserver parameters for `robot`: name -> scalar or array (the joints'
     rows only; the FMU's other rows keep their start values).
 
     unknown: "all" (every base parameter and the friction) or "payload" (the last link
     and the friction); f_plus (per joint or one value) bounds the model's acceleration
-    error [rad/s^2]; torque_scale (per joint) weighs the joints' equations; pi (12 n:
+    error [rad/s^2]; alpha1, alpha2 (per joint or one value; 0: from f_plus by Theorem
+    3.1) are the observer's gains; torque_scale (per joint) weighs the joints' equations; pi (12 n:
     link parameters, then friction) replaces the URDF's inertials and friction (e.g. an
     identified model)."""
     if identifier not in IDENTIFIERS:
@@ -56,7 +57,8 @@ def fmu_parameters(robot: Robot, unknown: str = "all", h: float = 1e-3, f_plus=1
         "axis": arrays["axis"].reshape(n, 3), "xyz": arrays["xyz"].reshape(n, 3),
         "rpy": arrays["rpy"].reshape(n, 3), "link": arrays["link"].reshape(n, 10),
         "friction": arrays["friction"].reshape(n, 2),
-        "f_plus": np.broadcast_to(np.asarray(f_plus, float), (n,)).copy(),
+        **{name: np.broadcast_to(np.asarray(value, float), (n,)).copy()
+           for name, value in (("f_plus", f_plus), ("alpha1", alpha1), ("alpha2", alpha2))},
         "torque_scale": np.broadcast_to(scale, (n,)).copy(),
         "base_columns": np.asarray(base.base, int),
         "base_nominal": base.project(nominal),
