@@ -8,7 +8,7 @@ and the cost of its internal step:
   (LSM over the base parameters) fed by it;
 - "model obs (ident.)": the observer with the model identified offline from the same log
   by the sg pipeline (a causal observer of a robot whose model was identified once), the
-  online identifier on top; "(ident., sign)": the same with the Coulomb shape fixed to
+  online identifier on top; "(ident. sign)": the same with the Coulomb shape fixed to
   sign(q'), the one the identification assumes;
 - "FMU": the RobotObserver FMU (FMI 2, fmpy) on the log with the identified model and the
   gains of the row above: the same numbers as "model obs (ident.)" but its output after
@@ -41,7 +41,7 @@ from harness.robot.fmu import fmu_parameters, run_fmu  # noqa: E402
 from harness.robot.pipeline import identify_robot  # noqa: E402
 from harness.robot.urdf import read_urdf  # noqa: E402
 
-MODEL_METHODS = ("model obs (URDF)", "model obs (ident.)", "model obs (ident., sign)", "FMU")
+MODEL_METHODS = ("model obs (URDF)", "model obs (ident.)", "model obs (ident. sign)", "FMU")
 SHAPES = (0.0, 0.005, 0.02, 0.05)  # [rad/s] Coulomb smoothing velocities tried
 START = 0.2  # [s] the identifier starts after the observer's transient
 
@@ -81,7 +81,7 @@ def tune(robot, pi: np.ndarray, log, qd: np.ndarray, skip: int, shapes=SHAPES):
 def model_observer(method: str, robot, log, qd: np.ndarray, unknown: str, skip: int,
                    shared: dict) -> tuple[np.ndarray, np.ndarray]:
     """(identified standard parameters, velocity at each sample) of one method; `shared`
-    carries the identified model and the tuned f+ from one method to the next."""
+    carries the identified model and the tuned gains from one method to the next."""
     n, h = robot.n, log.step
     base = base_parameters(robot.rigid_body(), robot.arrays()["types"], robot.joint_names,
                            unknown)
@@ -100,7 +100,7 @@ def model_observer(method: str, robot, log, qd: np.ndarray, unknown: str, skip: 
         pi = shared["identified"]
     else:
         pi = shared["identified"] = identify_robot(robot, log, unknown=unknown, method="sg").pi
-    sign = method == "model obs (ident., sign)"
+    sign = method == "model obs (ident. sign)"
     body, tuned = tune(robot, pi, log, qd, skip, (0.0,) if sign else SHAPES)
     alpha1, alpha2, _ = tuned
     if method == "model obs (ident.)":
@@ -109,7 +109,6 @@ def model_observer(method: str, robot, log, qd: np.ndarray, unknown: str, skip: 
         "columns": base.base, "kind": "lsm", "rho": 1e-6, "torque_scale": scale,
         "start": int(START / h)})
     return _standard(base, pi, base.project(pi) + result["delta"]), result["velocity"]
-
 
 
 def step_cost(name: str, steps: int = 20000, runs: int = 5) -> tuple[int, int, float]:
