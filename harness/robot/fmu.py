@@ -120,7 +120,8 @@ def run_fmu(fmu: str | Path, parameters: dict[str, object], log: JointLog,
     per sample: q and u of sample k are set, then doStep(t_k, h).
 
     Returns {"velocity": qd_hat after each step (the estimate for t_k + h, shape (N, n)),
-    "base_estimate", "base_std" (at the end), "excitation", "gamma_trace"}."""
+    "velocity_sample": qd_sample (the estimate for t_k), "base_estimate", "base_std" (at
+    the end), "excitation", "gamma_trace"}."""
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
     description = read_model_description(str(fmu))
@@ -130,7 +131,8 @@ def run_fmu(fmu: str | Path, parameters: dict[str, object], log: JointLog,
     n, p = int(parameters["n"]), int(parameters["base_count"])
     q_refs = [references[f"q[{i + 1}]"] for i in range(n)]
     u_refs = [references[f"u[{i + 1}]"] for i in range(n)]
-    qd_refs = [references[f"qd_hat[{i + 1}]"] for i in range(n)]
+    qd_refs = [references[f"{name}[{i + 1}]"] for name in ("qd_hat", "qd_sample")
+               for i in range(n)]
     unzipped = extract(str(fmu))
     slave = FMU2Slave(guid=description.guid, unzipDirectory=unzipped,
                       modelIdentifier=description.coSimulation.modelIdentifier,
@@ -145,7 +147,7 @@ def run_fmu(fmu: str | Path, parameters: dict[str, object], log: JointLog,
         slave.enterInitializationMode()
         slave.setReal(q_refs + u_refs, [*log.q[0], *log.u[0]])
         slave.exitInitializationMode()
-        velocity = np.empty_like(log.q)
+        velocity = np.empty((len(log.t), 2 * n))
         h = log.step
         for k in range(len(log.t)):
             slave.setReal(q_refs + u_refs, [*log.q[k], *log.u[k]])
@@ -153,7 +155,7 @@ def run_fmu(fmu: str | Path, parameters: dict[str, object], log: JointLog,
                          communicationStepSize=h)
             velocity[k] = slave.getReal(qd_refs)
         names = ("base_estimate", "base_std")
-        result = {"velocity": velocity}
+        result = {"velocity": velocity[:, :n], "velocity_sample": velocity[:, n:]}
         for name in names:
             result[name] = np.array(slave.getReal([references[f"{name}[{k + 1}]"]
                                                    for k in range(p)]))

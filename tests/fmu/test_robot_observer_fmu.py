@@ -43,6 +43,8 @@ def test_the_fmu_runs_the_offline_path_exactly(case):
     result = run_fmu(fmu_path("RobotObserver"), parameters, log)
     # after doStep(t_k, h): the prediction for t_k + h that the offline path records at k
     np.testing.assert_allclose(result["velocity"], offline["prediction"], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(result["velocity_sample"], offline["velocity"], rtol=0,
+                               atol=1e-12)
     np.testing.assert_allclose(result["base_estimate"],
                                parameters["base_nominal"] + offline["delta"], atol=1e-12)
     np.testing.assert_allclose(result["base_std"], offline["std_error"], rtol=1e-9)

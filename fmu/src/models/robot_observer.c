@@ -44,7 +44,7 @@ typedef struct {
     double q[MAX_N], u[MAX_N];
     int identifier_reset;
     /* outputs */
-    double q_hat[MAX_N], qd_hat[MAX_N], base_estimate[MAX_P], base_std[MAX_P];
+    double q_hat[MAX_N], qd_hat[MAX_N], qd_sample[MAX_N], base_estimate[MAX_P], base_std[MAX_P];
     double gamma_trace, excitation;
     int identifier_active, converged;
     /* state */
@@ -177,6 +177,10 @@ static const ModelVariable VARIABLES[] = {
     {.name = "qd_hat", .vr = 710, .rows = MAX_N, .type = TYPE_REAL,
      OUTPUT(.offset = OFF(qd_hat), .unit = "rad/s",
      .description = "Velocity estimate at the end of the communication step")},
+    {.name = "qd_sample", .vr = 720, .rows = MAX_N, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(qd_sample), .unit = "rad/s",
+     .description = "Velocity estimate at the last sample (h before the end of the "
+                    "communication step): more accurate than qd_hat, which predicts over h")},
     {.name = "base_estimate", .vr = 800, .rows = MAX_P, .type = TYPE_REAL,
      OUTPUT(.offset = OFF(base_estimate),
      .description = "Identified base parameters (base_nominal plus the identified change)")},
@@ -315,6 +319,7 @@ static void publish_estimates(RobotData *d, int with_statistics)
     for (int i = 0; i < d->n; ++i) {
         d->q_hat[i] = d->obs.x1_hat[i];
         d->qd_hat[i] = d->obs.x2_hat[i];
+        d->qd_sample[i] = d->obs.primed ? ro_velocity(&d->obs, i) : d->obs.x2_hat[i];
     }
     d->converged = d->obs.steps > 0.0 && ro_converged(&d->obs);
 }
