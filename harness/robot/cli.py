@@ -65,7 +65,9 @@ def register_fmu_parameters(sub, parents) -> None:
     p.add_argument("--unknown", choices=["all", "payload"], default="all",
                    help="identified: every base parameter and the friction (all), or the "
                         "last link's parameters and the friction (payload)")
-    p.add_argument("--identifier", choices=["off", "lsm", "mff"], default="lsm")
+    p.add_argument("--identifier", choices=["off", "lsm", "mff"], default="lsm",
+                   help="the FMU's base-parameter identifier: off, least squares (lsm, "
+                        "default) or matrix forgetting factor (mff)")
     p.add_argument("--step", type=float, default=1e-3, help="sampling period h [s]")
     p.add_argument("--f-plus", type=float, default=10.0,
                    help="bound on the model's acceleration error [rad/s^2] (every joint)")

@@ -5,8 +5,9 @@
 writes the robot's kinematic and inertial data, the base columns of its regressor and
 the nominal base parameters as an SSP parameter set (SSV, FMI 2 variable names such as
 ``link[2,1]``), which SSP tools load as they are; ``start_values`` turns the same
-parameters into fmpy start values (FMI 2 structured names, or FMI 3 arrays), so that an
-FMI tool chain sets them once.  ``run_fmu`` replays a log through the FMU with fmpy.
+parameters into fmpy start values (FMI 2 structured names; an FMI 3 importer sets the
+arrays of ``fmu_parameters`` whole, padded to 7 rows), so that an FMI tool chain sets them
+once.  ``run_fmu`` replays a log through the FMU with fmpy.
 """
 from __future__ import annotations
 
@@ -77,13 +78,10 @@ def _elements(name: str, value) -> list[tuple[str, float | int]]:
             for i in range(array.shape[0]) for j in range(array.shape[1])]
 
 
-def start_values(parameters: dict[str, object], fmi_version: int = 2) -> dict[str, object]:
-    """fmpy start values: FMI 2 structured names, or FMI 3 arrays padded to the FMU's
-    sizes (rows beyond the robot's keep the FMU's start values only in FMI 2)."""
-    if fmi_version == 2:
-        return dict(pair for name, value in parameters.items()
-                    for pair in _elements(name, value))
-    raise ValueError("FMI 3 arrays are set whole: use the FMI 2 names with fmpy, or the SSV")
+def start_values(parameters: dict[str, object]) -> dict[str, object]:
+    """fmpy start values of the FMI 2 FMU: one structured name per element (rows beyond
+    the robot's joints keep the FMU's start values)."""
+    return dict(pair for name, value in parameters.items() for pair in _elements(name, value))
 
 
 def write_ssv(parameters: dict[str, object], path: str | Path, name: str = "robot") -> Path:

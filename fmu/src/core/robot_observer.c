@@ -142,8 +142,9 @@ void ro_outputs(RobotObserver *o)
     if (!o->primed) return; /* still the initial estimates */
     for (int i = 0; i < o->n; ++i) {
         const RobotDof *s = &o->dof[i];
-        /* no Coulomb term in the prediction: a_current has the joint's friction */
-        implicit_predict(s->z1, s->mid, s->a_mean, s->a_current, 0.0, s->v, o->h,
+        /* no Coulomb term in the prediction (a_current has the joint's friction), the
+         * injection held */
+        implicit_predict(s->z1, s->mid, s->a_mean, s->a_current, 0.0, s->v, 0.0, o->h,
                          &o->x1_hat[i], &o->x2_hat[i]);
     }
 }
