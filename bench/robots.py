@@ -1,6 +1,7 @@
 """Serial robots (issue 11): identification from joint logs against the field's baselines.
 
-    .venv/bin/python bench/robots.py [--rates 1000,10000] [--seconds 20] [--out docs/robots.md]
+    .venv/bin/python bench/robots.py [--rates 1000,10000] [--seconds 20] [--methods ...]
+                                     [--out docs/robots.md]
 
 Robots: the two-link arm (example-robot-data's double pendulum) with an unknown 0.3 kg
 tip payload (unknown: the payload and the friction), the UR5 and the Panda arm with
@@ -13,6 +14,8 @@ model the integrator can follow); the identification assumes sign(q').
 Methods: the pipeline (harness.robot.pipeline) with Savitzky-Golay velocities ("sg")
 and with the causal super-twisting observer ("observer"); the baseline "SG+LS": plain
 Savitzky-Golay + torque-space least squares (no reversal mask, no consistency).
+The model-based observer of the RobotObserver FMU (bench/robot_observer_methods.py): with
+the URDF's model, with the model identified by "sg", and the FMU itself (--methods).
 Velocity baseline: a causal steady-state Kalman filter per joint, tuned on the truth
 (an oracle tuning: the best a Kalman filter can do).
 Metrics: velocity RMS (max over joints), torque prediction error on a separate
@@ -32,6 +35,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from realdata.baselines import kalman, tune_log10  # noqa: E402
+from robot_observer_methods import MODEL_METHODS, model_observer  # noqa: E402
 from robot_trajectories import quantize, simulate  # noqa: E402
 
 from harness.robot.base_parameters import base_parameters  # noqa: E402
@@ -97,7 +101,12 @@ def kalman_velocity_rms(q, qd, h, skip) -> float:
     return worst
 
 
-def run_case(name: str, rate: float, seconds: float, seed: int = 1) -> list[dict]:
+METHODS = ("sg", "observer", "SG+LS", *MODEL_METHODS)
+FMU = Path(__file__).resolve().parents[1] / "build" / "fmus" / "RobotObserver.fmu"
+
+
+def run_case(name: str, rate: float, seconds: float, seed: int = 1,
+             methods: tuple[str, ...] = METHODS) -> list[dict]:
     path, locked = example_urdf(name)
     robot = read_urdf(path, locked=locked)
     rng = np.random.default_rng(seed)
@@ -120,9 +129,12 @@ def run_case(name: str, rate: float, seconds: float, seed: int = 1) -> list[dict
         qm = q if bits is None else quantize(q, bits)
         log = JointLog(t, qm, tau)
         kalman_rms = kalman_velocity_rms(qm, qd, h, skip)
-        for method in ("sg", "observer", "SG+LS"):
+        shared = {"fmu": FMU}  # the model-based methods' identified model and gains
+        for method in methods:
             started = time.perf_counter()
-            if method == "SG+LS":
+            if method in MODEL_METHODS:
+                pi, velocity = model_observer(method, robot, log, qd, unknown, skip, shared)
+            elif method == "SG+LS":
                 qs, qds, qdds, us = savitzky_golay(log, 0.05)
                 body = robot.rigid_body()
                 base = base_parameters(body, robot.arrays()["types"], robot.joint_names, unknown)
@@ -175,13 +187,16 @@ def main() -> int:
     parser.add_argument("--rates", default="1000", help="comma-separated sampling rates [Hz]")
     parser.add_argument("--seconds", type=float, default=20.0, help="training log length [s]")
     parser.add_argument("--robots", default="double_pendulum,ur5,panda")
+    parser.add_argument("--methods", default=",".join(METHODS),
+                        help=f"comma-separated, of {', '.join(METHODS)} (FMU after "
+                             f"'model obs (ident.)')")
     parser.add_argument("--out", default=None, help="write the table (Markdown) here")
     args = parser.parse_args()
     print(HEADER)
     rows = []
     for name in args.robots.split(","):
         for rate in map(float, args.rates.split(",")):
-            rows += run_case(name, rate, args.seconds)
+            rows += run_case(name, rate, args.seconds, methods=tuple(args.methods.split(",")))
     if args.out:
         Path(args.out).write_text(HEADER + "\n" + "\n".join(map(format_row, rows)) + "\n")
     return 0

@@ -4,6 +4,7 @@
     identify DATA.csv --out DIR [--columns t=time,y=theta,u=tau] [--param NAME=VALUE ...]
                                                 offline identification of a recorded log
     identify DATA.csv --robot ROBOT.urdf --out DIR   a serial robot (harness.robot)
+    robot-fmu-parameters ROBOT.urdf --out FILE.ssv   the RobotObserver FMU's parameters
     demo [--out DIR]                            the closed-loop demonstration (reproduce + compare)
     compare --out DIR                           paper method vs the improved defaults
     sweep SPEC --out DIR [--scheduler tcp://HOST:PORT]   parameter / noise sweeps on Dask
@@ -319,6 +320,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_robot_arguments(p)
     p.set_defaults(func=cmd_identify)
 
+    from .robot.cli import register_fmu_parameters
+    register_fmu_parameters(sub, parents=[common])
     register_sweep(sub, parents=[common])
     return parser
 

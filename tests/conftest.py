@@ -8,7 +8,7 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 FMU_DIR = REPO / "build" / "fmus"
 FMI3_DIR = REPO / "build" / "fmi3"
-MODEL_IDENTIFIERS = ("SuperTwistingObserver", "Pendulum", "TwistingController")
+MODEL_IDENTIFIERS = ("SuperTwistingObserver", "Pendulum", "TwistingController", "RobotObserver")
 
 
 def fmu_path(model_identifier: str, fmi_version: int = 2) -> Path:
@@ -32,6 +32,11 @@ def pendulum_fmu() -> Path:
 @pytest.fixture(scope="session")
 def controller_fmu() -> Path:
     return fmu_path("TwistingController")
+
+
+@pytest.fixture(scope="session")
+def robot_fmu() -> Path:
+    return fmu_path("RobotObserver")
 
 
 @pytest.fixture(scope="session", params=MODEL_IDENTIFIERS)

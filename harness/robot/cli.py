@@ -1,5 +1,6 @@
 """`python -m harness identify DATA.csv --robot ROBOT.urdf --out DIR`: the robot options
-and command (harness/cli.py dispatches here when --robot is given)."""
+and command (harness/cli.py dispatches here when --robot is given); and
+`python -m harness robot-fmu-parameters ROBOT.urdf --out FILE.ssv`."""
 from __future__ import annotations
 
 import argparse
@@ -47,4 +48,45 @@ def identify_command(args, out: Path) -> int:
     for i, joint in enumerate(robot.joints):
         print(f"  {joint.name}: mass {result.pi[10 * i]:.6g} kg, viscous "
               f"{result.pi[10 * n + 2 * i]:.6g}, Coulomb {result.pi[10 * n + 2 * i + 1]:.6g}")
+    return 0
+
+
+def register_fmu_parameters(sub, parents) -> None:
+    """The robot-fmu-parameters command."""
+    p = sub.add_parser("robot-fmu-parameters", parents=parents,
+                       help="the RobotObserver FMU's parameters from a URDF (SSP parameter set)",
+                       description="Writes the robot's kinematic and inertial data, the base "
+                       "columns of its regressor and the nominal base parameters as an SSP "
+                       "parameter set (SSV) with the FMU's FMI 2 variable names.")
+    p.add_argument("urdf", help="the robot's URDF")
+    p.add_argument("--out", required=True, metavar="FILE", help="the .ssv file to write")
+    p.add_argument("--lock", action="append", default=[], metavar="JOINT",
+                   help="a URDF joint held at 0 (e.g. gripper fingers); repeatable")
+    p.add_argument("--unknown", choices=["all", "payload"], default="all",
+                   help="identified: every base parameter and the friction (all), or the "
+                        "last link's parameters and the friction (payload)")
+    p.add_argument("--identifier", choices=["off", "lsm", "mff"], default="lsm",
+                   help="the FMU's base-parameter identifier: off, least squares (lsm, "
+                        "default) or matrix forgetting factor (mff)")
+    p.add_argument("--step", type=float, default=1e-3, help="sampling period h [s]")
+    p.add_argument("--f-plus", type=float, default=10.0,
+                   help="bound on the model's acceleration error [rad/s^2] (every joint)")
+    p.add_argument("--coulomb-velocity", type=float, default=0.0,
+                   help="Coulomb friction saturates below this velocity [rad/s] (0: sign)")
+    p.set_defaults(func=fmu_parameters_command)
+
+
+def fmu_parameters_command(args) -> int:
+    from .fmu import fmu_parameters, write_ssv
+    from .urdf import UrdfError, read_urdf
+    try:
+        robot = read_urdf(args.urdf, locked=tuple(args.lock))
+        parameters = fmu_parameters(robot, unknown=args.unknown, h=args.step,
+                                    f_plus=args.f_plus, identifier=args.identifier,
+                                    coulomb_velocity=args.coulomb_velocity)
+    except (UrdfError, ValueError) as error:
+        print(f"harness robot-fmu-parameters: {error}", file=sys.stderr)
+        return 2
+    path = write_ssv(parameters, args.out, name=Path(args.urdf).stem)
+    print(f"wrote {path}: {robot.n} joints, {parameters['base_count']} base parameters")
     return 0

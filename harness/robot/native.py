@@ -20,7 +20,7 @@ HERE = Path(__file__).resolve().parent
 CHECKOUT_CORE = HERE.parents[1] / "fmu" / "src" / "core"
 # the checkout's sources win, so that an edit is compiled without rebuilding the package
 CORE = CHECKOUT_CORE if CHECKOUT_CORE.is_dir() else HERE / "core"
-CORE_SOURCES = ("rigid_body.c", "regressor_identifier.c", "super_twisting.c",
+CORE_SOURCES = ("rigid_body.c", "regressor_identifier.c", "robot_observer.c", "super_twisting.c",
                 "implicit_twisting.c", "noise_adaptive.c", "gains.c")
 WRAPPER = HERE / "native" / "robot_native.c"
 _double_p = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
@@ -57,6 +57,13 @@ def load() -> ctypes.CDLL:
     dll.rn_observe.restype = ctypes.c_int
     dll.rn_observe.argtypes = [ctypes.c_int, count, ctypes.c_double, _double_p, _double_p,
                                ctypes.c_double, _double_p, _double_p]
+    dll.rn_robot_run_size.restype = ctypes.c_size_t
+    dll.rn_robot_observe.restype = ctypes.c_long
+    dll.rn_robot_observe.argtypes = [
+        ctypes.c_void_p, ctypes.c_void_p, count, ctypes.c_double, _double_p, _double_p, _double_p,
+        ctypes.c_double, _double_p, _double_p, _double_p, _double_p, ctypes.c_int, ctypes.c_int,
+        _int_p, _double_p, ctypes.c_double, ctypes.c_double, count, _double_p, _double_p,
+        _double_p]
     return dll
 
 
@@ -163,6 +170,48 @@ class RigidBody:
                              "torque scales out of range)")
         return {"delta": delta, "std_error": std, "gamma_trace": stats[0],
                 "excitation": stats[1]}
+
+    def observe(self, q, u, h: float, f_plus, tau: float = 0.005, alpha1=0.0, alpha2=0.0,
+                identify: dict | None = None) -> dict:
+        """Run the model-based observer of robot_observer.c over positions q and torques u
+        (count, n) sampled every h, as the RobotObserver FMU does: f_plus (per joint)
+        bounds the model's acceleration error, gains alpha1, alpha2 left at 0 follow from
+        it by Theorem 3.1 (p = 0.5); tau is the injection's and the regression's filter.
+
+        Returns {"velocity": the estimate at each sample, "prediction": for the end of
+        the interval starting at each sample, "model_failures": samples at which M was
+        not positive definite}.  With identify = {"columns", "kind" ("lsm"/"mff"),
+        "rho", "R", "torque_scale", "start" (sample index)} the online identifier runs
+        too, adding "delta" (base parameters minus the nominal ones), "std_error",
+        "gamma_trace" and "excitation" at the end."""
+        dll = load()
+        q, u = _samples(q, self.n), _samples(u, self.n)
+        gains = [np.ascontiguousarray(np.broadcast_to(np.asarray(a, float), (self.n,)))
+                 for a in (alpha1, alpha2, f_plus)]
+        velocity, prediction = np.empty_like(q), np.empty_like(q)
+        options = dict(identify or {})
+        columns = np.ascontiguousarray(options.get("columns", [0]), dtype=np.int32)
+        scale = options.get("torque_scale")
+        scale = np.ascontiguousarray(np.ones(self.n) if scale is None else scale, dtype=float)
+        delta, std, stats = np.zeros(len(columns)), np.zeros(len(columns)), np.zeros(2)
+        kind = {"lsm": 1, "mff": 2}[options.get("kind", "lsm")] if identify else 0
+        run = ctypes.create_string_buffer(dll.rn_robot_run_size())
+        failures = dll.rn_robot_observe(
+            self._buffer, run, len(q), h, *gains, tau, q, u, velocity, prediction, kind,
+            len(columns), columns, scale, options.get("rho", 1e-6), options.get("R", 0.1),
+            int(options.get("start", 0)), delta, std, stats)
+        if failures == -2:
+            raise ValueError(f"no observer gains for f_plus {gains[2].tolist()}")
+        if failures == -3:
+            raise ValueError("the observer diverged (estimates not finite): the model's "
+                             "acceleration error exceeds what the gains correct; raise f_plus")
+        if failures < 0:
+            raise ValueError("online identifier rejected its settings (columns, h, rho, R or "
+                             "torque scales out of range)")
+        result = {"velocity": velocity, "prediction": prediction, "model_failures": failures}
+        if identify:
+            result.update(delta=delta, std_error=std, gamma_trace=stats[0], excitation=stats[1])
+        return result
 
     def regressor(self, q, qd, qdd) -> np.ndarray:
         """Y with tau = Y pi: shape (count, n, 12 n), pi = 10 link parameters per link,

@@ -28,7 +28,7 @@ from fmpy.fmi2 import (
 
 REPO = Path(__file__).resolve().parents[2]
 OK, WARNING, DISCARD, ERROR, FATAL = 0, 1, 2, 3, 4
-MODELS = ("SuperTwistingObserver", "Pendulum", "TwistingController")
+MODELS = ("SuperTwistingObserver", "Pendulum", "TwistingController", "RobotObserver")
 CO_SIMULATION, MODEL_EXCHANGE = 1, 0
 
 

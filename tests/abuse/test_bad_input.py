@@ -30,7 +30,7 @@ from abuse_fmi import (
 )
 
 NAN, INF = float("nan"), float("inf")
-OBS, PEN, CTL = MODELS
+OBS, PEN, CTL, ROBOT = MODELS
 
 # Per model: an input, an output, a fixed Real parameter with its valid range, and the
 # gap in its value references.
@@ -38,6 +38,7 @@ INFO = {
     OBS: dict(input="y[1]", output="x1_hat[1]", parameter="tau", unused_vr=7),
     PEN: dict(input="u", output="theta", parameter="M", unused_vr=17),
     CTL: dict(input="theta", output="u", parameter="k1", unused_vr=10),
+    ROBOT: dict(input="q[1]", output="qd_hat[1]", parameter="tau", unused_vr=10),
 }
 
 
@@ -638,7 +639,7 @@ def _free_twice(f: Raw) -> int:
 
 
 def _state_of_another_fmu(f: Raw) -> int:
-    other_model = MODELS[(MODELS.index(f.model) + 1) % 3]
+    other_model = MODELS[(MODELS.index(f.model) + 1) % len(MODELS)]
     other = Raw(other_model, "other")
     assert other.initialize() == OK
     data = other.serialize(other.get_state())

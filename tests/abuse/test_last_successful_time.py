@@ -14,7 +14,7 @@ import pytest
 
 from abuse_fmi import ERROR, MODELS, OK, Raw, isolated
 
-OBS, PEN, CTL = MODELS
+OBS, PEN, CTL, ROBOT = MODELS
 LAST_SUCCESSFUL_TIME = 2  # fmi2StatusKind fmi2LastSuccessfulTime
 
 # Per model: parameters, and inputs set before the failing step, that make the model fail
@@ -23,6 +23,7 @@ DIVERGING = {
     OBS: ({"b": 1e300}, {"u": 1e300}),
     PEN: ({}, {"u": 1e308}),
     CTL: None,  # its outputs are bounded by its parameters: it fails by itself, see below
+    ROBOT: ({}, {"u[1]": 1e306, "u[2]": -1e306}),
 }
 
 

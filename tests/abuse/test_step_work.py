@@ -17,7 +17,7 @@ import pytest
 
 from abuse_fmi import ERROR, MODELS, OK, Raw, assert_usable_after_reset, isolated
 
-OBS, PEN, CTL = MODELS
+OBS, PEN, CTL, ROBOT = MODELS
 DEFAULT_LIMIT = 10_000_000
 LIMIT_VR = 120
 INT_MAX = 2**31 - 1
@@ -25,9 +25,10 @@ INT_MAX = 2**31 - 1
 QUICK = 0.5  # s
 TIMEOUT = 20.0  # s, per case
 
-DEFAULT_H = {OBS: 1e-4, PEN: 1e-5, CTL: 1e-4}
+DEFAULT_H = {OBS: 1e-4, PEN: 1e-5, CTL: 1e-4, ROBOT: 1e-3}
 OUTPUTS = {OBS: ["x1_hat[1]", "x2_hat[1]", "theta_hat[1,1]", "gamma_trace"],
-           PEN: ["theta", "omega", "acceleration"], CTL: ["u", "theta_d", "omega_d"]}
+           PEN: ["theta", "omega", "acceleration"], CTL: ["u", "theta_d", "omega_d"],
+           ROBOT: ["q_hat[1]", "qd_hat[2]", "base_estimate[1]", "gamma_trace"]}
 
 
 def _limit_message(f: Raw, needed: int, limit: int):
@@ -76,7 +77,7 @@ for m in MODELS:
         for before in (0, 3):
             HUGE.append((m, {}, 0.0, H, before))
     HUGE.append((m, {"h": 1e-12}, 0.0, 1e-3, 0))   # a tiny h: 10^9 steps in one ms
-    HUGE.append((m, {}, 1e6, 1e4, 2))                # far from t = 0
+    HUGE.append((m, {}, 1e6, 1e9 * DEFAULT_H[m], 2))  # far from t = 0: 10^9 steps
 HUGE.append((OBS, {"identifier": 1, "identifier_start": 0}, 0.0, 1e6, 1))  # LSM: 6 min before
 HUGE.append((OBS, {"identifier": 2, "scheme": 1}, 0.0, 1e5, 1))
 HUGE.append((PEN, {"damping": 1, "disturbance": 1}, 0.0, 1e9, 1))

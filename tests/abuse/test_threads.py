@@ -18,7 +18,7 @@ from abuse_fmi import MODELS, OK, Raw, fmu_dir
 
 THREADS = 4
 _LOADING = threading.Lock()
-OBS, PEN, CTL = MODELS
+OBS, PEN, CTL, ROBOT = MODELS
 
 # Per model: parameters that differ per thread, an input signal, and the outputs read.
 SETUPS = {
@@ -32,6 +32,12 @@ SETUPS = {
     CTL: (lambda i: {"k1": 10.0 + i, "w1": 1.0 + i},
           lambda i, t: {"theta": 0.2 * math.sin(t * (1 + i)), "omega": 0.1 * math.cos(t)},
           ["u", "theta_d", "omega_d"]),
+    # f+ above the default arm's accelerations: its inputs here are not a motion of it
+    ROBOT: (lambda i: {"identifier": 1 + i % 2, "tau": 0.002 * (1 + i), "t_id": 0.0,
+                       "f_plus[1]": 1e4, "f_plus[2]": 1e4},
+            lambda i, t: {"q[1]": 0.3 * math.sin((2 + i) * t), "q[2]": 0.2 * math.cos(t),
+                          "u[1]": 0.1 * math.cos(t), "u[2]": 0.05 * math.sin(t)},
+            ["q_hat[1]", "qd_hat[1]", "qd_hat[2]", "base_estimate[1]", "gamma_trace"]),
 }
 
 
@@ -108,7 +114,7 @@ def test_one_instance_per_thread_equals_sequential(model):
                                           err_msg=f"thread {i}, attempt {attempt}")
 
 
-def test_all_three_fmus_mixed_across_threads():
+def test_all_fmus_mixed_across_threads():
     """Each thread drives instances of all three FMUs (12 live instances of 3 libraries)."""
     def work(i):
         return [life(m, i, steps=200) for m in MODELS]

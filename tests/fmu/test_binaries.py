@@ -7,6 +7,8 @@ import zipfile
 
 import pytest
 
+from tests.conftest import MODEL_IDENTIFIERS
+
 COMMON = """GetTypesPlatform GetVersion SetDebugLogging Instantiate FreeInstance SetupExperiment
 EnterInitializationMode ExitInitializationMode Terminate Reset GetReal GetInteger GetBoolean
 GetString SetReal SetInteger SetBoolean SetString GetFMUstate SetFMUstate FreeFMUstate
@@ -23,7 +25,7 @@ def _exports(fmu, member: str, library):
     return {line.split()[-1] for line in symbols if line.strip()}
 
 
-@pytest.mark.parametrize("model", ["SuperTwistingObserver", "Pendulum", "TwistingController"])
+@pytest.mark.parametrize("model", MODEL_IDENTIFIERS)
 def test_exports_and_dependencies(tmp_path, observer_fmu, model):
     library = tmp_path / f"{model}.so"
     exported = _exports(observer_fmu.parent / f"{model}.fmu", f"binaries/linux64/{model}.so",
@@ -46,7 +48,7 @@ def _fmi3_functions() -> set[str]:
     return set(re.findall(r"FMI3_Export\s+fmi3\w+TYPE\s+(fmi3\w+)\s*;", header))
 
 
-@pytest.mark.parametrize("model", ["SuperTwistingObserver", "Pendulum", "TwistingController"])
+@pytest.mark.parametrize("model", MODEL_IDENTIFIERS)
 def test_fmi3_exports_every_fmi3_function_and_nothing_else(tmp_path, observer_fmi3, model):
     exported = _exports(observer_fmi3.parent / f"{model}.fmu",
                         f"binaries/x86_64-linux/{model}.so", tmp_path / f"{model}.so")

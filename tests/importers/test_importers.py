@@ -32,11 +32,11 @@ def test_importers_are_installed():
 
 
 def test_every_fmu_agrees_with_its_reference_in_every_importer(observer_fmu, pendulum_fmu,
-                                                                 controller_fmu):
+                                                                 controller_fmu, robot_fmu):
     problems = check.check_tools()
     if problems:
         pytest.fail("importers missing:\n  " + "\n  ".join(problems) + f"\n{INSTALL}")
-    fmus = [observer_fmu, pendulum_fmu, controller_fmu]
+    fmus = [observer_fmu, pendulum_fmu, controller_fmu, robot_fmu]
     run = subprocess.run([sys.executable, str(TOOLS / "check.py"), *map(str, fmus)],
                          capture_output=True, text=True, cwd=REPO, timeout=1800)
     print(run.stdout)

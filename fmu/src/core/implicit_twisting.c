@@ -23,18 +23,8 @@ static inline double correct(DofState *s, double y, StoAcceleration a, double h,
                              double rate_gain)
 {
     const double w = y - s->z1 - h * s->mid - h2 * s->a_mean, innovation = w - h2 * s->v;
-    double e;
-    if (fabs(w) <= reach) { /* sliding: the injection keeps x1_hat on y */
-        e = 0.0;
-        s->v = w * inverse_h2;
-        sto_track_switching(&s->rate, &s->previous_sign, rate_gain, 0.0);
-    } else {
-        const double sign_w = w > 0.0 ? 1.0 : -1.0, r = fabs(w) - reach;
-        const double q = 2.0 * r / (b + sqrt(b * b + 4.0 * r)); /* stable root form */
-        e = sign_w * q * q;
-        s->v = alpha1 * sign_w;
-        sto_track_switching(&s->rate, &s->previous_sign, rate_gain, e != 0.0 ? sign_w : 0.0);
-    }
+    const double e = implicit_inject(w, reach, b, alpha1, inverse_h2, &s->v, &s->rate,
+                                     &s->previous_sign, rate_gain);
     s->mid += h * (s->a_mean + s->v);
     s->z1 = y - e;
     s->x2_previous = s->x2_now;

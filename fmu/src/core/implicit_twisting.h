@@ -81,6 +81,27 @@ static inline double implicit_mean_sign(double v_before, double v, double v_afte
     return 0.5 * (implicit_half_mean_sign(v, v_before) + implicit_half_mean_sign(v, v_after));
 }
 
+/* The implicit injection for the innovation w = y_k - (prediction without
+ * injection), reach = h^2 alpha1 and b = h alpha2: sets the injection *v and
+ * returns e = y_k - x1_k (0 in the sliding set), and counts the step in the
+ * convergence detector (rate, previous_sign). */
+static inline double implicit_inject(double w, double reach, double b, double alpha1,
+                                     double inverse_h2, double *v, double *rate,
+                                     double *previous_sign, double rate_gain)
+{
+    if (fabs(w) <= reach) { /* sliding: the injection keeps x1_hat on y */
+        *v = w * inverse_h2;
+        sto_track_switching(rate, previous_sign, rate_gain, 0.0);
+        return 0.0;
+    }
+    const double sign_w = w > 0.0 ? 1.0 : -1.0, r = fabs(w) - reach;
+    const double q = 2.0 * r / (b + sqrt(b * b + 4.0 * r)); /* stable root form */
+    const double e = sign_w * q * q;
+    *v = alpha1 * sign_w;
+    sto_track_switching(rate, previous_sign, rate_gain, e != 0.0 ? sign_w : 0.0);
+    return e;
+}
+
 /* Runs `count` steps (sto_run): at each sample the corrector completes the
  * interval that ends there (the first sample only takes the initial
  * estimates), then the nominal acceleration of the interval that starts is

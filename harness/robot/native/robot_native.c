@@ -6,6 +6,7 @@
 
 #include "gains.h"
 #include "regressor_identifier.h"
+#include "robot_observer.h"
 #include "rigid_body.h"
 #include "super_twisting.h"
 
@@ -141,4 +142,68 @@ int rn_observe(int n, long count, double h, const double y[], const double f_plu
         }
     }
     return 0;
+}
+
+/* The model-based observer and online identification (robot_observer.c) over a
+ * log, as the RobotObserver FMU runs them: state in a buffer of
+ * rn_robot_run_size() bytes. */
+typedef struct {
+    RobotObserver observer;
+    RobotRegression regression;
+    RegressorIdentifier identifier;
+} RobotRun;
+
+size_t rn_robot_run_size(void) { return sizeof(RobotRun); }
+
+/* y, u: count x n.  Gains alpha1, alpha2 (n; an entry 0 is computed from
+ * f_plus by Theorem 3.1 with p = 0.5, as the FMU does); tau: the injection and
+ * regression filter.  Outputs per sample: velocity (the estimate at the
+ * sample) and prediction (for the end of the interval that starts there, an
+ * FMU's output at the next communication point).  With kind 1 or 2 the
+ * identifier (columns, torque_scale, rho, R) runs from sample `start` on and
+ * delta, std_error, stats = (trace of Gamma, excitation) are solved at the
+ * end.  Returns the number of samples at which M was not positive definite,
+ * -1 for bad identifier settings, -2 for gains that cannot be computed, -3 if the
+ * identifier's information is not positive definite at the end (the observer
+ * diverged). */
+long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, long count, double h,
+                      const double alpha1_given[], const double alpha2_given[],
+                      const double f_plus[], double tau,
+                      const double y[], const double u[], double velocity[], double prediction[],
+                      int kind, int p, const int columns[], const double torque_scale[],
+                      double rho, double R, long start, double delta[], double std_error[],
+                      double stats[2])
+{
+    const int n = model->n;
+    double zero[RB_MAX_JOINTS] = {0}, alpha1[RB_MAX_JOINTS], alpha2[RB_MAX_JOINTS];
+    for (int i = 0; i < n; ++i) {
+        alpha1[i] = alpha1_given[i];
+        alpha2[i] = alpha2_given[i];
+        if (gains_complete(f_plus[i], 0.5, &alpha1[i], &alpha2[i]) != 0) return -2;
+    }
+    ro_init(&run->observer, n, h, alpha1, alpha2, tau, 0.05, y, zero);
+    ro_regression_init(&run->regression, model, h, tau);
+    if (kind && rri_init(&run->identifier, (RriKind)kind, n, p, columns, torque_scale, h, rho,
+                         R) != 0)
+        return -1;
+    for (long k = 0; k < count; ++k) {
+        ro_step(&run->observer, model, y + k * n, u + k * n);
+        if (kind && k == start) ro_regression_restart(&run->regression);
+        ro_regression_step(&run->regression, model, &run->observer, y + k * n, u + k * n,
+                           kind && k >= start ? &run->identifier : NULL);
+        ro_outputs(&run->observer);
+        for (int i = 0; i < n; ++i) {
+            velocity[k * n + i] = ro_velocity(&run->observer, i);
+            prediction[k * n + i] = run->observer.x2_hat[i];
+        }
+    }
+    if (kind) {
+        if (rri_solve(&run->identifier) != 0) return -3;
+        rri_statistics(&run->identifier);
+        memcpy(delta, run->identifier.delta, (size_t)p * sizeof(double));
+        memcpy(std_error, run->identifier.std_error, (size_t)p * sizeof(double));
+        stats[0] = run->identifier.gamma_trace;
+        stats[1] = run->identifier.excitation;
+    }
+    return (long)run->observer.model_failures;
 }

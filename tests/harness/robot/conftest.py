@@ -1,4 +1,5 @@
-"""Shared helpers of the robot tests: Pinocchio models of the same URDFs, random chains."""
+"""Shared helpers of the robot tests: the two-link arm with a tip payload along an analytic
+multi-sine, Pinocchio models of the same URDFs, random chains."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -8,6 +9,33 @@ import pinocchio as pin
 import pytest
 
 from harness.robot.examples import example_urdf
+
+PAYLOAD, TIP = 0.3, np.array([0.0, 0.0, 0.2])
+FRICTION = np.array([[0.05, 0.2], [0.04, 0.1]])
+
+
+def payload_link(link: np.ndarray) -> np.ndarray:
+    """Link 2's standard parameters with a point mass PAYLOAD at TIP."""
+    out = link.copy()
+    skew = np.array([[0, -TIP[2], TIP[1]], [TIP[2], 0, -TIP[0]], [-TIP[1], TIP[0], 0]])
+    I = -PAYLOAD * skew @ skew
+    out[1] += [PAYLOAD, *(PAYLOAD * TIP), I[0, 0], I[0, 1], I[1, 1], I[0, 2], I[1, 2], I[2, 2]]
+    return out
+
+
+def multisine_log(truth, seconds: float, h: float):
+    """(t, q, qd, qdd, tau) of a two-joint arm (`truth`, a RigidBody) along an analytic
+    multi-sine: exact velocities and accelerations, torques by inverse dynamics."""
+    t = np.arange(0.0, seconds, h)
+    f = np.array([0.2, 0.45, 0.8, 1.3])
+    rng = np.random.default_rng(0)
+    phase, amplitude = rng.uniform(0, 2 * np.pi, (2, 4)), np.array([[0.5], [0.4]]) / np.sqrt(f)
+    angle = 2 * np.pi * f[None, None, :] * t[:, None, None] + phase[None]
+    w = 2 * np.pi * f
+    q = (amplitude * np.sin(angle)).sum(-1) / 2
+    qd = (amplitude * w * np.cos(angle)).sum(-1) / 2
+    qdd = -(amplitude * w ** 2 * np.sin(angle)).sum(-1) / 2
+    return t, q, qd, qdd, truth.inverse_dynamics(q, qd, qdd)
 
 
 def pinocchio_model(path: Path, locked=()) -> pin.Model:

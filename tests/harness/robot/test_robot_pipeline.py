@@ -10,32 +10,12 @@ from harness.cli import main
 from harness.robot.examples import example_urdf
 from harness.robot.urdf import read_urdf
 
-PAYLOAD, TIP = 0.3, np.array([0.0, 0.0, 0.2])
-FRICTION = np.array([[0.05, 0.2], [0.04, 0.1]])
-
-
-def payload_link(link: np.ndarray) -> np.ndarray:
-    """Link 2's standard parameters with a point mass PAYLOAD at TIP."""
-    out = link.copy()
-    skew = np.array([[0, -TIP[2], TIP[1]], [TIP[2], 0, -TIP[0]], [-TIP[1], TIP[0], 0]])
-    I = -PAYLOAD * skew @ skew
-    out[1] += [PAYLOAD, *(PAYLOAD * TIP), I[0, 0], I[0, 1], I[1, 1], I[0, 2], I[1, 2], I[2, 2]]
-    return out
-
+from conftest import FRICTION, PAYLOAD, multisine_log, payload_link
 
 def write_log(path, robot, seconds: float = 12.0, h: float = 1e-3, bits: int = 17):
     """Torques of the true arm along an analytic multi-sine (no integration error)."""
-    t = np.arange(0.0, seconds, h)
-    f = np.array([0.2, 0.45, 0.8, 1.3])
-    rng = np.random.default_rng(0)
-    phase, amplitude = rng.uniform(0, 2 * np.pi, (2, 4)), np.array([[0.5], [0.4]]) / np.sqrt(f)
-    angle = 2 * np.pi * f[None, None, :] * t[:, None, None] + phase[None]
-    w = 2 * np.pi * f
-    q = (amplitude * np.sin(angle)).sum(-1) / 2
-    qd = (amplitude * w * np.cos(angle)).sum(-1) / 2
-    qdd = -(amplitude * w ** 2 * np.sin(angle)).sum(-1) / 2
-    truth = robot.rigid_body(link=payload_link(robot.arrays()["link"]), friction=FRICTION)
-    tau = truth.inverse_dynamics(q, qd, qdd)
+    t, q, _, _, tau = multisine_log(robot.rigid_body(link=payload_link(robot.arrays()["link"]),
+                                                     friction=FRICTION), seconds, h)
     resolution = 2 * np.pi / 2 ** bits
     q = np.round(q / resolution) * resolution
     np.savetxt(path, np.column_stack([t, q, tau]), delimiter=",", header="t,q1,q2,u1,u2",

@@ -1,0 +1,201 @@
+#include "robot_observer.h"
+
+#include <math.h>
+#include <string.h>
+
+void ro_init(RobotObserver *o, int n, double h, const double alpha1[], const double alpha2[],
+             double tau, double convergence_window, const double x1_hat0[],
+             const double x2_hat0[])
+{
+    memset(o, 0, sizeof *o);
+    o->n = n;
+    o->h = h;
+    o->h_squared = h * h;
+    o->inverse_h_squared = 1.0 / o->h_squared;
+    o->filter_gain = tau > 0.0 ? -expm1(-h / tau) : 1.0;
+    o->rate_gain = convergence_window > h ? h / convergence_window : 1.0;
+    for (int i = 0; i < n; ++i) {
+        o->alpha1[i] = alpha1[i];
+        o->alpha2[i] = alpha2[i];
+        o->x1_hat[i] = x1_hat0[i];
+        o->x2_hat[i] = x2_hat0[i];
+    }
+}
+
+/* x <- M^-1 x with the Cholesky factor L (lower triangle of L). */
+static void cholesky_solve(double L[RB_MAX_JOINTS][RB_MAX_JOINTS], int n, double x[])
+{
+    for (int i = 0; i < n; ++i) {
+        for (int k = 0; k < i; ++k) x[i] -= L[i][k] * x[k];
+        x[i] /= L[i][i];
+    }
+    for (int i = n - 1; i >= 0; --i) {
+        for (int k = i + 1; k < n; ++k) x[i] -= L[k][i] * x[k];
+        x[i] /= L[i][i];
+    }
+}
+
+/* The velocity v at the end of an interval from the velocity r it would reach
+ * without the joint's own friction: v = r - c f(v), c = h (M^-1)_ii > 0,
+ * f(v) = f_v v + f_c sat(v / v_s) (sign(v) if v_s = 0), solved exactly (f is
+ * monotone; negative coefficients count as 0).  Returns f(v). */
+static double implicit_friction(double r, double c, double viscous, double coulomb, double v_s)
+{
+    const double cv = c * (viscous > 0.0 ? viscous : 0.0), cc = c * (coulomb > 0.0 ? coulomb : 0.0);
+    double v;
+    if (v_s > 0.0 && fabs(r) <= v_s * (1.0 + cv + cc / v_s)) v = r / (1.0 + cv + cc / v_s);
+    else if (v_s <= 0.0 && fabs(r) <= cc) v = 0.0; /* sticks */
+    else v = (r - (r > 0.0 ? cc : -cc)) / (1.0 + cv);
+    return (r - v) / c;
+}
+
+/* The nominal acceleration of the interval that starts at the sample:
+ * M(y)^-1 (u - C x2 - G - friction) at the corrected velocities x2, with each
+ * joint's friction taken implicitly (at the velocity the interval ends with):
+ * Coulomb friction on a light link is far too stiff for an explicit step
+ * (f_c / (v_s m) h >> 1), and would make the estimate ring at every velocity
+ * reversal.  0 and -1 if M is not positive definite. */
+static int nominal_acceleration(RobotObserver *o, const RigidBodyModel *model, const double y[],
+                                const double u[], double a[])
+{
+    const int n = o->n;
+    double x2[RO_MAX_JOINTS] = {0}, bias[RO_MAX_JOINTS], friction[RO_MAX_JOINTS];
+    double M[RB_MAX_JOINTS][RB_MAX_JOINTS];
+    for (int i = 0; i < n; ++i) x2[i] = o->dof[i].x2_now;
+    rb_mass_matrix(model, y, M);
+    rb_inverse_dynamics(model, y, x2, NULL, 1, bias);
+    rb_friction(model, x2, friction);
+    for (int j = 0; j < n; ++j) { /* Cholesky M = L L^T, lower triangle */
+        double d = M[j][j];
+        for (int k = 0; k < j; ++k) d -= M[j][k] * M[j][k];
+        if (!(d > 0.0) || !isfinite(d)) {
+            memset(a, 0, (size_t)n * sizeof a[0]);
+            o->model_failures += 1.0;
+            return -1;
+        }
+        M[j][j] = sqrt(d);
+        for (int i = j + 1; i < n; ++i) {
+            double x = M[i][j];
+            for (int k = 0; k < j; ++k) x -= M[i][k] * M[j][k];
+            M[i][j] = x / M[j][j];
+        }
+    }
+    for (int i = 0; i < n; ++i) a[i] = u[i] - bias[i] - friction[i];
+    cholesky_solve(M, n, a);
+    for (int i = 0; i < n; ++i) { /* joint i's friction, implicitly: column i of M^-1 */
+        double column[RO_MAX_JOINTS] = {0};
+        column[i] = 1.0;
+        cholesky_solve(M, n, column);
+        const double c = o->h * column[i], r = x2[i] + o->h * (a[i] + column[i] * friction[i]);
+        const double change = friction[i] - implicit_friction(r, c, model->friction[i][RB_VISCOUS],
+                                                             model->friction[i][RB_COULOMB],
+                                                             model->coulomb_velocity);
+        for (int j = 0; j < n; ++j) a[j] += column[j] * change;
+    }
+    return 0;
+}
+
+int ro_step(RobotObserver *o, const RigidBodyModel *model, const double y[], const double u[])
+{
+    const int n = o->n;
+    const double h = o->h;
+    double a[RO_MAX_JOINTS];
+    int status;
+    if (!o->primed) { /* the initial estimates; the leapfrog starts half a step back */
+        for (int i = 0; i < n; ++i) {
+            o->dof[i].z1 = o->x1_hat[i];
+            o->dof[i].x2_now = o->x2_hat[i];
+        }
+        status = nominal_acceleration(o, model, y, u, a);
+        for (int i = 0; i < n; ++i) {
+            o->dof[i].a_current = a[i];
+            o->dof[i].mid = o->dof[i].x2_now - 0.5 * h * a[i];
+        }
+        o->primed = 1;
+    } else {
+        for (int i = 0; i < n; ++i) { /* each joint's corrector (implicit_twisting.h) */
+            RobotDof *s = &o->dof[i];
+            const double w = y[i] - s->z1 - h * s->mid - o->h_squared * s->a_mean;
+            const double e = implicit_inject(w, o->h_squared * o->alpha1[i], h * o->alpha2[i],
+                                             o->alpha1[i], o->inverse_h_squared, &s->v, &s->rate,
+                                             &s->previous_sign, o->rate_gain);
+            /* the velocity difference across the previous sample over h */
+            o->previous_acceleration[i] = s->a_mean + s->v;
+            s->mid += h * (s->a_mean + s->v);
+            s->z1 = y[i] - e;
+            s->x2_now = s->mid + 0.5 * h * (s->a_current + s->v);
+        }
+        status = nominal_acceleration(o, model, y, u, a);
+    }
+    for (int i = 0; i < n; ++i) { /* the interval that starts here */
+        RobotDof *s = &o->dof[i];
+        s->a_mean = 0.5 * (s->a_current + a[i]);
+        s->a_current = a[i];
+        s->z_filtered += o->filter_gain * (s->v - s->z_filtered);
+    }
+    o->steps += 1.0;
+    return status;
+}
+
+void ro_outputs(RobotObserver *o)
+{
+    if (!o->primed) return; /* still the initial estimates */
+    for (int i = 0; i < o->n; ++i) {
+        const RobotDof *s = &o->dof[i];
+        /* no Coulomb term in the prediction (a_current has the joint's friction), the
+         * injection held */
+        implicit_predict(s->z1, s->mid, s->a_mean, s->a_current, 0.0, s->v, 0.0, o->h,
+                         &o->x1_hat[i], &o->x2_hat[i]);
+    }
+}
+
+int ro_converged(const RobotObserver *o)
+{
+    for (int i = 0; i < o->n; ++i)
+        if (!(o->dof[i].rate >= STO_CONVERGED_RATE)) return 0;
+    return 1;
+}
+
+void ro_regression_init(RobotRegression *r, const RigidBodyModel *model, double h, double tau)
+{
+    memset(r, 0, sizeof *r);
+    r->gain = tau > 0.0 ? -expm1(-h / tau) : 1.0;
+    rb_get_parameters(model, r->pi_nominal);
+}
+
+void ro_regression_restart(RobotRegression *r) { r->started = 0; }
+
+static inline void low_pass(double *state, double x, double gain, int started)
+{
+    *state = started ? *state + gain * (x - *state) : x;
+}
+
+void ro_regression_step(RobotRegression *r, const RigidBodyModel *model, const RobotObserver *o,
+                        const double y[], const double u[], RegressorIdentifier *id)
+{
+    const int n = o->n, p = rb_parameter_count(model);
+    if (r->have_previous && id) {
+        for (int i = 0; i < n; ++i) {
+            low_pass(&r->q[i], r->previous_y[i], r->gain, r->started);
+            low_pass(&r->qd[i], r->previous_velocity[i], r->gain, r->started);
+            low_pass(&r->qdd[i], o->previous_acceleration[i], r->gain, r->started);
+            low_pass(&r->u[i], r->previous_u[i], r->gain, r->started);
+        }
+        r->started = 1;
+        RbRegressor Y;
+        double z[RO_MAX_JOINTS];
+        rb_regressor(model, r->q, r->qd, r->qdd, &Y);
+        for (int i = 0; i < n; ++i) {
+            double nominal = 0.0;
+            for (int k = 0; k < p; ++k) nominal += Y.row[i][k] * r->pi_nominal[k];
+            z[i] = r->u[i] - nominal;
+        }
+        rri_step(id, z, &Y);
+    }
+    for (int i = 0; i < n; ++i) {
+        r->previous_y[i] = y[i];
+        r->previous_u[i] = u[i];
+        r->previous_velocity[i] = o->dof[i].x2_now;
+    }
+    r->have_previous = 1;
+}

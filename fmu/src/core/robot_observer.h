@@ -1,0 +1,102 @@
+/* A model-based velocity observer for a serial robot of n <= RB_MAX_JOINTS
+ * joints, and the online identification of its base parameters from the
+ * observed state.  Plain C, no allocation, no FMI types.
+ *
+ * Observer: per joint the sampling-consistent implicit super-twisting
+ * observer (implicit_twisting.h), with the paper's nominal model
+ * f(x1, x2_hat, u) the forward dynamics of the rigid-body model
+ *     a = M(y)^-1 (u - C(y, x2_hat) x2_hat - G(y) - friction(x2_hat))
+ * at the measured positions y, the corrected velocity estimates and the
+ * torques u (Davila, Fridman and Poznyak 2006, eq. (12) with F the nominal
+ * model).  The joints are coupled through M^-1, so each sample runs in two
+ * phases: every joint's corrector, then one forward dynamics at the corrected
+ * state, which every joint takes as the nominal acceleration of the interval
+ * that starts at the sample.  The injection then bounds only the model's
+ * error (the gains' f+), not the whole acceleration.
+ *
+ * Identification (RobotRegression): the implicit corrector completes the
+ * interval ending at the sample, so after sample k it knows the acceleration
+ * at sample k-1, q''_{k-1} = (nominal acceleration around k-1) + injection.
+ * The regression takes sample k-1's positions, velocity estimates,
+ * accelerations and torques, passes all four through one first-order filter
+ * (time constant tau: the filtered injection's), and feeds the torque
+ * residual z = u - Y(q, q', q'') pi_nominal and the regressor Y to the
+ * regressor identifier (regressor_identifier.h). */
+#ifndef ROBOT_OBSERVER_H
+#define ROBOT_OBSERVER_H
+
+#include "implicit_twisting.h"
+#include "regressor_identifier.h"
+#include "rigid_body.h"
+
+#define RO_MAX_JOINTS RB_MAX_JOINTS
+
+/* One joint's implicit observer between samples (implicit_twisting.h's
+ * leapfrog): corrected position, mid-interval velocity, the nominal
+ * acceleration of the interval that starts at the sample and its mean with
+ * the previous one, the injection and its filter, the convergence detector,
+ * the velocity estimate at the sample. */
+typedef struct {
+    double z1, mid, a_current, a_mean, v, z_filtered, rate, previous_sign, x2_now;
+} RobotDof;
+
+typedef struct {
+    int n;
+    double h, h_squared, inverse_h_squared;
+    double filter_gain;            /* 1 - exp(-h/tau) of the injection filter */
+    double rate_gain;              /* convergence detector: h / window */
+    double alpha1[RO_MAX_JOINTS], alpha2[RO_MAX_JOINTS];
+    RobotDof dof[RO_MAX_JOINTS];
+    int primed;                    /* a sample has been taken */
+    double x1_hat[RO_MAX_JOINTS];  /* outputs: the prediction for the end of the last */
+    double x2_hat[RO_MAX_JOINTS];  /* interval (ro_outputs), or the initial estimates */
+    double previous_acceleration[RO_MAX_JOINTS]; /* q'' at the sample before the last */
+    double steps;                  /* samples taken */
+    double model_failures;         /* samples at which M(y) was not positive definite */
+} RobotObserver;
+
+/* Gains per joint (alpha1 > f+ of the model error, alpha2 by Theorem 3.1),
+ * tau the injection filter's time constant (0: none), the convergence
+ * window [s] of the switching-rate test, initial estimates. */
+void ro_init(RobotObserver *o, int n, double h, const double alpha1[], const double alpha2[],
+             double tau, double convergence_window, const double x1_hat0[],
+             const double x2_hat0[]);
+
+/* One sample: positions y and torques u (held over the interval that starts
+ * here).  Returns 0, or -1 if M(y) is not positive definite (the nominal
+ * acceleration is then taken as 0 for this interval and the failure counted). */
+int ro_step(RobotObserver *o, const RigidBodyModel *model, const double y[], const double u[]);
+
+/* x1_hat, x2_hat: the prediction for the end of the last interval. */
+void ro_outputs(RobotObserver *o);
+
+/* Velocity estimate at the last sample (after its corrector). */
+static inline double ro_velocity(const RobotObserver *o, int i) { return o->dof[i].x2_now; }
+
+/* Every joint in its sliding mode by the switching-rate test. */
+int ro_converged(const RobotObserver *o);
+
+typedef struct {
+    double gain;                   /* 1 - exp(-h/tau) of the regression filter */
+    int have_previous, started;
+    double previous_y[RO_MAX_JOINTS], previous_u[RO_MAX_JOINTS],
+        previous_velocity[RO_MAX_JOINTS];
+    /* sample k-1's q, q', q'', u through the filter */
+    double q[RO_MAX_JOINTS], qd[RO_MAX_JOINTS], qdd[RO_MAX_JOINTS], u[RO_MAX_JOINTS];
+    double pi_nominal[RB_MAX_PARAMETERS];
+} RobotRegression;
+
+/* The regression signals' filter (tau > 0; 0: no filter) and the nominal
+ * parameters (the model's). */
+void ro_regression_init(RobotRegression *r, const RigidBodyModel *model, double h, double tau);
+
+/* The filters start again at the next sample (with its values: no transient). */
+void ro_regression_restart(RobotRegression *r);
+
+/* After ro_step(o, model, y, u): one identifier step (rri_step) with the
+ * regression of the previous sample (none on the first sample, nor with id
+ * NULL: the identifier is not running, the sample is only remembered). */
+void ro_regression_step(RobotRegression *r, const RigidBodyModel *model, const RobotObserver *o,
+                        const double y[], const double u[], RegressorIdentifier *id);
+
+#endif

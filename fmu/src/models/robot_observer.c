@@ -1,0 +1,451 @@
+/* RobotObserver: the model-based velocity observer and the online
+ * identification of a serial robot (up to 7 revolute or prismatic joints)
+ * with its rigid-body model built in (core/robot_observer.h).
+ *
+ * The robot's kinematic and inertial data are parameters, in the flat form
+ * of rigid_body.h's rb_load (what `python -m harness robot-fmu-parameters
+ * ROBOT.urdf` writes from a URDF, with the base columns of the regressor and
+ * the nominal base parameters).  Inputs: joint positions q and torques u,
+ * held over each communication step.  Each internal step: the observer's
+ * corrector, the forward dynamics at the corrected state, and (identifier on)
+ * the regressor and one identifier step.  At communication points: the
+ * estimates (the identifier's running solution, or a fresh solve with the
+ * standard errors every statistics_interval seconds).
+ * Value references are stable and documented in docs/robots.md. */
+#include <math.h>
+#include <stddef.h>
+#include <string.h>
+
+#include "../core/gains.h"
+#include "../core/regressor_identifier.h"
+#include "../core/rigid_body.h"
+#include "../core/robot_observer.h"
+#include "../instance/model_interface.h"
+
+#define MAX_N RB_MAX_JOINTS
+#define MAX_P RB_MAX_PARAMETERS
+
+typedef struct {
+    /* parameters */
+    double h;
+    int n, identifier, base_count;
+    double tau, convergence_window, rho, R, t_id, statistics_interval, coulomb_velocity, p;
+    double gravity[3];
+    int joint_type[MAX_N];
+    double axis[MAX_N][3], xyz[MAX_N][3], rpy[MAX_N][3];
+    double link[MAX_N][RB_LINK_PARAMETERS], friction[MAX_N][RB_JOINT_FRICTION];
+    double f_plus[MAX_N], alpha1[MAX_N], alpha2[MAX_N], torque_scale[MAX_N];
+    int base_columns[MAX_P];
+    double base_nominal[MAX_P];
+    int max_internal_steps;
+    /* calculated parameters */
+    double alpha1_used[MAX_N], alpha2_used[MAX_N];
+    /* inputs */
+    double q[MAX_N], u[MAX_N];
+    int identifier_reset;
+    /* outputs */
+    double q_hat[MAX_N], qd_hat[MAX_N], qd_sample[MAX_N], base_estimate[MAX_P], base_std[MAX_P];
+    double gamma_trace, excitation;
+    int identifier_active, converged;
+    /* state */
+    RigidBodyModel model;
+    RobotObserver obs;
+    RobotRegression regression;
+    RegressorIdentifier id;
+    int reset_seen;
+    double failures_seen;   /* obs.model_failures at the last communication point */
+    double last_statistics; /* time of the last solve with statistics */
+} RobotData;
+
+#define OFF(field) offsetof(RobotData, field)
+
+/* The default robot: two revolute joints about x (a double pendulum standing
+ * upright at q = 0), 1 kg links with the centre of mass 5 cm up the link,
+ * joint 2 10 cm above joint 1.  Joints 3..7 (unused at n = 2) repeat them. */
+#define LINK_START 1.0, 0.0, 0.0, 0.05, 0.0035, 0.0, 0.0035, 0.0, 0.0, 0.0005
+static const double LINK_STARTS[MAX_N * RB_LINK_PARAMETERS] = {
+    LINK_START, LINK_START, LINK_START, LINK_START, LINK_START, LINK_START, LINK_START};
+static const double AXIS_STARTS[MAX_N * 3] = {1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0,
+                                               1, 0, 0, 1, 0, 0, 1, 0, 0};
+static const double XYZ_STARTS[MAX_N * 3] = {0, 0, 0, 0, 0, 0.1, 0, 0, 0.1, 0, 0, 0.1,
+                                              0, 0, 0.1, 0, 0, 0.1, 0, 0, 0.1};
+static const double GRAVITY_START[3] = {0.0, 0.0, -9.81};
+/* Friction of joints 1 and 2 (viscous, Coulomb): always base parameters. */
+static const double COLUMN_STARTS[MAX_P] = {20, 21, 22, 23};
+
+static const ModelVariable VARIABLES[] = {
+    {.name = "h", .vr = 1, .type = TYPE_REAL, PARAM(.offset = OFF(h), .start = 1e-3, .min = 0.0,
+     .max = 1.0, .min_exclusive = true, .unit = "s",
+     .description = "Fixed internal step (the sampling period of q and u)")},
+    {.name = "n", .vr = 2, .type = TYPE_INTEGER, PARAM(.offset = OFF(n), .start = 2, .min = 1,
+     .max = MAX_N, .description = "Number of joints (active rows of the joint arrays)")},
+    {.name = "identifier", .vr = 3, .type = TYPE_INTEGER, PARAM(.offset = OFF(identifier),
+     .start = RRI_LSM, .min = 0, .max = 2,
+     .description = "Base-parameter identifier: 0 off, 1 least squares, 2 matrix forgetting "
+                    "factor")},
+    {.name = "base_count", .vr = 4, .type = TYPE_INTEGER, PARAM(.offset = OFF(base_count),
+     .start = 4, .min = 1, .max = MAX_P,
+     .description = "Number of identified base parameters (entries of base_columns)")},
+    {.name = "tau", .vr = 5, .type = TYPE_REAL, PARAM(.offset = OFF(tau), .start = 0.005,
+     .min = 0.0, .max = NAN, .unit = "s",
+     .description = "Time constant of the filter of the injection and of the regression "
+                    "signals q, q', q'', u; 0: none")},
+    {.name = "convergence_window", .vr = 6, .type = TYPE_REAL,
+     PARAM(.offset = OFF(convergence_window), .start = 0.05, .min = 0.0, .max = NAN,
+     .min_exclusive = true, .unit = "s",
+     .description = "Time constant of the convergence test (rate of sign switching of e)")},
+    {.name = "rho", .vr = 7, .type = TYPE_REAL, PARAM(.offset = OFF(rho), .start = 1e-6,
+     .min = 0.0, .max = NAN, .min_exclusive = true,
+     .description = "Regularization of the identifier: Gamma <= I/rho")},
+    {.name = "R", .vr = 8, .type = TYPE_REAL, PARAM(.offset = OFF(R), .start = 0.1, .min = 0.0,
+     .max = 1.0, .min_exclusive = true, .max_exclusive = true,
+     .description = "MFF forgetting factor per second")},
+    {.name = "t_id", .vr = 9, .type = TYPE_REAL, PARAM(.offset = OFF(t_id), .start = 0.2,
+     UNBOUNDED, .unit = "s",
+     .description = "Time at which the identifier starts (after the observer's transient)")},
+    {.name = "statistics_interval", .vr = 11, .type = TYPE_REAL,
+     PARAM(.offset = OFF(statistics_interval), .start = 0.1, .min = 0.0, .max = NAN, .unit = "s",
+     .description = "Least time between solves with standard errors (p^3 operations); in "
+                    "between the outputs carry the identifier's running solution; 0: at every "
+                    "communication point")},
+    {.name = "coulomb_velocity", .vr = 12, .type = TYPE_REAL,
+     PARAM(.offset = OFF(coulomb_velocity), .start = 0.0, .min = 0.0, .max = NAN,
+     .unit = "rad/s",
+     .description = "Coulomb friction f_c sat(q'/v) below this velocity v; 0: f_c sign(q')")},
+    {.name = "p", .vr = 13, .type = TYPE_REAL, PARAM(.offset = OFF(p), .start = 0.5, .min = 0.0,
+     .max = 1.0, .min_exclusive = true, .max_exclusive = true,
+     .description = "Constant p of condition (6) for the gains computed from f_plus")},
+    {.name = "gravity", .vr = 14, .rows = 3, .type = TYPE_REAL,
+     PARAM(.offset = OFF(gravity), .starts = GRAVITY_START, UNBOUNDED, .unit = "m/s2",
+     .description = "Gravity in the base frame")},
+    {.name = "joint_type", .vr = 20, .rows = MAX_N, .type = TYPE_INTEGER,
+     PARAM(.offset = OFF(joint_type), .start = RB_REVOLUTE, .min = 0, .max = 1,
+     .description = "0 revolute, 1 prismatic")},
+    {.name = "axis", .vr = 30, .rows = MAX_N, .cols = 3, .type = TYPE_REAL,
+     PARAM(.offset = OFF(axis), .starts = AXIS_STARTS, UNBOUNDED,
+     .description = "Joint axis in the joint's frame (URDF <axis xyz>; normalized)")},
+    {.name = "xyz", .vr = 51, .rows = MAX_N, .cols = 3, .type = TYPE_REAL,
+     PARAM(.offset = OFF(xyz), .starts = XYZ_STARTS, UNBOUNDED, .unit = "m",
+     .description = "Joint placement in the previous joint's frame (URDF <origin xyz>)")},
+    {.name = "rpy", .vr = 72, .rows = MAX_N, .cols = 3, .type = TYPE_REAL,
+     PARAM(.offset = OFF(rpy), .start = 0.0, UNBOUNDED, .unit = "rad",
+     .description = "Joint placement rotation (URDF <origin rpy>)")},
+    {.name = "link", .vr = 130, .rows = MAX_N, .cols = RB_LINK_PARAMETERS, .type = TYPE_REAL,
+     PARAM(.offset = OFF(link), .starts = LINK_STARTS, UNBOUNDED,
+     .description = "Standard parameters of each link in its joint frame: m, m c_x, m c_y, "
+                    "m c_z, I_xx, I_xy, I_yy, I_xz, I_yz, I_zz (inertia about the frame origin)")},
+    {.name = "friction", .vr = 200, .rows = MAX_N, .cols = RB_JOINT_FRICTION, .type = TYPE_REAL,
+     PARAM(.offset = OFF(friction), .start = 0.0, .min = 0.0, .max = NAN,
+     .description = "Nominal joint friction: viscous [N.m.s/rad], Coulomb [N.m]")},
+    {.name = "f_plus", .vr = 220, .rows = MAX_N, .type = TYPE_REAL,
+     PARAM(.offset = OFF(f_plus), .start = 10.0, .min = 0.0, .max = NAN, .unit = "rad/s2",
+     .description = "Bound f+ on the model's acceleration error (gains by Theorem 3.1)")},
+    {.name = "alpha1", .vr = 230, .rows = MAX_N, .type = TYPE_REAL,
+     PARAM(.offset = OFF(alpha1), .start = 0.0, .min = 0.0, .max = NAN, .unit = "rad/s2",
+     .description = "Gain of alpha1 sign(e); 0: computed from f_plus by Theorem 3.1")},
+    {.name = "alpha2", .vr = 240, .rows = MAX_N, .type = TYPE_REAL,
+     PARAM(.offset = OFF(alpha2), .start = 0.0, .min = 0.0, .max = NAN,
+     .description = "Gain of alpha2 |e|^(1/2) sign(e); 0: computed by Theorem 3.1")},
+    {.name = "torque_scale", .vr = 250, .rows = MAX_N, .type = TYPE_REAL,
+     PARAM(.offset = OFF(torque_scale), .start = 1.0, .min = 0.0, .max = NAN,
+     .min_exclusive = true, .unit = "N.m",
+     .description = "Per-joint torque scale s_i: the identifier weighs joint i by 1/s_i^2")},
+    {.name = "base_columns", .vr = 300, .rows = MAX_P, .type = TYPE_INTEGER,
+     PARAM(.offset = OFF(base_columns), .starts = COLUMN_STARTS, .min = 0, .max = MAX_P - 1,
+     .description = "Columns of the regressor (0-based, link parameters then friction) of "
+                    "the identified base parameters")},
+    {.name = "base_nominal", .vr = 400, .rows = MAX_P, .type = TYPE_REAL,
+     PARAM(.offset = OFF(base_nominal), .start = 0.0, UNBOUNDED,
+     .description = "The base parameters of the nominal model (the estimates start here)")},
+    MAX_INTERNAL_STEPS_VARIABLE(OFF(max_internal_steps)),
+    {.name = "alpha1_used", .vr = 500, .rows = MAX_N, .type = TYPE_REAL,
+     CALC(.offset = OFF(alpha1_used), .unit = "rad/s2",
+     .description = "alpha1 in use (given, or from Theorem 3.1)")},
+    {.name = "alpha2_used", .vr = 510, .rows = MAX_N, .type = TYPE_REAL,
+     CALC(.offset = OFF(alpha2_used), .description = "alpha2 in use (given, or from Theorem 3.1)")},
+    {.name = "q", .vr = 600, .rows = MAX_N, .type = TYPE_REAL,
+     INPUT(.offset = OFF(q), .unit = "rad", .description = "Measured joint positions")},
+    {.name = "u", .vr = 610, .rows = MAX_N, .type = TYPE_REAL,
+     INPUT(.offset = OFF(u), .unit = "N.m", .description = "Joint torques (forces)")},
+    {.name = "identifier_reset", .vr = 620, .type = TYPE_BOOLEAN,
+     .causality = CAUSALITY_INPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
+     .offset = OFF(identifier_reset),
+     .description = "A rising edge restarts identification from the nominal parameters"},
+    {.name = "q_hat", .vr = 700, .rows = MAX_N, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(q_hat), .unit = "rad",
+     .description = "Position estimate at the end of the communication step")},
+    {.name = "qd_hat", .vr = 710, .rows = MAX_N, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(qd_hat), .unit = "rad/s",
+     .description = "Velocity estimate at the end of the communication step")},
+    {.name = "qd_sample", .vr = 720, .rows = MAX_N, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(qd_sample), .unit = "rad/s",
+     .description = "Velocity estimate at the last sample (h before the end of the "
+                    "communication step): more accurate than qd_hat, which predicts over h")},
+    {.name = "base_estimate", .vr = 800, .rows = MAX_P, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(base_estimate),
+     .description = "Identified base parameters (base_nominal plus the identified change)")},
+    {.name = "base_std", .vr = 900, .rows = MAX_P, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(base_std),
+     .description = "Standard errors of base_estimate (sandwich formula, at the last solve "
+                    "with statistics)")},
+    {.name = "gamma_trace", .vr = 1000, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(gamma_trace), .description = "Trace of the identifier's Gamma")},
+    {.name = "excitation", .vr = 1001, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(excitation),
+     .description = "Smallest eigenvalue of the identifier's information per unit time; near "
+                    "0: some base parameter is not being learned")},
+    {.name = "identifier_active", .vr = 1002, .type = TYPE_BOOLEAN,
+     .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
+     .offset = OFF(identifier_active), .description = "The identifier is integrating"},
+    {.name = "converged", .vr = 1003, .type = TYPE_BOOLEAN,
+     .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
+     .offset = OFF(converged),
+     .description = "Every joint's observer is in its sliding mode by the switching-rate test"},
+};
+
+/* Mass >= 0 and, with mass, a positive definite inertia about the centre of
+ * mass; logs and returns MODEL_ERROR otherwise. */
+static ModelStatus check_link(const RobotData *d, int i, const ModelLogger *log)
+{
+    const double *l = d->link[i], m = l[RB_MASS];
+    if (!(m >= 0.0)) {
+        log->log(log->context, MODEL_ERROR, "link[%d]: negative mass %g", i + 1, m);
+        return MODEL_ERROR;
+    }
+    if (m == 0.0) return MODEL_OK; /* a massless link: M's definiteness is checked at q */
+    const double c[3] = {l[1] / m, l[2] / m, l[3] / m};
+    const double cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+    /* inertia about the centre of mass: I_o - m (|c|^2 1 - c c^T) */
+    const double xx = l[4] - m * (cc - c[0] * c[0]), yy = l[6] - m * (cc - c[1] * c[1]);
+    const double zz = l[9] - m * (cc - c[2] * c[2]);
+    const double xy = l[5] + m * c[0] * c[1], xz = l[7] + m * c[0] * c[2];
+    const double yz = l[8] + m * c[1] * c[2];
+    const double minor2 = xx * yy - xy * xy;
+    const double det = xx * (yy * zz - yz * yz) - xy * (xy * zz - yz * xz) + xz * (xy * yz - yy * xz);
+    if (!(xx > 0.0 && minor2 > 0.0 && det > 0.0)) {
+        log->log(log->context, MODEL_ERROR,
+                 "link[%d]: the inertia about the centre of mass (xx %g, yy %g, zz %g, xy %g, "
+                 "xz %g, yz %g) is not positive definite: no rigid body has it", i + 1, xx, yy,
+                 zz, xy, xz, yz);
+        return MODEL_ERROR;
+    }
+    return MODEL_OK;
+}
+
+static ModelStatus load_model(RobotData *d, const ModelLogger *log)
+{
+    const int n = d->n;
+    for (int i = 0; i < n; ++i) {
+        const double *a = d->axis[i];
+        if (!(a[0] * a[0] + a[1] * a[1] + a[2] * a[2] > 0.0)) {
+            log->log(log->context, MODEL_ERROR, "axis[%d] = (%g, %g, %g) is zero: joint %d has "
+                     "no direction", i + 1, a[0], a[1], a[2], i + 1);
+            return MODEL_ERROR;
+        }
+        if (check_link(d, i, log) != MODEL_OK) return MODEL_ERROR;
+    }
+    const RbStatus status = rb_load(&d->model, n, d->joint_type, &d->axis[0][0], &d->xyz[0][0],
+                                    &d->rpy[0][0], &d->link[0][0], &d->friction[0][0],
+                                    d->gravity, d->coulomb_velocity);
+    if (status != RB_OK) {
+        log->log(log->context, MODEL_ERROR, "the robot's parameters are refused: %s",
+                 rb_status_text(status));
+        return MODEL_ERROR;
+    }
+    double qd[MAX_N] = {0}, qdd[MAX_N];
+    if (rb_forward_dynamics(&d->model, d->q, qd, d->u, qdd) != 0) {
+        log->log(log->context, MODEL_ERROR,
+                 "the joint-space inertia matrix M(q) of the robot's parameters is not positive "
+                 "definite at the start positions q (a joint moves no mass; check link and the "
+                 "joint axes of the %d joints)", n);
+        return MODEL_ERROR;
+    }
+    return MODEL_OK;
+}
+
+static ModelStatus check_columns(const RobotData *d, const ModelLogger *log)
+{
+    const int columns = RB_PARAMETERS_PER_JOINT * d->n;
+    if (d->base_count > columns) {
+        log->log(log->context, MODEL_ERROR, "base_count = %d exceeds the %d columns of a %d-joint "
+                 "regressor", d->base_count, columns, d->n);
+        return MODEL_ERROR;
+    }
+    for (int k = 0; k < d->base_count; ++k) {
+        if (d->base_columns[k] >= columns) {
+            log->log(log->context, MODEL_ERROR, "base_columns[%d] = %d: a %d-joint regressor has "
+                     "columns 0..%d", k + 1, d->base_columns[k], d->n, columns - 1);
+            return MODEL_ERROR;
+        }
+        for (int j = 0; j < k; ++j)
+            if (d->base_columns[j] == d->base_columns[k]) {
+                log->log(log->context, MODEL_ERROR, "base_columns[%d] and base_columns[%d] are "
+                         "both %d", j + 1, k + 1, d->base_columns[k]);
+                return MODEL_ERROR;
+            }
+    }
+    return MODEL_OK;
+}
+
+static ModelStatus complete_gains(RobotData *d, const ModelLogger *log)
+{
+    for (int i = 0; i < d->n; ++i) {
+        double a1 = d->alpha1[i], a2 = d->alpha2[i];
+        if (gains_complete(d->f_plus[i], d->p, &a1, &a2) != 0) {
+            log->log(log->context, MODEL_ERROR,
+                     "joint %d: no gains from f_plus[%d] = %g, alpha1[%d] = %g, alpha2[%d] = %g "
+                     "(a gain left at 0 needs f_plus > 0, and alpha1 > f_plus, by Theorem 3.1)",
+                     i + 1, i + 1, d->f_plus[i], i + 1, d->alpha1[i], i + 1, d->alpha2[i]);
+            return MODEL_ERROR;
+        }
+        d->alpha1_used[i] = a1;
+        d->alpha2_used[i] = a2;
+    }
+    return MODEL_OK;
+}
+
+static void publish_estimates(RobotData *d, int with_statistics)
+{
+    const double *delta = d->id.anchor; /* the running solution, at most 32 samples old */
+    if (d->identifier && with_statistics && rri_solve(&d->id) == 0) {
+        rri_statistics(&d->id);
+        delta = d->id.delta;
+        for (int k = 0; k < d->base_count; ++k) d->base_std[k] = d->id.std_error[k];
+        d->gamma_trace = d->id.gamma_trace;
+        d->excitation = d->id.excitation;
+    }
+    for (int k = 0; k < d->base_count; ++k)
+        d->base_estimate[k] = d->base_nominal[k] + (d->identifier ? delta[k] : 0.0);
+    for (int i = 0; i < d->n; ++i) {
+        d->q_hat[i] = d->obs.x1_hat[i];
+        d->qd_hat[i] = d->obs.x2_hat[i];
+        d->qd_sample[i] = d->obs.primed ? ro_velocity(&d->obs, i) : d->obs.x2_hat[i];
+    }
+    d->converged = d->obs.steps > 0.0 && ro_converged(&d->obs);
+}
+
+static ModelStatus initialize(void *data, double start_time, const ModelLogger *log)
+{
+    RobotData *d = data;
+    if (load_model(d, log) != MODEL_OK || complete_gains(d, log) != MODEL_OK) return MODEL_ERROR;
+    if (d->identifier && check_columns(d, log) != MODEL_OK) return MODEL_ERROR;
+    const double zero[MAX_N] = {0};
+    ro_init(&d->obs, d->n, d->h, d->alpha1_used, d->alpha2_used, d->tau, d->convergence_window,
+            d->q, zero);
+    ro_regression_init(&d->regression, &d->model, d->h, d->tau);
+    memset(&d->id, 0, sizeof d->id);
+    if (d->identifier && rri_init(&d->id, (RriKind)d->identifier, d->n, d->base_count,
+                                  d->base_columns, d->torque_scale, d->h, d->rho, d->R) != 0) {
+        log->log(log->context, MODEL_ERROR, "the identifier refused its settings (h = %g, rho = "
+                 "%g, R = %g)", d->h, d->rho, d->R);
+        return MODEL_ERROR;
+    }
+    memset(d->base_std, 0, sizeof d->base_std);
+    memset(d->base_estimate, 0, sizeof d->base_estimate);
+    d->gamma_trace = d->identifier ? d->id.gamma_trace : 0.0;
+    d->excitation = 0.0;
+    d->identifier_active = 0;
+    d->reset_seen = d->identifier_reset;
+    d->failures_seen = 0.0;
+    d->last_statistics = start_time;
+    publish_estimates(d, 0);
+    return MODEL_OK;
+}
+
+static double internal_step(const void *data) { return ((const RobotData *)data)->h; }
+
+static uint64_t max_internal_steps(const void *data)
+{
+    return (uint64_t)((const RobotData *)data)->max_internal_steps;
+}
+
+static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
+{
+    RobotData *d = data;
+    if (d->identifier && d->identifier_reset != d->reset_seen) {
+        d->reset_seen = d->identifier_reset;
+        if (d->identifier_reset) {
+            rri_reset(&d->id);
+            d->identifier_active = 0;
+        }
+    }
+    for (; k < k_end; ++k) {
+        ro_step(&d->obs, &d->model, d->q, d->u);
+        if (d->identifier && !d->identifier_active && start_time + (double)k * d->h >= d->t_id) {
+            d->identifier_active = 1;
+            ro_regression_restart(&d->regression);
+        }
+        if (d->identifier)
+            ro_regression_step(&d->regression, &d->model, &d->obs, d->q, d->u,
+                               d->identifier_active ? &d->id : NULL);
+    }
+}
+
+static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
+{
+    RobotData *d = data;
+    ro_outputs(&d->obs);
+    const int statistics = t - d->last_statistics >= d->statistics_interval;
+    if (statistics) d->last_statistics = t;
+    publish_estimates(d, statistics && d->identifier_active);
+    if (d->obs.model_failures > d->failures_seen) {
+        d->failures_seen = d->obs.model_failures;
+        log->log(log->context, MODEL_ERROR,
+                 "the inertia matrix M(q) is not positive definite at t = %g (q[1] = %g): the "
+                 "robot's inertial parameters are not physical there", t, d->q[0]);
+        return MODEL_ERROR;
+    }
+    for (int i = 0; i < d->n; ++i) {
+        if (!isfinite(d->q_hat[i]) || !isfinite(d->qd_hat[i])) {
+            log->log(log->context, MODEL_ERROR,
+                     "observer diverged at t = %g: q_hat[%d] = %g, qd_hat[%d] = %g (q[%d] = %g, "
+                     "u[%d] = %g): the model's acceleration error exceeds what the gains "
+                     "(alpha1_used[%d] = %g) correct; raise f_plus[%d] or correct the model",
+                     t, i + 1, d->q_hat[i], i + 1, d->qd_hat[i], i + 1, d->q[i], i + 1, d->u[i],
+                     i + 1, d->alpha1_used[i], i + 1);
+            return MODEL_ERROR;
+        }
+    }
+    return MODEL_OK;
+}
+
+/* A deserialized state: every count and index the step trusts must fit. */
+static ModelStatus check_restored(const void *data, const ModelLogger *log)
+{
+    const RobotData *d = data;
+    const int columns = RB_PARAMETERS_PER_JOINT * d->n;
+    int ok = d->obs.n >= 0 && d->obs.n <= MAX_N && (d->obs.n == 0 || d->obs.n == d->n) &&
+             (d->obs.n == 0 || d->model.n == d->n) && d->id.rows >= 0 &&
+             (d->id.rows == 0 || d->id.rows == d->n) && d->id.p >= 0 && d->id.p <= columns;
+    for (int k = 0; ok && k < d->id.p; ++k)
+        ok = d->id.columns[k] >= 0 && d->id.columns[k] < columns;
+    for (int i = 0; ok && d->obs.n && i < d->n; ++i)
+        ok = d->model.type[i] == RB_REVOLUTE || d->model.type[i] == RB_PRISMATIC;
+    if (!ok) {
+        log->log(log->context, MODEL_ERROR,
+                 "deserialized FMU state: the robot observer's internal counts are inconsistent "
+                 "(n = %d, observer n = %d, identifier p = %d); state refused", d->n, d->obs.n,
+                 d->id.p);
+        return MODEL_ERROR;
+    }
+    return MODEL_OK;
+}
+
+const ModelDescriptor MODEL_DESCRIPTOR = {
+    .model_name = "RobotObserver",
+    .model_identifier = "RobotObserver",
+    .guid = "{3c9e5a71-0b4d-4f6e-8a2c-7d1e9f4b6a53}",
+    .description = "Model-based super-twisting velocity observer and base-parameter identifier "
+                   "for serial robots of up to 7 joints, with the rigid-body model built in",
+    .variables = VARIABLES,
+    .n_variables = sizeof VARIABLES / sizeof VARIABLES[0],
+    .data_size = sizeof(RobotData),
+    .default_stop_time = 1.0,
+    .default_tolerance = 1e-6,
+    .initialize = initialize,
+    .internal_step = internal_step,
+    .max_internal_steps = max_internal_steps,
+    .advance = advance,
+    .communication_point = communication_point,
+    .check_restored = check_restored,
+};

@@ -1,0 +1,152 @@
+"""The RobotObserver FMU (FMI 2 and FMI 3): the same numbers as the offline ctypes path
+(harness.robot.native) on the same log, its default experiment, and clear errors for
+bad parameters."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from fmpy import simulate_fmu
+
+from harness.robot.examples import example_urdf
+from harness.robot.fmu import INTEGERS, fmu_parameters, run_fmu, start_values
+from harness.robot.pipeline import JointLog
+from harness.robot.urdf import read_urdf
+from tests.conftest import fmu_path
+from tests.harness.robot.conftest import FRICTION, multisine_log, payload_link
+
+from .fmi_helpers import ERROR, OK, RawFMU, RawFMU3, instances
+
+H = 1e-3
+F_PLUS = 1000.0  # the URDF's arm without friction: model errors up to 600 rad/s^2
+
+
+@pytest.fixture(scope="module")
+def case():
+    """The two-link arm with its payload, friction unknown (nominal 0), a 1 s log."""
+    path, _ = example_urdf("double_pendulum")
+    robot = read_urdf(path)
+    link = payload_link(robot.arrays()["link"])
+    truth = robot.rigid_body(link=link, friction=FRICTION)
+    t, q, qd, _, tau = multisine_log(truth, 1.0, H)
+    pi = np.concatenate([link.ravel(), np.zeros(4)])
+    parameters = fmu_parameters(robot, unknown="payload", f_plus=F_PLUS, pi=pi, t_id=0.2,
+                                torque_scale=np.sqrt(np.mean(tau ** 2, axis=0)))
+    offline = robot.rigid_body(link=link, friction=np.zeros((2, 2))).observe(
+        q, tau, H, F_PLUS, identify={"columns": parameters["base_columns"], "kind": "lsm",
+                                     "rho": parameters["rho"], "start": 200,
+                                     "torque_scale": parameters["torque_scale"]})
+    return JointLog(t, q, tau), qd, parameters, offline
+
+
+def test_the_fmu_runs_the_offline_path_exactly(case):
+    log, qd, parameters, offline = case
+    result = run_fmu(fmu_path("RobotObserver"), parameters, log)
+    # after doStep(t_k, h): the prediction for t_k + h that the offline path records at k
+    np.testing.assert_allclose(result["velocity"], offline["prediction"], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(result["velocity_sample"], offline["velocity"], rtol=0,
+                               atol=1e-12)
+    np.testing.assert_allclose(result["base_estimate"],
+                               parameters["base_nominal"] + offline["delta"], atol=1e-12)
+    np.testing.assert_allclose(result["base_std"], offline["std_error"], rtol=1e-9)
+    # and it observes: RMS 0.009 and 0.013 rad/s with the friction unknown to the model
+    error = result["velocity"][200:-1] - qd[201:]
+    assert np.all(np.sqrt(np.mean(error ** 2, axis=0)) < 0.02)
+
+
+def _fmi3_run(fmu: RawFMU3, parameters: dict, log: JointLog, steps: int) -> list[float]:
+    """Sets the parameters as whole arrays (rows beyond n keep their start values)."""
+    assert fmu.call("EnterInitializationMode", False, 0.0, 0.0, False, 0.0) == OK
+    for name, value in {**parameters, "statistics_interval": 0.0}.items():
+        kind = "Int32" if name in INTEGERS else "Float64"
+        flat = list(np.ravel(value))
+        current = fmu.get(kind, [name])
+        assert fmu.set(kind, {name: flat + current[len(flat):]}) == OK, fmu.messages()
+    n = parameters["n"]
+    pad = [0.0] * (7 - n)
+    inputs = lambda k: {"q": [*log.q[k], *pad], "u": [*log.u[k], *pad]}  # noqa: E731
+    assert fmu.set("Float64", inputs(0)) == OK
+    assert fmu.call("ExitInitializationMode") == OK, fmu.messages()
+    velocity = []
+    for k in range(steps):
+        assert fmu.set("Float64", inputs(k)) == OK
+        assert fmu.do_step(k * H, H)[0] == OK, fmu.messages()
+        velocity.append(fmu.get("Float64", ["qd_hat"])[:n])
+    return velocity + fmu.get("Float64", ["base_estimate"])[:parameters["base_count"]]
+
+
+@pytest.fixture
+def make3():
+    yield from instances(RawFMU3, fmu_path("RobotObserver", 3))
+
+
+def test_fmi3_gives_the_fmi2_numbers(case, make3):
+    log, _, parameters, offline = case
+    out = _fmi3_run(make3(), parameters, log, 400)
+    np.testing.assert_allclose(np.array(out[:400]), offline["prediction"][:400], atol=1e-12)
+    fmi2 = run_fmu(fmu_path("RobotObserver"), parameters,
+                   JointLog(log.t[:400], log.q[:400], log.u[:400]))
+    np.testing.assert_allclose(out[400:], fmi2["base_estimate"], atol=1e-12)
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_the_default_experiment_runs(version):
+    result = simulate_fmu(str(fmu_path("RobotObserver", version)), stop_time=1.0,
+                          output_interval=0.01)
+    names = [n for n in result.dtype.names if n != "time"]
+    assert len(result) == 101 and names
+    for name in names:
+        assert np.all(np.isfinite(np.asarray(result[name], dtype=float))), name
+
+
+@pytest.fixture
+def make():
+    yield from instances(RawFMU, fmu_path("RobotObserver"))
+
+
+def _bad(make, reals=None, integers=None) -> str:
+    """Initializes with the changed parameters; expects an error; returns the log."""
+    fmu = make()
+    assert fmu.initialize(reals=reals, integers=integers) == ERROR
+    return fmu.messages()
+
+
+def test_more_than_seven_joints_is_refused(make):
+    fmu = make()
+    assert fmu.set_integer({"n": 8}) == ERROR
+    assert "n = 8 is out of range [1, 7]" in fmu.messages()
+
+
+@pytest.mark.parametrize("reals, integers, message", [
+    ({"link[2,5]": -0.01}, None, "link[2]: the inertia about the centre of mass"),
+    ({"link[1,1]": -1.0}, None, "link[1]: negative mass -1"),
+    ({"axis[2,1]": 0.0}, None, "axis[2] = (0, 0, 0) is zero"),
+    ({f"link[{i},{j}]": 0.0 for i in (1, 2) for j in range(1, 11)}, None,
+     "M(q) of the robot's parameters is not positive definite"),
+    (None, {"base_columns[1]": 30}, "base_columns[1] = 30: a 2-joint regressor has columns "
+     "0..23"),
+    (None, {"base_columns[2]": 20}, "base_columns[1] and base_columns[2] are both 20"),
+    (None, {"base_count": 30}, "base_count = 30 exceeds the 24 columns"),
+    ({"f_plus[1]": 0.0}, None, "joint 1: no gains from f_plus[1] = 0"),
+])
+def test_bad_parameters_are_clear_errors(make, reals, integers, message):
+    assert message in _bad(make, reals, integers)
+
+
+def test_a_diverging_observer_is_an_error_not_a_crash(make):
+    fmu = make()
+    assert fmu.initialize() == OK
+    assert fmu.set_real({"u[1]": 1e306, "u[2]": -1e306}) == OK
+    statuses = [fmu.do_step(k * H, H) for k in range(10)]
+    assert ERROR in statuses, "a torque beyond floating point never diverged"
+    assert "observer diverged at t = " in fmu.messages()
+    assert "raise f_plus[" in fmu.messages()
+
+
+def test_the_parameter_names_exist_in_both_versions(case):
+    _, _, parameters, _ = case
+    from fmpy import read_model_description
+    for version in (2, 3):
+        names = {v.name for v in read_model_description(
+            str(fmu_path("RobotObserver", version))).modelVariables}
+        wanted = set(start_values(parameters)) if version == 2 else set(parameters)
+        assert wanted <= names, wanted - names
