@@ -133,7 +133,7 @@ int rn_observe(int n, long count, double h, const double y[], const double f_plu
         SuperTwistingObserver o;
         sto_init(&o, 1, h, &alpha1, &alpha2, tau, &y0, &zero);
         sto_configure(&o, STO_SCHEME_IMPLICIT, 0.1);
-        const StoAcceleration none = {0.0, 0.0, 0.0};
+        const StoAcceleration none = {.held = 0.0}; /* model-free: every term 0 */
         StoTrace trace;
         for (long k = 0; k < count; ++k) {
             sto_run(&o, y + k * n + i, &none, 1, &trace);
