@@ -423,6 +423,17 @@ static void link_force_columns(const LinkMotion *s, int i, double lin[10][3], do
     }
 }
 
+/* A motion (lin, ang) in frame i-1 expressed in frame i (in place): the dual of
+ * force_to_parent, so that dot(S, force_to_parent(f)) = dot(motion_to_child(S), f). */
+static void motion_to_child(const Transform *X, double lin[3], double ang[3])
+{
+    double t[3];
+    cross(ang, X->p, t);
+    for (int k = 0; k < 3; ++k) t[k] += lin[k];
+    rotate_back(X->R, t, lin);
+    rotate_back(X->R, ang, ang);
+}
+
 void rb_regressor(const RigidBodyModel *model, const double q[], const double qd[],
                   const double qdd[], RbRegressor *regressor)
 {
@@ -432,17 +443,21 @@ void rb_regressor(const RigidBodyModel *model, const double q[], const double qd
     forward_pass(model, q, qd, qdd, 1, &s);
     for (int j = 0; j < n; ++j)
         for (int c = 0; c < RB_PARAMETERS_PER_JOINT * n; ++c) Y[j][c] = 0.0;
+    /* joint j's motion subspace expressed in frame i (for every j <= i) */
+    double s_lin[RB_MAX_JOINTS][3], s_ang[RB_MAX_JOINTS][3];
     for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < i; ++j) motion_to_child(&s.X[i], s_lin[j], s_ang[j]);
+        joint_subspace(model, i, s_lin[i], s_ang[i]);
         double lin[10][3], ang[10][3];
         link_force_columns(&s, i, lin, ang);
-        /* link i's force reaches every joint j <= i through the frames between */
+        /* link i's force reaches every joint j <= i: Y = S_j . f in frame i,
+         * where the mass has no moment, the inertia no force */
         for (int j = i; j >= 0; --j) {
-            double s_lin[3], s_ang[3];
-            joint_subspace(model, j, s_lin, s_ang);
-            for (int c = 0; c < RB_LINK_PARAMETERS; ++c) {
-                if (j < i) force_to_parent(&s.X[j + 1], lin[c], ang[c]);
-                Y[j][RB_LINK_PARAMETERS * i + c] = dot(s_lin, lin[c]) + dot(s_ang, ang[c]);
-            }
+            double *y = Y[j] + RB_LINK_PARAMETERS * i;
+            y[RB_MASS] = dot(s_lin[j], lin[RB_MASS]);
+            for (int c = RB_FIRST_MOMENT; c < RB_INERTIA; ++c)
+                y[c] = dot(s_lin[j], lin[c]) + dot(s_ang[j], ang[c]);
+            for (int c = RB_INERTIA; c < RB_LINK_PARAMETERS; ++c) y[c] = dot(s_ang[j], ang[c]);
         }
         Y[i][RB_LINK_PARAMETERS * n + RB_JOINT_FRICTION * i + RB_VISCOUS] = qd ? qd[i] : 0.0;
         Y[i][RB_LINK_PARAMETERS * n + RB_JOINT_FRICTION * i + RB_COULOMB] =
