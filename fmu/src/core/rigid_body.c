@@ -413,13 +413,20 @@ static void link_force_columns(const LinkMotion *s, int i, double lin[10][3], do
         for (int r = 0; r < 3; ++r) lin[RB_FIRST_MOMENT + k][r] += u[r];
         cross(e, ac, ang[RB_FIRST_MOMENT + k]);
     }
+    /* inertia entry (r, c) (xx, xy, yy, xz, yz, zz): with U its unit symmetric
+     * matrix, U alpha + w x U w = alpha_c e_r + alpha_r e_c + w_c (w x e_r) + w_r (w x e_c)
+     * (once if r = c) */
+    static const int entry[6][2] = {{0, 0}, {0, 1}, {1, 1}, {0, 2}, {1, 2}, {2, 2}};
+    const double w_cross_e[3][3] = {{0.0, w[2], -w[1]}, {-w[2], 0.0, w[0]}, {w[1], -w[0], 0.0}};
     for (int k = 0; k < 6; ++k) {
-        double unit[6] = {0}, Ia[3], Iw[3], u[3];
-        unit[k] = 1.0;
-        inertia_times(unit, alpha, Ia);
-        inertia_times(unit, w, Iw);
-        cross(w, Iw, u);
-        for (int r = 0; r < 3; ++r) ang[RB_INERTIA + k][r] = Ia[r] + u[r];
+        const int r = entry[k][0], c = entry[k][1];
+        double *out = ang[RB_INERTIA + k];
+        for (int d = 0; d < 3; ++d) out[d] = w[c] * w_cross_e[r][d];
+        out[r] += alpha[c];
+        if (r != c) {
+            for (int d = 0; d < 3; ++d) out[d] += w[r] * w_cross_e[c][d];
+            out[c] += alpha[r];
+        }
     }
 }
 
@@ -462,5 +469,19 @@ void rb_regressor(const RigidBodyModel *model, const double q[], const double qd
         Y[i][RB_LINK_PARAMETERS * n + RB_JOINT_FRICTION * i + RB_VISCOUS] = qd ? qd[i] : 0.0;
         Y[i][RB_LINK_PARAMETERS * n + RB_JOINT_FRICTION * i + RB_COULOMB] =
             rb_coulomb_shape(model, qd ? qd[i] : 0.0);
+    }
+}
+
+void rb_regressor_torque(const RigidBodyModel *model, const RbRegressor *Y, const double pi[],
+                         double tau[])
+{
+    const int n = model->n, friction = RB_LINK_PARAMETERS * n;
+    for (int j = 0; j < n; ++j) {
+        const double *y = Y->row[j];
+        double sum = 0.0;
+        for (int c = RB_LINK_PARAMETERS * j; c < RB_LINK_PARAMETERS * n; ++c) sum += y[c] * pi[c];
+        for (int c = friction + RB_JOINT_FRICTION * j; c < friction + RB_JOINT_FRICTION * (j + 1); ++c)
+            sum += y[c] * pi[c];
+        tau[j] = sum;
     }
 }

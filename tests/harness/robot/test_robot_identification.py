@@ -96,9 +96,10 @@ def test_online_lsm_is_the_regularized_least_squares():
 def test_online_lsm_over_a_7_joint_regressor_reads_only_its_nonzero_blocks(order):
     """The step skips the regressor's structural zeros (joint i's row for the links
     before i, the other joints' friction): the same P and b as the dense formula,
-    in any column order."""
-    robot, body, types, base = setup("panda")
+    in any column order; the nominal torques Y pi (rb_regressor_torque) with friction."""
+    robot, _, types, base = setup("panda")
     rng = np.random.default_rng(3)
+    body = robot.rigid_body(friction=rng.uniform(0.5, 2.0, (robot.n, 2)))
     q, qd, qdd = random_states(types, 300, rng)
     tau = rng.normal(0, 5, q.shape)
     columns = base.base if order == "ascending" else rng.permutation(base.base)
