@@ -1,5 +1,6 @@
-"""Cost of one internal step of the robot identifier in C (regressor, nominal torques,
-LSM step over every base parameter and the friction), per example robot.
+"""Cost of one internal step of the robot identifier in C (regressor, nominal torques
+Y pi, LSM step over every base parameter and the friction, with its anchor re-solve
+every RRI_ANCHOR_INTERVAL steps), per example robot.
 
     .venv/bin/python bench/robot_step_cost.py [--steps 20000] [--callgrind]
 
