@@ -475,13 +475,13 @@ void rb_regressor(const RigidBodyModel *model, const double q[], const double qd
 void rb_regressor_torque(const RigidBodyModel *model, const RbRegressor *Y, const double pi[],
                          double tau[])
 {
-    const int n = model->n, friction = RB_LINK_PARAMETERS * n;
+    const int n = model->n;
     for (int j = 0; j < n; ++j) {
         const double *y = Y->row[j];
         double sum = 0.0;
         for (int c = RB_LINK_PARAMETERS * j; c < RB_LINK_PARAMETERS * n; ++c) sum += y[c] * pi[c];
-        for (int c = friction + RB_JOINT_FRICTION * j; c < friction + RB_JOINT_FRICTION * (j + 1); ++c)
-            sum += y[c] * pi[c];
+        const int own = RB_LINK_PARAMETERS * n + RB_JOINT_FRICTION * j; /* joint j's friction */
+        for (int c = own; c < own + RB_JOINT_FRICTION; ++c) sum += y[c] * pi[c];
         tau[j] = sum;
     }
 }

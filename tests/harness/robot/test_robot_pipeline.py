@@ -127,7 +127,8 @@ def test_friction_rows_leave_out_reversals_and_slow_stretches():
     assert not rows[int(0.53 / h), 0] and rows[int(0.6 / h), 0]        # reversal margin 0.05 s
     assert not rows[int(1.5 / h), 1] and not rows[int(1.69 / h), 1]    # |q'| < 0.05
     assert rows[int(1.71 / h), 1] and rows[int(0.5 / h), 1]
-    assert np.array_equal(friction_rows(velocity, h, 0.05, 0.0), away_from_reversals(velocity, h, 0.05))
+    assert np.array_equal(friction_rows(velocity, h, 0.05, 0.0),
+                          away_from_reversals(velocity, h, 0.05))
     with pytest.raises(ValueError, match="min_speed"):
         friction_rows(velocity, h, 0.05, -1.0)
 
