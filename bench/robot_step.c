@@ -1,5 +1,5 @@
 /* Cost of one internal step of the robot identifier: the regressor, the nominal
- * torques and the LSM step over the base columns (bench/robot_step_cost.py).
+ * torques (Y pi) and the LSM step over the base columns (bench/robot_step_cost.py).
  * Usage: robot_step MODEL.txt STEPS; MODEL.txt: n, then per joint a line
  * "type ax ay az x y z roll pitch yaw m mx my mz Ixx Ixy Iyy Ixz Iyz Izz fv fc",
  * then p and the p base columns.  Prints nanoseconds per step. */
@@ -37,6 +37,8 @@ int main(int argc, char **argv)
     static RegressorIdentifier id;
     if (rb_load(&model, n, type, axis, xyz, rpy, link, friction, gravity, 0.0) != RB_OK) return 2;
     if (rri_init(&id, RRI_LSM, n, p, columns, NULL, 1e-4, 1e-6, 0.0) != 0) return 2;
+    double pi[RB_MAX_PARAMETERS];
+    rb_get_parameters(&model, pi);
     const long steps = atol(argv[2]);
     double q[RB_MAX_JOINTS], qd[RB_MAX_JOINTS], qdd[RB_MAX_JOINTS], tau[RB_MAX_JOINTS], z[RB_MAX_JOINTS];
     RbRegressor Y;
@@ -50,7 +52,7 @@ int main(int argc, char **argv)
             qdd[i] = 0.2 * i - 0.1 * t;
         }
         rb_regressor(&model, q, qd, qdd, &Y);
-        rb_inverse_dynamics(&model, q, qd, qdd, 1, tau);
+        rb_regressor_torque(&model, &Y, pi, tau);
         for (int i = 0; i < n; ++i) z[i] = 0.01 * tau[i];
         rri_step(&id, z, &Y);
     }

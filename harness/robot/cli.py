@@ -22,6 +22,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                             "super-twisting observer of the C core")
     group.add_argument("--window", type=float, default=0.05,
                        help="Savitzky-Golay window [s] (default 0.05)")
+    group.add_argument("--min-speed", type=_non_negative, default=None, metavar="V",
+                       help="leave out joint equations at |q'| < V [rad/s or m/s], where "
+                            "Coulomb friction is not f_c sign(q') (default 0.05)")
+
+
+def _non_negative(text: str) -> float:
+    value = float(text)
+    if not value >= 0.0:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number >= 0")
+    return value
 
 
 def identify_command(args, out: Path) -> int:
@@ -37,8 +47,9 @@ def identify_command(args, out: Path) -> int:
     try:
         robot = read_urdf(args.robot, locked=tuple(args.lock))
         log = read_log(args.data, robot.n, mapping)
+        speed = {} if args.min_speed is None else {"min_speed": args.min_speed}
         result = identify_robot(robot, log, unknown=args.unknown, method=args.velocity,
-                                window=args.window)
+                                window=args.window, **speed)
     except (UrdfError, LogError) as error:
         print(f"harness identify: {error}", file=sys.stderr)
         return 2

@@ -27,6 +27,9 @@ from .least_squares import Fit, torque_least_squares
 from .urdf import Robot
 
 
+MIN_SPEED = 0.05  # [rad/s or m/s] below it, joint equations are left out (friction_rows)
+
+
 class LogError(ValueError):
     """The joint log cannot be used; the message names the file and line or column."""
 
@@ -124,11 +127,13 @@ class Identification:
 
 def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: str = "sg",
                    window: float = 0.05, tau: float = 0.005, max_samples: int = 20000,
-                   skip: float = 0.5) -> Identification:
+                   skip: float = 0.5, min_speed: float = MIN_SPEED) -> Identification:
     """Identify the unknown parameters ("all" or "payload") from the log.
 
     The first `skip` seconds (observer convergence, filter edges) and the last window
-    are not used; at most max_samples evenly spaced samples enter the regression."""
+    are not used; at most max_samples evenly spaced samples enter the regression.
+    Joint i's equation is left out near its velocity reversals and where
+    |q_i'| < min_speed (rad/s or m/s; see friction_rows)."""
     if log.q.shape[1] != robot.n:
         raise LogError(f"the log has {log.q.shape[1]} joints, the robot {robot.n}")
     if method == "sg":
@@ -152,10 +157,23 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     nominal = robot.parameters()
     z = u[used] - Y[:, :, known] @ nominal[known]
     correlation = max(1, int(np.ceil(2 * max(window, tau) / (stride * log.step))))
-    mask = away_from_reversals(qd, log.step, max(window, 4 * tau))[used]
+    mask = friction_rows(qd, log.step, max(window, 4 * tau), min_speed)[used]
     fit = torque_least_squares(base.regressor(Y), z, batch=correlation, mask=mask)
     pi = consistent_parameters(robot, base, fit.beta, fit.std_error)
     return Identification(base, fit, pi, qd, used)
+
+
+def friction_rows(velocity: np.ndarray, h: float, margin: float,
+                  min_speed: float = MIN_SPEED) -> np.ndarray:
+    """(N, n) True for the joint equations whose friction is f_v q' + f_c sign(q'):
+    away from the joint's reversals (away_from_reversals) and at |q'| >= min_speed.
+
+    At low speed a joint's Coulomb friction is not f_c sign(q') (stiction, the
+    Stribeck effect, a simulator's smoothing), also where the joint slows down
+    without reversing, which the reversal margin does not catch."""
+    if not min_speed >= 0.0:
+        raise ValueError(f"min_speed must be >= 0, not {min_speed!r}")
+    return away_from_reversals(velocity, h, margin) & (np.abs(velocity) >= min_speed)
 
 
 def away_from_reversals(velocity: np.ndarray, h: float, margin: float) -> np.ndarray:

@@ -12,7 +12,7 @@ from harness.robot.fmu import INTEGERS, fmu_parameters, run_fmu, start_values
 from harness.robot.pipeline import JointLog
 from harness.robot.urdf import read_urdf
 from tests.conftest import fmu_path
-from tests.harness.robot.conftest import FRICTION, multisine_log, payload_link
+from tests.harness.robot.robot_helpers import FRICTION, multisine_log, payload_link
 
 from .fmi_helpers import ERROR, OK, RawFMU, RawFMU3, instances
 

@@ -17,6 +17,23 @@ int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int c
             if (columns[j] == columns[k]) return -1;
         id->columns[k] = columns[k];
     }
+    /* link l's columns reach joints 0..l, joint i's friction only joint i */
+    const int link_columns = RB_LINK_PARAMETERS * rows;
+    for (int i = 0; i < rows; ++i) {
+        id->runs[i] = 0;
+        for (int k = 0; k < p; ++k) {
+            const int c = columns[k];
+            const int reaches = c < link_columns ? i <= c / RB_LINK_PARAMETERS
+                                                 : (c - link_columns) / RB_JOINT_FRICTION == i;
+            if (!reaches) continue;
+            if (id->runs[i] > 0 && id->run_end[i][id->runs[i] - 1] == k) {
+                id->run_end[i][id->runs[i] - 1] = k + 1;
+            } else {
+                id->run_start[i][id->runs[i]] = k;
+                id->run_end[i][id->runs[i]++] = k + 1;
+            }
+        }
+    }
     for (int i = 0; i < rows; ++i) {
         const double s = torque_scale ? torque_scale[i] : 1.0;
         if (!(s > 0.0) || !isfinite(s)) return -1;
@@ -91,19 +108,7 @@ static void solve_anchor(RegressorIdentifier *id)
 
 void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
 {
-    const int rows = id->rows, p = id->p;
-    const double h = id->h;
-    double y[RRI_MAX_ROWS][RRI_MAX_PARAMETERS], wy[RRI_MAX_ROWS][RRI_MAX_PARAMETERS];
-    double residual[RRI_MAX_ROWS];
-    for (int i = 0; i < rows; ++i) {
-        double r = z[i];
-        for (int k = 0; k < p; ++k) {
-            y[i][k] = Y->row[i][id->columns[k]];
-            wy[i][k] = h * id->weight[i] * y[i][k];
-            r -= y[i][k] * id->anchor[k];
-        }
-        residual[i] = r;
-    }
+    const int p = id->p;
     if (id->lambda < 1.0) {
         const double lambda = id->lambda, pull = id->one_minus_lambda_rho;
         for (int j = 0; j < p; ++j) {
@@ -112,21 +117,30 @@ void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
             id->b[j] = lambda * id->b[j] + pull * id->anchor[j];
         }
     }
-    for (int j = 0; j < p; ++j) {
-        double bz = 0.0, score = 0.0;
-        for (int i = 0; i < rows; ++i) {
-            bz += wy[i][j] * z[i];
-            score += wy[i][j] * residual[i];
-        }
-        id->b[j] += bz;
-        id->score[j] += score;
-        for (int k = j; k < p; ++k) {
-            double sum = 0.0;
-            for (int i = 0; i < rows; ++i) sum += wy[i][j] * y[i][k];
-            id->P[j][k] += sum;
-        }
+    /* row i adds h w_i y_i^T (y_i, z_i, residual_i) over the columns where y_i
+     * can be nonzero (its runs): the upper triangle of P row by row */
+    for (int i = 0; i < id->rows; ++i) {
+        const int runs = id->runs[i];
+        const int *start = id->run_start[i], *end = id->run_end[i];
+        const double *row = Y->row[i], c = id->h * id->weight[i];
+        double y[RRI_MAX_PARAMETERS], residual = z[i];
+        for (int r = 0; r < runs; ++r)
+            for (int k = start[r]; k < end[r]; ++k) {
+                y[k] = row[id->columns[k]];
+                residual -= y[k] * id->anchor[k];
+            }
+        for (int r = 0; r < runs; ++r)
+            for (int j = start[r]; j < end[r]; ++j) {
+                const double a = c * y[j];
+                double *P = id->P[j];
+                id->b[j] += a * z[i];
+                id->score[j] += a * residual;
+                for (int k = j; k < end[r]; ++k) P[k] += a * y[k];
+                for (int s = r + 1; s < runs; ++s)
+                    for (int k = start[s]; k < end[s]; ++k) P[k] += a * y[k];
+            }
     }
-    id->active_time += h;
+    id->active_time += id->h;
     if (++id->batch_age >= id->batch_samples) {
         for (int j = 0; j < p; ++j)
             for (int k = j; k < p; ++k)

@@ -13,7 +13,7 @@
  *   scales (so that joints with large torques do not drown the others);
  * - stabilized forgetting toward rho I: Gamma = P^-1 <= I / rho always;
  * - Delta_hat = P^-1 b by Cholesky only when asked (rri_solve), so the
- *   internal step costs n p (p + 3) / 2 multiply-adds;
+ *   internal step costs at most n p (p + 3) / 2 multiply-adds;
  * - reset back to the nominal parameters (Delta = 0, P = rho I);
  * - standard errors by the sandwich formula P^-1 S P^-1, S the (forgotten) sum
  *   of the outer products of the scores h Y^T W (z - Y Delta_anchor) summed over
@@ -37,6 +37,10 @@
 typedef struct {
     int rows, p;                 /* joints n; identified (base) parameters p */
     int columns[RRI_MAX_PARAMETERS]; /* columns of the full regressor taken */
+    /* where row i of the base regressor can be nonzero (in the layout of
+     * rb_regressor): columns run_start[i][r]..run_end[i][r]-1, r < runs[i] */
+    int runs[RRI_MAX_ROWS];
+    int run_start[RRI_MAX_ROWS][RRI_MAX_PARAMETERS], run_end[RRI_MAX_ROWS][RRI_MAX_PARAMETERS];
     double weight[RRI_MAX_ROWS]; /* 1 / s_i^2 */
     double h, rho, lambda, one_minus_lambda_rho;
     double active_time;          /* [s] since the (re)start */
@@ -66,7 +70,11 @@ int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int c
 /* Back to the nominal parameters and P = rho I. */
 void rri_reset(RegressorIdentifier *id);
 
-/* One internal step: z the torque residual (rows), Y the full regressor. */
+/* One internal step: z the torque residual (rows), Y the full regressor in the
+ * layout of rb_regressor, whose structural zeros are not read (joint i's row
+ * for the links before i and for the other joints' friction): the step costs
+ * the regressor's nonzero products only, about a third of n p (p + 3) / 2 for
+ * a 7-joint arm. */
 void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y);
 
 /* Solves Delta_hat = P^-1 b (p^3/6 multiply-adds).  Returns 0, or -1 if P is

@@ -413,14 +413,32 @@ static void link_force_columns(const LinkMotion *s, int i, double lin[10][3], do
         for (int r = 0; r < 3; ++r) lin[RB_FIRST_MOMENT + k][r] += u[r];
         cross(e, ac, ang[RB_FIRST_MOMENT + k]);
     }
+    /* inertia entry (r, c) (xx, xy, yy, xz, yz, zz): with U its unit symmetric
+     * matrix, U alpha + w x U w = alpha_c e_r + alpha_r e_c + w_c (w x e_r) + w_r (w x e_c)
+     * (once if r = c) */
+    static const int entry[6][2] = {{0, 0}, {0, 1}, {1, 1}, {0, 2}, {1, 2}, {2, 2}};
+    const double w_cross_e[3][3] = {{0.0, w[2], -w[1]}, {-w[2], 0.0, w[0]}, {w[1], -w[0], 0.0}};
     for (int k = 0; k < 6; ++k) {
-        double unit[6] = {0}, Ia[3], Iw[3], u[3];
-        unit[k] = 1.0;
-        inertia_times(unit, alpha, Ia);
-        inertia_times(unit, w, Iw);
-        cross(w, Iw, u);
-        for (int r = 0; r < 3; ++r) ang[RB_INERTIA + k][r] = Ia[r] + u[r];
+        const int r = entry[k][0], c = entry[k][1];
+        double *out = ang[RB_INERTIA + k];
+        for (int d = 0; d < 3; ++d) out[d] = w[c] * w_cross_e[r][d];
+        out[r] += alpha[c];
+        if (r != c) {
+            for (int d = 0; d < 3; ++d) out[d] += w[r] * w_cross_e[c][d];
+            out[c] += alpha[r];
+        }
     }
+}
+
+/* A motion (lin, ang) in frame i-1 expressed in frame i (in place): the dual of
+ * force_to_parent, so that dot(S, force_to_parent(f)) = dot(motion_to_child(S), f). */
+static void motion_to_child(const Transform *X, double lin[3], double ang[3])
+{
+    double t[3];
+    cross(ang, X->p, t);
+    for (int k = 0; k < 3; ++k) t[k] += lin[k];
+    rotate_back(X->R, t, lin);
+    rotate_back(X->R, ang, ang);
 }
 
 void rb_regressor(const RigidBodyModel *model, const double q[], const double qd[],
@@ -432,20 +450,38 @@ void rb_regressor(const RigidBodyModel *model, const double q[], const double qd
     forward_pass(model, q, qd, qdd, 1, &s);
     for (int j = 0; j < n; ++j)
         for (int c = 0; c < RB_PARAMETERS_PER_JOINT * n; ++c) Y[j][c] = 0.0;
+    /* joint j's motion subspace expressed in frame i (for every j <= i) */
+    double s_lin[RB_MAX_JOINTS][3], s_ang[RB_MAX_JOINTS][3];
     for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < i; ++j) motion_to_child(&s.X[i], s_lin[j], s_ang[j]);
+        joint_subspace(model, i, s_lin[i], s_ang[i]);
         double lin[10][3], ang[10][3];
         link_force_columns(&s, i, lin, ang);
-        /* link i's force reaches every joint j <= i through the frames between */
+        /* link i's force reaches every joint j <= i: Y = S_j . f in frame i,
+         * where the mass has no moment, the inertia no force */
         for (int j = i; j >= 0; --j) {
-            double s_lin[3], s_ang[3];
-            joint_subspace(model, j, s_lin, s_ang);
-            for (int c = 0; c < RB_LINK_PARAMETERS; ++c) {
-                if (j < i) force_to_parent(&s.X[j + 1], lin[c], ang[c]);
-                Y[j][RB_LINK_PARAMETERS * i + c] = dot(s_lin, lin[c]) + dot(s_ang, ang[c]);
-            }
+            double *y = Y[j] + RB_LINK_PARAMETERS * i;
+            y[RB_MASS] = dot(s_lin[j], lin[RB_MASS]);
+            for (int c = RB_FIRST_MOMENT; c < RB_INERTIA; ++c)
+                y[c] = dot(s_lin[j], lin[c]) + dot(s_ang[j], ang[c]);
+            for (int c = RB_INERTIA; c < RB_LINK_PARAMETERS; ++c) y[c] = dot(s_ang[j], ang[c]);
         }
         Y[i][RB_LINK_PARAMETERS * n + RB_JOINT_FRICTION * i + RB_VISCOUS] = qd ? qd[i] : 0.0;
         Y[i][RB_LINK_PARAMETERS * n + RB_JOINT_FRICTION * i + RB_COULOMB] =
             rb_coulomb_shape(model, qd ? qd[i] : 0.0);
+    }
+}
+
+void rb_regressor_torque(const RigidBodyModel *model, const RbRegressor *Y, const double pi[],
+                         double tau[])
+{
+    const int n = model->n;
+    for (int j = 0; j < n; ++j) {
+        const double *y = Y->row[j];
+        double sum = 0.0;
+        for (int c = RB_LINK_PARAMETERS * j; c < RB_LINK_PARAMETERS * n; ++c) sum += y[c] * pi[c];
+        const int own = RB_LINK_PARAMETERS * n + RB_JOINT_FRICTION * j; /* joint j's friction */
+        for (int c = own; c < own + RB_JOINT_FRICTION; ++c) sum += y[c] * pi[c];
+        tau[j] = sum;
     }
 }

@@ -112,4 +112,11 @@ typedef struct {
 void rb_regressor(const RigidBodyModel *model, const double q[], const double qd[],
                   const double qdd[], RbRegressor *Y);
 
+/* tau = Y pi (pi: 12 n parameters in the regressor's order) over the entries of Y
+ * that can be nonzero (joint j's row: the links j..n-1 and joint j's friction):
+ * the torques of the parameters pi with gravity and friction, at the cost of
+ * n (5 n + 7) multiply-adds once Y is known (instead of another RNEA). */
+void rb_regressor_torque(const RigidBodyModel *model, const RbRegressor *Y, const double pi[],
+                         double tau[]);
+
 #endif

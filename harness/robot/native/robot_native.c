@@ -100,12 +100,14 @@ int rn_identify(const RigidBodyModel *model, RegressorIdentifier *identifier, in
     RegressorIdentifier *id = identifier;
     const int n = model->n;
     if (rri_init(id, (RriKind)kind, n, p, columns, torque_scale, h, rho, R) != 0) return -1;
+    double pi[RB_MAX_PARAMETERS];
+    rb_get_parameters(model, pi);
     for (long k = 0; k < count; ++k) {
         if (k == reset_at) rri_reset(id);
         RbRegressor Y;
         double nominal[RB_MAX_JOINTS], z[RB_MAX_JOINTS];
         rb_regressor(model, q + k * n, qd + k * n, qdd + k * n, &Y);
-        rn_inverse_dynamics(model, 1, q + k * n, qd + k * n, qdd + k * n, 1, 1, nominal);
+        rb_regressor_torque(model, &Y, pi, nominal);
         for (int i = 0; i < n; ++i) z[i] = tau[k * n + i] - nominal[i];
         rri_step(id, z, &Y);
     }

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import pinocchio_model, random_chain_urdf
+from robot_helpers import pinocchio_model, random_chain_urdf
 
 from harness.robot.urdf import read_urdf
 

@@ -92,6 +92,29 @@ def test_online_lsm_is_the_regularized_least_squares():
     assert online["excitation"] > 0
 
 
+@pytest.mark.parametrize("order", ["ascending", "shuffled"])
+def test_online_lsm_over_a_7_joint_regressor_reads_only_its_nonzero_blocks(order):
+    """The step skips the regressor's structural zeros (joint i's row for the links
+    before i, the other joints' friction): the same P and b as the dense formula,
+    in any column order; the nominal torques Y pi (rb_regressor_torque) with friction."""
+    robot, _, types, base = setup("panda")
+    rng = np.random.default_rng(3)
+    body = robot.rigid_body(friction=rng.uniform(0.5, 2.0, (robot.n, 2)))
+    q, qd, qdd = random_states(types, 300, rng)
+    tau = rng.normal(0, 5, q.shape)
+    columns = base.base if order == "ascending" else rng.permutation(base.base)
+    h, rho, scale = 1e-3, 1e-2, rng.uniform(0.5, 2.0, robot.n)
+    online = body.identify_online(columns, q, qd, qdd, tau, h=h, rho=rho, torque_scale=scale)
+    Yb = body.regressor(q, qd, qdd)[:, :, columns]
+    z = tau - body.inverse_dynamics(q, qd, qdd)
+    W = 1.0 / scale ** 2
+    P = rho * np.eye(len(columns)) + h * np.einsum("kia,i,kib->ab", Yb, W, Yb)
+    b = h * np.einsum("kia,i,ki->a", Yb, W, z)
+    expected = np.linalg.solve(P, b)
+    assert np.abs(online["delta"] - expected).max() < 1e-8 * np.abs(expected).max()
+    assert online["gamma_trace"] == pytest.approx(np.trace(np.linalg.inv(P)), rel=1e-8)
+
+
 def test_online_reset_forgets_everything_before():
     robot, body, base, (q, qd, qdd, tau), truth = noisy_pendulum(2, samples=2000)
     tau = tau.copy()

@@ -10,7 +10,7 @@ from harness.robot.examples import example_urdf
 from harness.robot.fmu import fmu_parameters, read_ssv, start_values, write_ssv
 from harness.robot.urdf import read_urdf
 
-from conftest import FRICTION, multisine_log, payload_link
+from robot_helpers import FRICTION, multisine_log, payload_link
 
 H = 1e-3
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import random_chain_urdf
+from robot_helpers import random_chain_urdf
 
 from harness.robot.examples import example_urdf
 from harness.robot.urdf import UrdfError, matrix_rpy, read_urdf, rpy_matrix
