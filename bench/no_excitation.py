@@ -102,7 +102,7 @@ def data_path(data_dir: Path, variant: str, kind: str) -> Path:
 def at_rest_from(t: np.ndarray, x2: np.ndarray) -> float:
     """The first time after the torque stops from which |x2| stays below AT_REST_SPEED."""
     moving = np.nonzero((np.abs(x2) >= AT_REST_SPEED) & (t >= EXCITED))[0]
-    return float(t[moving[-1] + 1]) if len(moving) else EXCITED
+    return float(t[min(moving[-1] + 1, len(t) - 1)]) if len(moving) else EXCITED
 
 
 def quiet_scores(t: np.ndarray, out: dict[str, np.ndarray], d_true: float, rest: float
@@ -148,8 +148,9 @@ def run_row(variant: str, kind: str, meas_name: str, rest: float, data_dir: Path
     case = methods.Case(data, y, meas, float(s.observer["b"]), tuple(s.c_nominal[:3]),
                         s.transient)  # type: ignore[arg-type]
     d_true = float(data.d[-1])
+    results: dict[str, dict[str, object]] = {}
     row: dict[str, object] = {"variant": variant, "plant": kind, "measurement": meas_name,
-                              "d_true": d_true, "at_rest_from": rest, "methods": {}}
+                              "d_true": d_true, "at_rest_from": rest, "methods": results}
     for method in methods.FMU_METHODS:
         params = methods.fmu_parameters(case, method)
         try:
@@ -159,7 +160,7 @@ def run_row(variant: str, kind: str, meas_name: str, rest: float, data_dir: Path
             trace = out["theta_hat[1,2]"][::100]  # 100 Hz for the figure
         except Exception as error:  # a failed run is a result, not a crash
             scores, trace = f"{type(error).__name__}: {error}"[:300], np.array([])
-        row["methods"][method] = {"scores": scores, "d_hat_100hz": trace.tolist()}  # type: ignore[index]
+        results[method] = {"scores": scores, "d_hat_100hz": trace.tolist()}
     row["seconds"] = round(time.perf_counter() - start, 1)
     return row
 
@@ -230,7 +231,8 @@ def markdown(rows: list[dict], data_meta: list[dict], fmu_sha: str, runtime: flo
         "",
         "## Plant data at rest",
         "",
-        "| variant | plant | torque off -> at rest [s] | rest angle [rad] | creep at rest [rad/s] |",
+        "| variant | plant | torque off -> at rest [s] | rest angle [rad] "
+        "| creep at rest [rad/s] |",
         "|---|---|---|---|---|",
     ] + [f"| {m['variant']} | {m['plant']} | {m['at_rest_from'] - EXCITED:.2f} "
          f"| {m['rest_angle']:.5f} | {m['creep']:.2g} |" for m in data_meta] + [""]
@@ -354,7 +356,8 @@ def main(argv: list[str] | None = None) -> int:
          "rows": [{**r, "methods": {k: {"scores": v["scores"]} for k, v in r["methods"].items()}}
                   for r in rows]}, indent=1))
     args.docs.mkdir(parents=True, exist_ok=True)
-    (args.docs / "no_excitation.md").write_text("\n".join(markdown(rows, data_meta, fmu_sha, runtime)) + "\n")
+    document = markdown(rows, data_meta, fmu_sha, runtime)
+    (args.docs / "no_excitation.md").write_text("\n".join(document) + "\n")
     figure(rows, args.docs / "no_excitation.png")
     shutil.rmtree(data_dir, ignore_errors=True)
     print("\n".join(summary(rows)), file=sys.stderr)
