@@ -1,6 +1,8 @@
 """60 s without excitation after a 6.3-kind identification, on every kind of plant data.
 
     .venv/bin/python bench/no_excitation.py [--out DIR] [--fmu-dir build/fmus] [--jobs N]
+    .venv/bin/python bench/no_excitation.py --variants "constant d" --plants euler \
+        --measurements clean --set rho=0.1      # a diagnostic subset: prints, no docs
 
 Issue 10's target: "60 s without excitation: the estimate moves less than 1 %, on
 every kind of plant data".  The experiment: the 6.3 pendulum (time-varying damping
@@ -12,8 +14,9 @@ The damping's regressor is the velocity, so at rest the data say nothing about d
 any movement of the estimate there is the identifier's own.  During the ring-down
 the data still carry information; the true damping is therefore held at d(50 s)
 from the moment the torque stops, so that the right answer does not move either
-(variant "6.3 d(t)"); variant "constant d" (d = 0.5 throughout, as in
-tests/harness/test_windup.py) separates what the drift model's slope does.
+(variant "6.3 d(t)"); variant "constant d" (d = 0.5 throughout, the value of
+tests/harness/test_windup.py, whose pendulum has no Coulomb friction) separates what
+the drift model's slope does.
 
 Open loop rather than the twisting loop so that every plant kind of
 bench/realdata/plants.py can be made (a variable-step solver needs a continuous
@@ -134,9 +137,10 @@ def quiet_scores(t: np.ndarray, out: dict[str, np.ndarray], d_true: float, rest:
             "identifier_active": float(out["identifier_active"][0])}
 
 
-def run_row(variant: str, kind: str, meas_name: str, rest: float, data_dir: Path, fmu: Path
-            ) -> dict[str, object]:
-    """Both FMU methods on one measured record."""
+def run_row(variant: str, kind: str, meas_name: str, rest: float, data_dir: Path, fmu: Path,
+            overrides: dict[str, float] | None = None) -> dict[str, object]:
+    """Both FMU methods on one measured record (overrides: FMU parameters added to
+    fmu-default's, for diagnostic runs)."""
     from harness import identify as ident
 
     start = time.perf_counter()
@@ -153,6 +157,8 @@ def run_row(variant: str, kind: str, meas_name: str, rest: float, data_dir: Path
                               "d_true": d_true, "at_rest_from": rest, "methods": results}
     for method in methods.FMU_METHODS:
         params = methods.fmu_parameters(case, method)
+        if method == "fmu-default":
+            params.update(overrides or {})
         try:
             out = ident.identify(ident.Recording(data.t, y, data.u), fmu, params,
                                  input_hold="sampled")
@@ -328,7 +334,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--docs", type=Path, default=REPO / "docs",
                         help="where no_excitation.md and .png are written")
+    parser.add_argument("--variants", default=",".join(VARIANTS))
+    parser.add_argument("--plants", default=",".join(plants.PLANT_KINDS))
+    parser.add_argument("--measurements", default=",".join(MEASUREMENTS))
+    parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                        help="an FMU parameter for fmu-default (diagnostic runs)")
     args = parser.parse_args(argv)
+    variants, kinds, measurements = (args.variants.split(","), args.plants.split(","),
+                                     args.measurements.split(","))
+    for given, known in ((variants, VARIANTS), (kinds, plants.PLANT_KINDS),
+                         (measurements, MEASUREMENTS)):
+        if unknown := [x for x in given if x not in known]:
+            parser.error(f"unknown {unknown}: expected some of {', '.join(known)}")
+    try:
+        overrides = {k: float(v) for k, v in (a.split("=", 1) for a in args.set)}
+    except ValueError:
+        parser.error(f"--set expects NAME=NUMBER, got {args.set}")
+    full = (not overrides and variants == list(VARIANTS) and kinds == list(plants.PLANT_KINDS)
+            and measurements == list(MEASUREMENTS))
     t_start = time.perf_counter()
     out: Path = args.out
     data_dir = out / "data"
@@ -341,25 +364,34 @@ def main(argv: list[str] | None = None) -> int:
     shutil.copyfile(src, fmu)
     fmu_sha = hashlib.sha256(fmu.read_bytes()).hexdigest()
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-        made = [pool.submit(make_data, v, k, data_dir) for v in VARIANTS
-                for k in plants.PLANT_KINDS]
+        made = [pool.submit(make_data, v, k, data_dir) for v in variants for k in kinds]
         data_meta = [job.result() for job in made]
         rest = {(m["variant"], m["plant"]): m["at_rest_from"] for m in data_meta}
         print(f"data: {len(made)} trajectories in {time.perf_counter() - t_start:.1f} s",
               file=sys.stderr)
-        jobs = [pool.submit(run_row, v, k, meas, rest[v, k], data_dir, fmu)
-                for v in VARIANTS for k in plants.PLANT_KINDS for meas in MEASUREMENTS]
+        jobs = [pool.submit(run_row, v, k, meas, rest[v, k], data_dir, fmu, overrides)
+                for v in variants for k in kinds for meas in measurements]
         rows = [job.result() for job in jobs]
     runtime = time.perf_counter() - t_start
+    shutil.rmtree(data_dir, ignore_errors=True)
     (out / "no_excitation.json").write_text(json.dumps(
         {"fmu_sha256": fmu_sha, "runtime_s": round(runtime, 1), "data": data_meta,
+         "overrides": overrides,
          "rows": [{**r, "methods": {k: {"scores": v["scores"]} for k, v in r["methods"].items()}}
                   for r in rows]}, indent=1))
+    if not full:  # a diagnostic subset: print it, leave the docs alone
+        for r in rows:
+            s = r["methods"]["fmu-default"]["scores"]
+            print(f"{r['variant']}, {r['plant']}, {r['measurement']}, fmu-default {overrides}: "
+                  + (s if isinstance(s, str) else
+                     f"max move {100 * s['max_move']:.2f} %, end {pct(s['end_move'])}, at rest "
+                     f"{100 * s['at_rest_move']:.2f} %, d0 err {pct(s['start_error'])}, "
+                     f"trace Gamma end {g(s['gamma_trace_end'])}"))
+        return 0
     args.docs.mkdir(parents=True, exist_ok=True)
     document = markdown(rows, data_meta, fmu_sha, runtime)
     (args.docs / "no_excitation.md").write_text("\n".join(document) + "\n")
     figure(rows, args.docs / "no_excitation.png")
-    shutil.rmtree(data_dir, ignore_errors=True)
     print("\n".join(summary(rows)), file=sys.stderr)
     print(f"{len(rows)} records in {runtime:.1f} s; wrote {args.docs / 'no_excitation.md'}",
           file=sys.stderr)
