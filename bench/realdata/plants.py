@@ -17,6 +17,7 @@ the paper's closed loop (harness scenarios) and its explicit-Euler replay.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -39,7 +40,11 @@ MULTISINE_AMPLITUDES = (2.0, 2.0, 5.0, 10.0)  # rad/s^2 (times J gives N m)
 MULTISINE_PHASES = (0.3, 1.9, 4.1, 5.3)  # rad
 
 PLANT_KINDS = ("accurate", "rk45-1e-4", "rk45-1e-6", "euler")
+# The open-loop functions below take the torque, the coefficients and a damping d(t)
+# (a function of time, None for d = 0); the defaults make data set A.
+Signal = Callable[[np.ndarray | float], np.ndarray]
 RK45_TOLERANCES = {"rk45-1e-4": (1e-4, 1e-8), "rk45-1e-6": (1e-6, 1e-10)}
+STOP_SPEED = 1e-6  # rad/s: open_loop_rk45's stop into static friction (stop_after)
 
 
 @dataclass
@@ -89,29 +94,43 @@ def multisine(t: np.ndarray | float) -> np.ndarray:
     return out
 
 
-def _open_loop_acc(t: np.ndarray, x1: np.ndarray, x2: np.ndarray, u: np.ndarray,
-                   sign: np.ndarray) -> np.ndarray:
-    c1, c2, c3 = C_TRUE
-    return B_TRUE * u - c1 * np.sin(x1) - c2 * x2 - c3 * sign
+def _open_loop_acc(x1: np.ndarray, x2: np.ndarray, u: np.ndarray, sign: np.ndarray,
+                   c: tuple[float, ...], d: np.ndarray) -> np.ndarray:
+    c1, c2, c3 = c[:3]
+    return B_TRUE * u - c1 * np.sin(x1) - c2 * x2 - c3 * sign - d * x2
+
+
+def _damping_of(damping: Signal | None) -> Callable[[float], float]:
+    return (lambda t: 0.0) if damping is None else (lambda t: float(damping(t)))
+
+
+def _damping_samples(damping: Signal | None, t: np.ndarray) -> np.ndarray:
+    return np.zeros_like(t) if damping is None else np.asarray(damping(t), dtype=float)
 
 
 def _sample_times(rate: float, duration: float) -> np.ndarray:
     return np.arange(int(round(duration * rate))) / rate
 
 
-def open_loop_accurate(rate: float, duration: float = OPEN_LOOP_DURATION) -> Dataset:
+def open_loop_accurate(rate: float, duration: float = OPEN_LOOP_DURATION, *,
+                       torque: Signal = multisine, c: tuple[float, ...] = C_TRUE,
+                       damping: Signal | None = None, breaks: tuple[float, ...] = ()
+                       ) -> Dataset:
     """DOP853 at rtol = atol = 1e-12 with the Coulomb friction handled exactly.
 
     The velocity sign is a mode s in {-1, 0, +1}; a terminal event at x' = 0
     ends each mode, and at the reversal the pendulum either continues with the
     opposite sign or sticks (Filippov: |b u - c1 sin x| <= c3) until the driving
-    acceleration exceeds the static friction.  No step crosses a discontinuity.
+    acceleration exceeds the static friction.  No step crosses a discontinuity:
+    the integration also stops at the ``breaks`` (the times where the torque or the
+    damping jumps or kinks).
     """
-    c1, c2, c3 = C_TRUE
+    c1, c2, c3 = c[:3]
+    d_of = _damping_of(damping)
     t_samples = _sample_times(rate, duration)
 
     def drive(t: float, x1: float) -> float:  # acceleration without the friction terms
-        return B_TRUE * float(multisine(t)) - c1 * math.sin(x1)
+        return B_TRUE * float(torque(t)) - c1 * math.sin(x1)
 
     def mode_of(t: float, x1: float) -> int:
         f0 = drive(t, x1)
@@ -134,18 +153,24 @@ def open_loop_accurate(rate: float, duration: float = OPEN_LOOP_DURATION) -> Dat
             s = mode
 
             def rhs(t, x):  # noqa: ANN001
-                return [x[1], drive(t, x[0]) - c2 * x[1] - c3 * s]
+                return [x[1], drive(t, x[0]) - (c2 + d_of(t)) * x[1] - c3 * s]
 
             def event(t, x):  # noqa: ANN001 -- velocity reversal
                 return x[1]
             event.direction = -s
         event.terminal = True
-        sol = solve_ivp(rhs, (t0, end), state, method="DOP853", rtol=1e-12, atol=1e-12,
+        stop = min([b for b in breaks if t0 < b < end] + [end])
+        sol = solve_ivp(rhs, (t0, stop), state, method="DOP853", rtol=1e-12, atol=1e-12,
                         events=event, dense_output=True)
         t1 = float(sol.t[-1])
         segments.append((t0, t1, sol.sol, mode))
-        if sol.status != 1:  # reached the end
-            break
+        if sol.status != 1:  # reached a break or the end
+            if stop >= end:
+                break
+            state, t0 = sol.y[:, -1].copy(), stop
+            if mode == 0:  # stuck through a jump of the drive: it may now break away
+                mode = mode_of(t0, float(state[0]))
+            continue
         state = np.array([sol.y[0, -1], 0.0])
         f0 = drive(t1, float(state[0]))
         if mode == 0:  # breakaway: |f0| = c3 at the event, move the way the drive pushes
@@ -164,32 +189,76 @@ def open_loop_accurate(rate: float, duration: float = OPEN_LOOP_DURATION) -> Dat
         if np.any(sel):
             x = dense(t_samples[sel])
             x1[sel], x2[sel], sign[sel] = x[0], (x[1] if m else 0.0), m
-    u = multisine(t_samples)
-    acc = np.where(sign == 0, 0.0, _open_loop_acc(t_samples, x1, x2, u, sign))
-    zeros = np.zeros_like(t_samples)
-    return Dataset("A", "accurate", t_samples, x1, x2, acc, u, zeros, zeros.copy(),
-                   meta={"segments": len(segments),
+    u = torque(t_samples)
+    d = _damping_samples(damping, t_samples)
+    acc = np.where(sign == 0, 0.0, _open_loop_acc(x1, x2, u, sign, c, d))
+    return Dataset("A", "accurate", t_samples, x1, x2, acc, u, np.zeros_like(t_samples), d,
+                   c=tuple(c[:3]), meta={"segments": len(segments),
                          "stuck_segments": sum(1 for s in segments if s[3] == 0)})
 
 
-def open_loop_rk45(kind: str, rate: float, duration: float = OPEN_LOOP_DURATION) -> Dataset:
-    """RK45 with the kind's tolerances and no event handling, read from its dense output."""
+def open_loop_rk45(kind: str, rate: float, duration: float = OPEN_LOOP_DURATION, *,
+                   torque: Signal = multisine, c: tuple[float, ...] = C_TRUE,
+                   damping: Signal | None = None, stop_after: float | None = None) -> Dataset:
+    """RK45 with the kind's tolerances and no event handling, read from its dense output
+    (it steps across the Coulomb friction's and the torque's jumps like any solver
+    without events).
+
+    ``stop_after``: from then on, the pendulum stops where its speed falls below
+    STOP_SPEED inside the static-friction band (|b u - c1 sin x| <= c3): it sticks
+    there and rests.  Without events a solver slides along x' = 0 at steps of about
+    1e-7 s (measured for RK45 at rtol 1e-4: a creeping speed of 1e-7 to 1e-6 rad/s),
+    too many to integrate here; from the stop to x' = 0 the angle moves by about
+    STOP_SPEED^2 / (2 c3), far below any sensor's resolution.
+    """
     rtol, atol = RK45_TOLERANCES[kind]
-    c1, c2, c3 = C_TRUE
+    c1, c2, c3 = c[:3]
+    d_of = _damping_of(damping)
     t_samples = _sample_times(rate, duration)
+    t_end = float(t_samples[-1])
 
     def rhs(t, x):  # noqa: ANN001
-        return [x[1], B_TRUE * float(multisine(t)) - c1 * math.sin(x[0]) - c2 * x[1]
+        return [x[1], B_TRUE * float(torque(t)) - c1 * math.sin(x[0]) - (c2 + d_of(t)) * x[1]
                 - c3 * float(np.sign(x[1]))]
 
-    sol = solve_ivp(rhs, (0.0, float(t_samples[-1])), [0.0, 0.0], method="RK45", rtol=rtol,
-                    atol=atol, dense_output=True)
-    x = sol.sol(t_samples)
-    u = multisine(t_samples)
-    acc = _open_loop_acc(t_samples, x[0], x[1], u, np.sign(x[1]))
-    zeros = np.zeros_like(t_samples)
-    return Dataset("A", kind, t_samples, x[0], x[1], acc, u, zeros, zeros.copy(),
-                   meta={"nfev": int(sol.nfev)})
+    def stop(t, x):  # noqa: ANN001 -- |x'| falls below STOP_SPEED inside the band
+        held = abs(B_TRUE * float(torque(t)) - c1 * math.sin(x[0])) <= c3
+        return abs(x[1]) - STOP_SPEED if held else abs(x[1]) + 1.0
+    stop.terminal, stop.direction = True, -1
+
+    def solve(t0: float, x0: list[float], t1: float, events=None):  # noqa: ANN001, ANN202
+        return solve_ivp(rhs, (t0, t1), x0, method="RK45", rtol=rtol, atol=atol,
+                         dense_output=True, events=events)
+
+    first = stop_after if stop_after is not None and stop_after < t_end else t_end
+    pieces = [solve(0.0, [0.0, 0.0], first)]
+    rest: tuple[float, float] | None = None  # (time, angle) where the pendulum sticks
+    if first < t_end:
+        x0 = [float(v) for v in pieces[-1].y[:, -1]]
+        if stop(first, x0) < 0:  # already resting
+            rest = (first, x0[0])
+        else:
+            pieces.append(solve(first, x0, t_end, stop))
+            if pieces[-1].status == 1:
+                rest = (float(pieces[-1].t[-1]), float(pieces[-1].y[0, -1]))
+    x = np.zeros((2, len(t_samples)))
+    starts = np.array([float(p.t[0]) for p in pieces])
+    which = np.clip(np.searchsorted(starts, t_samples, side="right") - 1, 0, len(pieces) - 1)
+    for i, piece in enumerate(pieces):
+        sel = which == i
+        if np.any(sel):
+            x[:, sel] = piece.sol(t_samples[sel])
+    if rest is not None:
+        after = t_samples >= rest[0]
+        x[0, after], x[1, after] = rest[1], 0.0
+    u = torque(t_samples)
+    d = _damping_samples(damping, t_samples)
+    acc = _open_loop_acc(x[0], x[1], u, np.sign(x[1]), c, d)
+    meta: dict[str, float | str] = {"nfev": int(sum(p.nfev for p in pieces))}
+    if rest is not None:
+        meta["rest_from"] = rest[0]
+    return Dataset("A", kind, t_samples, x[0], x[1], acc, u, np.zeros_like(t_samples), d,
+                   c=tuple(c[:3]), meta=meta)
 
 
 def _euler(t: np.ndarray, u: np.ndarray, v: np.ndarray, d: np.ndarray, c: tuple[float, ...],
@@ -210,13 +279,15 @@ def _euler(t: np.ndarray, u: np.ndarray, v: np.ndarray, d: np.ndarray, c: tuple[
     return x1, x2, acc
 
 
-def open_loop_euler(rate: float, duration: float = OPEN_LOOP_DURATION) -> Dataset:
+def open_loop_euler(rate: float, duration: float = OPEN_LOOP_DURATION, *,
+                    torque: Signal = multisine, c: tuple[float, ...] = C_TRUE,
+                    damping: Signal | None = None) -> Dataset:
     """Explicit Euler at the sample step with u held per sample (the paper's discretization)."""
     t = _sample_times(rate, duration)
-    u = multisine(t)
-    zeros = np.zeros_like(t)
-    x1, x2, acc = _euler(t, u, zeros, zeros, C_TRUE, (0.0, 0.0))
-    return Dataset("A", "euler", t, x1, x2, acc, u, zeros, zeros.copy())
+    u = torque(t)
+    d = _damping_samples(damping, t)
+    x1, x2, acc = _euler(t, u, np.zeros_like(t), d, c, (0.0, 0.0))
+    return Dataset("A", "euler", t, x1, x2, acc, u, np.zeros_like(t), d, c=tuple(c[:3]))
 
 
 def closed_loop_accurate(scenario: str, fmu_dir: Path) -> Dataset:
