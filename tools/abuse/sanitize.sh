@@ -17,7 +17,7 @@ cd "$(dirname "$0")/../.."
 REPO=$PWD
 PY=$REPO/.venv/bin/python
 OUT=$REPO/build/sanitize
-MODELS=(SuperTwistingObserver Pendulum TwistingController)
+MODELS=(SuperTwistingObserver Pendulum TwistingController RobotObserver)
 CC=${CC:-gcc}
 SANITIZE=(-fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=all
           -fno-omit-frame-pointer)

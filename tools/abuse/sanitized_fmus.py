@@ -30,7 +30,8 @@ def pytest_plugin_registered(plugin, manager):
 def pytest_sessionstart(session):
     for plugin in session.config.pluginmanager.get_plugins():
         _redirect(plugin)
-    missing = [str(d / f"{m}.fmu") for m in ("SuperTwistingObserver", "Pendulum", "TwistingController")
+    missing = [str(d / f"{m}.fmu")
+               for m in ("SuperTwistingObserver", "Pendulum", "TwistingController", "RobotObserver")
                for d in (DIRECTORY, FMI3_DIRECTORY) if not (d / f"{m}.fmu").exists()]
     if missing:
         raise pytest.UsageError(f"{DIRECTORY} lacks {missing}: run tools/abuse/sanitize.sh")

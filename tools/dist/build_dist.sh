@@ -21,7 +21,7 @@ cd "$(dirname "$0")/../.."
 PY=$PWD/.venv/bin/python
 BUILD=build
 OUT=$BUILD/dist
-MODELS=(SuperTwistingObserver Pendulum TwistingController)
+MODELS=(SuperTwistingObserver Pendulum TwistingController RobotObserver)
 CFLAGS=(-std=c11 -Wall -Wextra -Wpedantic -Werror -O2 -fvisibility=hidden)
 
 log() { printf '\033[1m== %s\033[0m\n' "$*"; }

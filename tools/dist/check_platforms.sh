@@ -17,7 +17,7 @@ cd "$(dirname "$0")/../.."
 PY=$PWD/.venv/bin/python
 DIST=build/dist
 OUT=build/dist/check
-MODELS=(SuperTwistingObserver Pendulum TwistingController)
+MODELS=(SuperTwistingObserver Pendulum TwistingController RobotObserver)
 CFLAGS=(-std=c11 -Wall -Wextra -Wpedantic -Werror -O2)
 
 log() { printf '\033[1m== %s\033[0m\n' "$*"; }
