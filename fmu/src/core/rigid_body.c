@@ -365,14 +365,20 @@ int rb_forward_dynamics(const RigidBodyModel *model, const double q[], const dou
     rb_inverse_dynamics(model, q, qd, NULL, 1, bias);
     rb_friction(model, qd, fr);
     for (int i = 0; i < n; ++i) qdd[i] = tau[i] - bias[i] - fr[i];
-    /* Cholesky M = L L^T in the lower triangle, then two substitutions */
+    if (rb_cholesky(M, n) != 0) {
+        memset(qdd, 0, (size_t)n * sizeof qdd[0]);
+        return -1;
+    }
+    rb_cholesky_solve(M, n, qdd);
+    return 0;
+}
+
+int rb_cholesky(double M[RB_MAX_JOINTS][RB_MAX_JOINTS], int n)
+{
     for (int j = 0; j < n; ++j) {
         double d = M[j][j];
         for (int k = 0; k < j; ++k) d -= M[j][k] * M[j][k];
-        if (!(d > 0.0)) {
-            memset(qdd, 0, (size_t)n * sizeof qdd[0]);
-            return -1;
-        }
+        if (!(d > 0.0) || !isfinite(d)) return -1;
         M[j][j] = sqrt(d);
         for (int i = j + 1; i < n; ++i) {
             double x = M[i][j];
@@ -380,15 +386,19 @@ int rb_forward_dynamics(const RigidBodyModel *model, const double q[], const dou
             M[i][j] = x / M[j][j];
         }
     }
+    return 0;
+}
+
+void rb_cholesky_solve(double L[RB_MAX_JOINTS][RB_MAX_JOINTS], int n, double x[])
+{
     for (int i = 0; i < n; ++i) {
-        for (int k = 0; k < i; ++k) qdd[i] -= M[i][k] * qdd[k];
-        qdd[i] /= M[i][i];
+        for (int k = 0; k < i; ++k) x[i] -= L[i][k] * x[k];
+        x[i] /= L[i][i];
     }
     for (int i = n - 1; i >= 0; --i) {
-        for (int k = i + 1; k < n; ++k) qdd[i] -= M[k][i] * qdd[k];
-        qdd[i] /= M[i][i];
+        for (int k = i + 1; k < n; ++k) x[i] -= L[k][i] * x[k];
+        x[i] /= L[i][i];
     }
-    return 0;
 }
 
 /* ---- regressor ------------------------------------------------------------------------ */

@@ -103,6 +103,13 @@ double rb_coulomb_shape(const RigidBodyModel *model, double v);
 int rb_forward_dynamics(const RigidBodyModel *model, const double q[], const double qd[],
                         const double tau[], double qdd[]);
 
+/* M = L L^T in place (L in the lower triangle).  Returns 0, or -1 if M is not
+ * positive definite. */
+int rb_cholesky(double M[RB_MAX_JOINTS][RB_MAX_JOINTS], int n);
+
+/* x <- M^-1 x from the factor of rb_cholesky. */
+void rb_cholesky_solve(double L[RB_MAX_JOINTS][RB_MAX_JOINTS], int n, double x[]);
+
 /* A regressor matrix: row i is joint i, columns 0..12n-1 are used. */
 typedef struct {
     double row[RB_MAX_JOINTS][RB_MAX_PARAMETERS];

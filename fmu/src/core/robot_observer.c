@@ -22,19 +22,6 @@ void ro_init(RobotObserver *o, int n, double h, const double alpha1[], const dou
     }
 }
 
-/* x <- M^-1 x with the Cholesky factor L (lower triangle of L). */
-static void cholesky_solve(double L[RB_MAX_JOINTS][RB_MAX_JOINTS], int n, double x[])
-{
-    for (int i = 0; i < n; ++i) {
-        for (int k = 0; k < i; ++k) x[i] -= L[i][k] * x[k];
-        x[i] /= L[i][i];
-    }
-    for (int i = n - 1; i >= 0; --i) {
-        for (int k = i + 1; k < n; ++k) x[i] -= L[k][i] * x[k];
-        x[i] /= L[i][i];
-    }
-}
-
 /* The velocity v at the end of an interval from the velocity r it would reach
  * without the joint's own friction: v = r - c f(v), c = h (M^-1)_ii > 0,
  * f(v) = f_v v + f_c sat(v / v_s) (sign(v) if v_s = 0), solved exactly (f is
@@ -65,27 +52,17 @@ static int nominal_acceleration(RobotObserver *o, const RigidBodyModel *model, c
     rb_mass_matrix(model, y, M);
     rb_inverse_dynamics(model, y, x2, NULL, 1, bias);
     rb_friction(model, x2, friction);
-    for (int j = 0; j < n; ++j) { /* Cholesky M = L L^T, lower triangle */
-        double d = M[j][j];
-        for (int k = 0; k < j; ++k) d -= M[j][k] * M[j][k];
-        if (!(d > 0.0) || !isfinite(d)) {
-            memset(a, 0, (size_t)n * sizeof a[0]);
-            o->model_failures += 1.0;
-            return -1;
-        }
-        M[j][j] = sqrt(d);
-        for (int i = j + 1; i < n; ++i) {
-            double x = M[i][j];
-            for (int k = 0; k < j; ++k) x -= M[i][k] * M[j][k];
-            M[i][j] = x / M[j][j];
-        }
+    if (rb_cholesky(M, n) != 0) {
+        memset(a, 0, (size_t)n * sizeof a[0]);
+        o->model_failures += 1.0;
+        return -1;
     }
     for (int i = 0; i < n; ++i) a[i] = u[i] - bias[i] - friction[i];
-    cholesky_solve(M, n, a);
+    rb_cholesky_solve(M, n, a);
     for (int i = 0; i < n; ++i) { /* joint i's friction, implicitly: column i of M^-1 */
         double column[RO_MAX_JOINTS] = {0};
         column[i] = 1.0;
-        cholesky_solve(M, n, column);
+        rb_cholesky_solve(M, n, column);
         const double c = o->h * column[i], r = x2[i] + o->h * (a[i] + column[i] * friction[i]);
         const double change = friction[i] - implicit_friction(r, c, model->friction[i][RB_VISCOUS],
                                                              model->friction[i][RB_COULOMB],
