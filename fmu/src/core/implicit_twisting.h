@@ -34,8 +34,9 @@
  * reversals: a nominal model whose Coulomb coefficient is off by dc leaves
  * -dc sign(v) in the perturbation, which the injection held over a sample
  * carries across a reversal, an error of up to 2 dc h on the velocity in the
- * samples after it (exact 1 kHz data, c3 off by 0.4: 9e-4 rad/s; the RMS
- * error 5.7e-5 where it is 1.5e-5 away from reversals).  The injection's
+ * samples after it (exact 1 kHz data, c3 off by 0.4, with the sign change
+ * of coulomb_mean_acceleration: up to 9e-4 rad/s, the RMS error 5.7e-5 where
+ * it is 1.5e-5 away from reversals; with the learning 1.7e-5).  The injection's
  * change from the sample before a reversal to IMPLICIT_REVERSAL_SAMPLES after
  * it (the second differences that do not span it) is -2 (dc - learned)
  * sign(v) plus the smooth perturbation's change; the learned level moves by
@@ -115,9 +116,9 @@ void implicit_run(SuperTwistingObserver *o, const double y[], const StoAccelerat
  * (sticking) when the rest is within the Coulomb level.  The Coulomb term of
  * the sign at the start over the whole dt put an error of up to 2 coulomb dt
  * on the velocity after every reversal, and the injection took up the same
- * error over the next samples: on exact 1 kHz data spikes of up to 9e-4 rad/s
+ * error over the next samples: on exact 1 kHz data spikes of up to 1e-3 rad/s
  * in the 2-3 samples after each reversal, the velocity's RMS error 6.2e-5
- * where the rest is 2.0e-5. */
+ * where it is 1.5e-5 away from the reversals (bench/reversal_errors.py). */
 static inline double coulomb_mean_acceleration(double v0, double other, double coulomb, double dt)
 {
     const double s = sto_sign(v0), a = other - coulomb * s;
