@@ -9,7 +9,6 @@ int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int c
     memset(id, 0, sizeof *id);
     if (rows < 1 || rows > RRI_MAX_ROWS || p < 1 || p > RRI_PARAMETERS_OF(rows)) return -1;
     if (!(h > 0.0) || !isfinite(h) || !(rho > 0.0) || !isfinite(rho)) return -1;
-    if (!(RRI_BATCH_TIME / h <= RRI_MAX_BATCH_SAMPLES)) return -1; /* the count is an int */
     if (kind == RRI_MFF && !(R > 0.0 && R < 1.0)) return -1;
     if (kind != RRI_LSM && kind != RRI_MFF) return -1;
     for (int k = 0; k < p; ++k) {
@@ -46,7 +45,8 @@ int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int c
     id->rho = rho;
     id->lambda = kind == RRI_MFF ? pow(R, h) : 1.0;
     id->one_minus_lambda_rho = (1.0 - id->lambda) * rho;
-    id->batch_samples = (int)ceil(RRI_BATCH_TIME / h);
+    /* an int: a tiny h (below RRI_BATCH_TIME / RRI_MAX_BATCH_SAMPLES) gets shorter batches */
+    id->batch_samples = (int)fmin(ceil(RRI_BATCH_TIME / h), RRI_MAX_BATCH_SAMPLES);
     id->batch_lambda = pow(id->lambda, 2.0 * id->batch_samples); /* variances forget twice as fast */
     rri_reset(id);
     return 0;

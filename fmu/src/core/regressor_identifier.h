@@ -32,7 +32,7 @@
 #define RRI_MAX_PARAMETERS RB_MAX_PARAMETERS
 #define RRI_PARAMETERS_OF(rows) (RB_PARAMETERS_PER_JOINT * (rows)) /* full regressor's columns */
 #define RRI_BATCH_TIME 0.5       /* [s] of scores summed into one batch */
-#define RRI_MAX_BATCH_SAMPLES 1e9 /* h >= RRI_BATCH_TIME / this */
+#define RRI_MAX_BATCH_SAMPLES 1e9 /* samples in a batch at most (an int) */
 #define RRI_ANCHOR_INTERVAL 32   /* samples between re-solves of the anchor (MFF) */
 
 typedef struct {
