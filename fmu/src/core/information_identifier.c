@@ -3,6 +3,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "cholesky.h"
+
 #include "small_loops.h"
 
 /* Size of the sums: m, or 2m with the drift model. */
@@ -184,31 +186,13 @@ void info_run(InformationIdentifier *id, const IdSample samples[], int count)
 static int cholesky(const InformationIdentifier *id, int m,
                     double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS])
 {
-    for (int j = 0; j < m; ++j) {
-        double d = id->P[j][j];
-        for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
-        if (!(d > 0.0)) return -1;
-        L[j][j] = sqrt(d);
-        for (int i = j + 1; i < m; ++i) {
-            double s = id->P[j][i]; /* P[i][j] of the symmetric matrix */
-            for (int k = 0; k < j; ++k) s -= L[i][k] * L[j][k];
-            L[i][j] = s / L[j][j];
-        }
-    }
-    return 0;
+    return cholesky_factor(&id->P[0][0], &L[0][0], m, ID_MAX_REGRESSORS);
 }
 
 /* Solves L L^T x = b in place. */
-static void cholesky_solve(int m, double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS], double x[])
+static void solve(int m, double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS], double x[])
 {
-    for (int i = 0; i < m; ++i) {
-        for (int k = 0; k < i; ++k) x[i] -= L[i][k] * x[k];
-        x[i] /= L[i][i];
-    }
-    for (int i = m - 1; i >= 0; --i) {
-        for (int k = i + 1; k < m; ++k) x[i] -= L[k][i] * x[k];
-        x[i] /= L[i][i];
-    }
+    cholesky_solve(&L[0][0], m, ID_MAX_REGRESSORS, x);
 }
 
 /* Delta_hat = Theta P^-1 into estimate, with the Cholesky factor L of P. */
@@ -219,7 +203,7 @@ static void solve_estimate(const InformationIdentifier *id, int n,
     for (int i = 0; i < id->rows; ++i) {
         double x[ID_MAX_REGRESSORS];
         memcpy(x, id->theta[i], sizeof x);
-        cholesky_solve(n, L, x);
+        solve(n, L, x);
         memcpy(estimate[i], x, sizeof x);
     }
 }
@@ -250,7 +234,7 @@ static void update_standard_errors(InformationIdentifier *id)
     for (int j = 0; j < m; ++j) {
         double e[ID_MAX_REGRESSORS] = {0};
         e[j] = 1.0;
-        cholesky_solve(n, L, e); /* column j of P^-1 */
+        solve(n, L, e); /* column j of P^-1 */
         memcpy(gamma[j], e, sizeof e);
     }
     /* Sandwich: cov(Delta_i) = Gamma (T 2 T_b E[mean mean^T]) Gamma, T the data's
@@ -297,7 +281,7 @@ int info_solve(InformationIdentifier *id)
         for (int j = 0; j < m; ++j) {
             double e[ID_MAX_REGRESSORS] = {0};
             e[j] = 1.0;
-            cholesky_solve(n, L, e); /* column j of P^-1 */
+            solve(n, L, e); /* column j of P^-1 */
             trace += e[j];
         }
     }
@@ -307,7 +291,7 @@ int info_solve(InformationIdentifier *id)
      * block of L is its Cholesky factor); the Rayleigh quotient estimates it. */
     double v[ID_MAX_REGRESSORS];
     memcpy(v, id->eigvec, sizeof v);
-    cholesky_solve(m, L, v);
+    solve(m, L, v);
     double norm = 0.0;
     for (int k = 0; k < m; ++k) norm += v[k] * v[k];
     norm = sqrt(norm);

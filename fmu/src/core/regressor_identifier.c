@@ -3,6 +3,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "cholesky.h"
+
 int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int columns[],
              const double torque_scale[], double h, double rho, double R)
 {
@@ -71,40 +73,20 @@ void rri_reset(RegressorIdentifier *id)
 /* Cholesky P = L L^T into id->factor (lower triangle); 0 or -1. */
 static int factorize(RegressorIdentifier *id)
 {
-    const int p = id->p;
-    for (int j = 0; j < p; ++j) {
-        double d = id->P[j][j];
-        for (int k = 0; k < j; ++k) d -= id->factor[j][k] * id->factor[j][k];
-        if (!(d > 0.0) || !isfinite(d)) return -1;
-        id->factor[j][j] = sqrt(d);
-        for (int i = j + 1; i < p; ++i) {
-            double x = id->P[j][i];  /* upper triangle holds P */
-            for (int k = 0; k < j; ++k) x -= id->factor[i][k] * id->factor[j][k];
-            id->factor[i][j] = x / id->factor[j][j];
-        }
-    }
-    return 0;
+    return cholesky_factor(&id->P[0][0], &id->factor[0][0], id->p, RRI_MAX_PARAMETERS);
 }
 
 /* x <- P^-1 x with the factor. */
-static void cholesky_solve(const RegressorIdentifier *id, double x[])
+static void solve(const RegressorIdentifier *id, double x[])
 {
-    const int p = id->p;
-    for (int i = 0; i < p; ++i) {
-        for (int k = 0; k < i; ++k) x[i] -= id->factor[i][k] * x[k];
-        x[i] /= id->factor[i][i];
-    }
-    for (int i = p - 1; i >= 0; --i) {
-        for (int k = i + 1; k < p; ++k) x[i] -= id->factor[k][i] * x[k];
-        x[i] /= id->factor[i][i];
-    }
+    cholesky_solve(&id->factor[0][0], id->p, RRI_MAX_PARAMETERS, x);
 }
 
 static void solve_anchor(RegressorIdentifier *id)
 {
     if (factorize(id) != 0) return;
     memcpy(id->anchor, id->b, sizeof id->b);
-    cholesky_solve(id, id->anchor);
+    solve(id, id->anchor);
 }
 
 void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
@@ -160,7 +142,7 @@ int rri_solve(RegressorIdentifier *id)
 {
     if (factorize(id) != 0) return -1;
     memcpy(id->delta, id->b, sizeof id->b);
-    cholesky_solve(id, id->delta);
+    solve(id, id->delta);
     return 0;
 }
 
@@ -172,7 +154,7 @@ void rri_statistics(RegressorIdentifier *id)
     for (int k = 0; k < p; ++k) {
         double g[RRI_MAX_PARAMETERS] = {0};
         g[k] = 1.0;
-        cholesky_solve(id, g);
+        solve(id, g);
         trace += g[k];
         double variance = 0.0;
         for (int j = 0; j < p; ++j) {
@@ -187,7 +169,7 @@ void rri_statistics(RegressorIdentifier *id)
     double v[RRI_MAX_PARAMETERS], norm = 0.0;
     for (int k = 0; k < p; ++k) v[k] = 1.0 / sqrt((double)p);
     for (int iteration = 0; iteration < 30; ++iteration) {
-        cholesky_solve(id, v);
+        solve(id, v);
         norm = 0.0;
         for (int k = 0; k < p; ++k) norm += v[k] * v[k];
         norm = sqrt(norm);

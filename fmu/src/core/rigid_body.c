@@ -3,6 +3,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "cholesky.h"
+
 /* ---- 3-vector helpers ---------------------------------------------------------- */
 
 static void cross(const double a[3], const double b[3], double out[3])
@@ -375,30 +377,12 @@ int rb_forward_dynamics(const RigidBodyModel *model, const double q[], const dou
 
 int rb_cholesky(double M[RB_MAX_JOINTS][RB_MAX_JOINTS], int n)
 {
-    for (int j = 0; j < n; ++j) {
-        double d = M[j][j];
-        for (int k = 0; k < j; ++k) d -= M[j][k] * M[j][k];
-        if (!(d > 0.0) || !isfinite(d)) return -1;
-        M[j][j] = sqrt(d);
-        for (int i = j + 1; i < n; ++i) {
-            double x = M[i][j];
-            for (int k = 0; k < j; ++k) x -= M[i][k] * M[j][k];
-            M[i][j] = x / M[j][j];
-        }
-    }
-    return 0;
+    return cholesky_factor(&M[0][0], &M[0][0], n, RB_MAX_JOINTS); /* M is symmetric */
 }
 
 void rb_cholesky_solve(double L[RB_MAX_JOINTS][RB_MAX_JOINTS], int n, double x[])
 {
-    for (int i = 0; i < n; ++i) {
-        for (int k = 0; k < i; ++k) x[i] -= L[i][k] * x[k];
-        x[i] /= L[i][i];
-    }
-    for (int i = n - 1; i >= 0; --i) {
-        for (int k = i + 1; k < n; ++k) x[i] -= L[k][i] * x[k];
-        x[i] /= L[i][i];
-    }
+    cholesky_solve(&L[0][0], n, RB_MAX_JOINTS, x);
 }
 
 /* ---- regressor ------------------------------------------------------------------------ */
