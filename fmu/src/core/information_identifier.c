@@ -24,6 +24,9 @@ void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, 
     id->batch_gain = -expm1(-h / INFO_BATCH_WINDOW);
     id->power_gain = -expm1(-h * INFO_STD_INTERVAL / INFO_POWER_WINDOW);
     id->forgetting_rate = kind == IDENTIFIER_MFF ? -log(R) : 0.0;
+    id->reference_lambda = pow(id->lambda, 1.0 / INFO_REFERENCE_MEMORY);
+    id->reference_pull = (1.0 - id->reference_lambda) * rho;
+    id->skip_threshold = INFO_SKIP_SHARE * m * (1.0 - id->reference_lambda) / h;
     /* LSM re-solves its anchor (used for the residuals) every 32 samples */
     const double interval = id->forgetting_rate > 0.0 ? 0.01 / (h * id->forgetting_rate)
                                                       : INFO_ANCHOR_MAX_INTERVAL;
@@ -45,7 +48,15 @@ void info_reset(InformationIdentifier *id)
     memset(id->std_error, 0, sizeof id->std_error);
     id->std_age = 0;
     id->residual_samples = 0.0;
+    memset(id->reference, 0, sizeof id->reference);
+    memset(id->reference_factor, 0, sizeof id->reference_factor);
+    id->used_mean = 1.0;
+    id->gap_time = 0.0;
     const int n = dimension(id);
+    for (int k = 0; k < id->m; ++k) {
+        id->reference[k][k] = id->rho;
+        id->reference_factor[k][k] = sqrt(id->rho);
+    }
     for (int k = 0; k < n; ++k) {
         id->P[k][k] = id->rho;
         id->eigvec[k] = k < id->m ? 1.0 / sqrt((double)id->m) : 0.0;
@@ -113,11 +124,45 @@ KERNEL mff_accumulate_n(InformationIdentifier *id, const double z[], const doubl
     }
 }
 
+/* Adds the sample to the long-run inflow Pref and tells whether it is
+ * informative: q = h phi^T Pref^-1 phi (with the factor of the last anchor
+ * refresh) at least INFO_SKIP_SHARE of its share of Pref. */
+INLINED int informative(InformationIdentifier *id, const double phi[], const int m)
+{
+    double y[ID_MAX_REGRESSORS], q = 0.0;
+    UNROLL for (int i = 0; i < m; ++i) { /* y = L^-1 phi */
+        double s = phi[i];
+        UNROLL for (int k = 0; k < i; ++k) s -= id->reference_factor[i][k] * y[k];
+        y[i] = s / id->reference_factor[i][i];
+        q += y[i] * y[i];
+    }
+    const double lambda = id->reference_lambda, h = id->h;
+    UNROLL for (int j = 0; j < m; ++j) {
+        const double hj = h * phi[j];
+        UNROLL for (int k = j; k < m; ++k) id->reference[j][k] = lambda * id->reference[j][k] + hj * phi[k];
+        id->reference[j][j] += id->reference_pull;
+    }
+    const int used = q >= id->skip_threshold;
+    id->used_mean += (1.0 - id->lambda) * ((double)used - id->used_mean);
+    return used;
+}
+
 KERNEL mff_accumulate(InformationIdentifier *id, const double z[], const double phi[], const int m,
                       const int rows)
 {
-    if (id->drift && 2 * m <= ID_MAX_REGRESSORS) { /* (the second test removes the
-                                                     * impossible large-m copies) */
+    const int drift = id->drift && 2 * m <= ID_MAX_REGRESSORS; /* (the second test removes
+                                                                 * the impossible large-m copies) */
+    if (!informative(id, phi, m)) {
+        /* a short gap (a velocity zero) forgets and extrapolates as before,
+         * without the sample's data; a longer one (a rest) freezes the sums */
+        if ((id->gap_time += id->h) * id->forgetting_rate >= INFO_GAP_MEMORY) return;
+        static const double none[ID_MAX_ROWS + ID_MAX_REGRESSORS] = {0};
+        z = none;
+        phi = none;
+    } else {
+        id->gap_time = 0.0;
+    }
+    if (drift) {
         recentre(id, m);
         mff_accumulate_n(id, z, phi, m, 2 * m, rows);
     } else {
@@ -214,6 +259,9 @@ static void refresh_anchor(InformationIdentifier *id)
     const int n = dimension(id);
     id->anchor_age = 0;
     if (cholesky(id, n, L) == 0) solve_estimate(id, n, L, id->anchor); /* else keep it */
+    if (id->lambda < 1.0 && cholesky_factor(&id->reference[0][0], &L[0][0], id->m,
+                                            ID_MAX_REGRESSORS) == 0)
+        memcpy(id->reference_factor, L, sizeof L);
 }
 
 static void update_standard_errors(InformationIdentifier *id)
@@ -222,8 +270,11 @@ static void update_standard_errors(InformationIdentifier *id)
     id->std_age = 0;
     /* the first INFO_SCORE_DELAY seconds hold the estimate's own transient */
     if (id->active_time < INFO_SCORE_DELAY) return;
-    const double gp = id->residual_samples * id->power_gain < 1.0 ? 1.0 / ++id->residual_samples
-                                                                   : id->power_gain;
+    /* MFF: in proportion to the samples used, so that a rest (no data, no
+     * forgetting) leaves the standard errors where the excitation left them */
+    const double gp = id->residual_samples * id->power_gain < 1.0
+                          ? 1.0 / ++id->residual_samples
+                          : id->power_gain * (id->lambda < 1.0 ? id->used_mean : 1.0);
     for (int i = 0; i < id->rows; ++i)
         for (int a = 0; a < m; ++a)
             for (int b = a; b < m; ++b)
@@ -304,10 +355,11 @@ int info_solve(InformationIdentifier *id)
         for (int k = 0; k < m; ++k) pv += (k >= j ? id->P[j][k] : id->P[k][j]) * id->eigvec[k];
         rayleigh += id->eigvec[j] * pv;
     }
-    /* Information gathered per unit time: LSM averages over the active time,
-     * MFF's window has length 1/|ln R| (lambda = R^h). */
+    /* Information gathered per unit time: LSM averages over the active time;
+     * MFF holds what arrives over its window 1/|ln R| (lambda = R^h), of the
+     * samples it uses. */
     const double excess = rayleigh - id->rho;
-    if (id->lambda < 1.0) id->excitation = excess * id->forgetting_rate;
+    if (id->lambda < 1.0) id->excitation = excess * id->forgetting_rate * id->used_mean;
     else id->excitation = id->active_time > 0.0 ? excess / id->active_time : 0.0;
     if (id->excitation < 0.0) id->excitation = 0.0;
     return 0;

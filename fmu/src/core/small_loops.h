@@ -16,10 +16,11 @@
 
 /* A kernel must be inlined into its constant-m call for the loops to unroll. */
 #if defined(__GNUC__)
-#define KERNEL static inline __attribute__((always_inline)) void
+#define INLINED static inline __attribute__((always_inline))
 #else
-#define KERNEL static inline void
+#define INLINED static inline
 #endif
+#define KERNEL INLINED void
 
 /* Calls FUNCTION(args..., M) with the constant M equal to m; does nothing for
  * m outside 1..8 (the callers' counts are validated, this is the last guard). */
