@@ -26,6 +26,8 @@ void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, 
     id->forgetting_rate = kind == IDENTIFIER_MFF ? -log(R) : 0.0;
     id->reference_lambda = pow(id->lambda, 1.0 / INFO_REFERENCE_MEMORY);
     id->reference_pull = (1.0 - id->reference_lambda) * rho;
+    id->rest_lambda = pow(id->lambda, 1.0 / INFO_REST_MEMORY);
+    id->rest_pull = (1.0 - id->rest_lambda) * rho;
     id->skip_threshold = INFO_SKIP_SHARE * m * (1.0 - id->reference_lambda) / h;
     /* LSM re-solves its anchor (used for the residuals) every 32 samples */
     const double interval = id->forgetting_rate > 0.0 ? 0.01 / (h * id->forgetting_rate)
@@ -136,13 +138,16 @@ INLINED int informative(InformationIdentifier *id, const double phi[], const int
         y[i] = s / id->reference_factor[i][i];
         q += y[i] * y[i];
     }
-    const double lambda = id->reference_lambda, h = id->h;
+    const int used = q >= id->skip_threshold;
+    /* over a rest Pref forgets slower, so that an isolated pulse (an encoder
+     * step of a creeping plant) stays small against it */
+    const double lambda = used ? id->reference_lambda : id->rest_lambda, h = id->h;
+    const double pull = used ? id->reference_pull : id->rest_pull;
     UNROLL for (int j = 0; j < m; ++j) {
         const double hj = h * phi[j];
         UNROLL for (int k = j; k < m; ++k) id->reference[j][k] = lambda * id->reference[j][k] + hj * phi[k];
-        id->reference[j][j] += id->reference_pull;
+        id->reference[j][j] += pull;
     }
-    const int used = q >= id->skip_threshold;
     id->used_mean += (1.0 - id->lambda) * ((double)used - id->used_mean);
     return used;
 }

@@ -52,6 +52,7 @@
 #define INFO_SCORE_DELAY 2.0    /* [s] of identification before the scores count */
 #define INFO_STD_INTERVAL 256   /* samples between updates of the standard errors */
 #define INFO_REFERENCE_MEMORY 10.0 /* Pref's memory, in MFF memories 1/|ln R| */
+#define INFO_REST_MEMORY 100.0  /* Pref's memory over the samples left out */
 #define INFO_SKIP_SHARE 0.04    /* below this share of the long-run inflow a sample is left
                                  * out: |v| < 0.2 RMS(v) for a velocity regressor */
 #define INFO_GAP_MEMORY 0.25    /* gaps longer than this many memories freeze the sums */
@@ -78,6 +79,7 @@ typedef struct {
     double reference[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
     double reference_factor[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
     double reference_lambda, reference_pull; /* lambda^(1/INFO_REFERENCE_MEMORY), its rho pull */
+    double rest_lambda, rest_pull; /* the same over left-out samples: lambda^(1/INFO_REST_MEMORY) */
     double skip_threshold; /* INFO_SKIP_SHARE m (1 - reference_lambda) / h */
     double used_mean;      /* fraction of the samples used, over the memory */
     double gap_time;       /* time since the last sample used [s] */
