@@ -106,14 +106,33 @@ def savitzky_golay(log: JointLog, window: float, order: int = 4):
 
 
 def observer(log: JointLog, acceleration_bound: np.ndarray, tau: float):
-    """(q, q', q'', u) with q' by the super-twisting observer (C core, causal) and q''
-    its filtered injection; q, q' and u pass through the same first-order filter as q''
-    so that every signal of the regression carries the same lag."""
-    from .native import observe_velocities
-    velocity, acceleration = observe_velocities(log.q, log.step, acceleration_bound, tau)
+    """(q, q', q'', u, velocity) for the regression from the causal, model-free observer.
+
+    velocity: each joint's estimate by the observer FMU's default estimator without a
+    model (harness.robot.native.observe_adaptive: the implicit super-twisting observer
+    beside the noise-adaptive bank of linear observers, which estimates the encoder
+    noise itself), the velocity the pipeline reports.  The regression's signals pass
+    one causal filter L, two first-order stages of time constant tau: q, the velocity
+    and u through L, q'' as the derivative of the filtered velocity.  The derivative is
+    the difference of two samples, a value between them, so every signal is taken
+    there (the mean of the two samples: 0.5 % of q'' off at 1 kHz, tau = 5 ms,
+    where the derivative (L1 v - L v) / tau of the continuous filter was 10 % off).
+    Every signal then carries the same lag, and the torque equation holds between
+    them to second order in tau."""
+    from .native import observe_adaptive
+    velocity = observe_adaptive(log.q, log.step, acceleration_bound).velocity
     gain = -np.expm1(-log.step / tau)
-    lag = lambda x: lfilter([gain], [1.0, gain - 1.0], x - x[0], axis=0) + x[0]  # noqa: E731
-    return lag(log.q), lag(velocity), acceleration, lag(log.u)
+
+    def filtered(x: np.ndarray) -> np.ndarray:  # L, started at rest at x[0]
+        for _ in range(2):
+            x = lfilter([gain], [1.0, gain - 1.0], x - x[0], axis=0) + x[0]
+        return x
+
+    def between(x: np.ndarray) -> np.ndarray:  # at t_k - h/2 (the first sample: t_0)
+        return np.concatenate([x[:1], 0.5 * (x[1:] + x[:-1])])
+    qd = filtered(velocity)
+    qdd = np.concatenate([np.zeros_like(qd[:1]), np.diff(qd, axis=0) / log.step])
+    return (between(filtered(log.q)), between(qd), qdd, between(filtered(log.u)), velocity)
 
 
 @dataclass
@@ -138,9 +157,10 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
         raise LogError(f"the log has {log.q.shape[1]} joints, the robot {robot.n}")
     if method == "sg":
         q, qd, qdd, u = savitzky_golay(log, window)
+        velocity = qd
     elif method == "observer":
         bound = 1.5 * np.abs(savitzky_golay(log, max(window, 0.05))[2]).max(axis=0) + 1e-3
-        q, qd, qdd, u = observer(log, bound, tau)
+        q, qd, qdd, u, velocity = observer(log, bound, tau)
     else:
         raise ValueError(f"unknown method {method!r}: 'sg' or 'observer'")
     first, last = int(skip / log.step), len(log.t) - int(window / log.step) - 1
@@ -160,7 +180,7 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     mask = friction_rows(qd, log.step, max(window, 4 * tau), min_speed)[used]
     fit = torque_least_squares(base.regressor(Y), z, batch=correlation, mask=mask)
     pi = consistent_parameters(robot, base, fit.beta, fit.std_error)
-    return Identification(base, fit, pi, qd, used)
+    return Identification(base, fit, pi, velocity, used)
 
 
 def friction_rows(velocity: np.ndarray, h: float, margin: float,
