@@ -32,7 +32,7 @@ def _stages(tau: float, h: float):
 
 def filtered_regression(body, q: np.ndarray, velocity: np.ndarray, u: np.ndarray, h: float,
                         tau: float, used: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(Y, z) at the samples `used` (indices >= 1): Y (len(used), n, 12 n) and the
+    """(Y, z) at the samples `used` (increasing): Y (len(used), n, 12 n) and the
     filtered torques z (len(used), n) with z = Y pi, from positions q, velocity estimates
     and torques u (N, n) sampled every h.  The filter starts at rest at the first sample."""
     count, n = q.shape
@@ -67,8 +67,7 @@ def filtered_regression(body, q: np.ndarray, velocity: np.ndarray, u: np.ndarray
         if previous is None:
             previous = [f[:1] for f in filtered]
         extended = [np.concatenate([p, f]) for p, f in zip(previous, filtered)]
-        rows = np.flatnonzero(want[start:stop])
-        rows = rows[rows + start >= 1]
+        rows = np.flatnonzero(want[start:stop])  # sample 0: the filter at rest, s L = 0
         if len(rows):
             m, r, t = extended  # index j + 1 is sample start + j
             dm = (m[rows + 1] - m[rows]) / h

@@ -4,10 +4,13 @@
 
 DATA.csv has a header and columns t, q1..qn (rad, or m for prismatic joints), u1..un
 (N.m or N); other names map with --column q1=shoulder_pos etc.  Steps:
-1. velocities and accelerations: Savitzky-Golay (zero-phase, the default) or the
-   super-twisting observer of the C core (causal), the torques filtered alike;
-2. the base regressor of the URDF's model (C core) and torque-space weighted least
-   squares with standard errors (harness.robot.least_squares);
+1. velocities: Savitzky-Golay (zero-phase, the default; with accelerations and the
+   torques filtered alike) or a causal, model-free observer per joint, the observer
+   FMU's default estimator through the C core (observer_velocities);
+2. the base regressor of the URDF's model (C core): at the smoothed signals (sg) or in
+   momentum form through a causal filter, with no acceleration (observer,
+   harness.robot.filtered_regression); torque-space weighted least squares with
+   standard errors (harness.robot.least_squares);
 3. physically consistent link parameters near the URDF's (harness.robot.consistency),
    written as DIR/identified.urdf with the joints' viscous and Coulomb friction.
 """
@@ -140,7 +143,8 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     The first `skip` seconds (observer convergence, filter edges) and the last window
     are not used; at most max_samples evenly spaced samples enter the regression.
     Joint i's equation is left out near its velocity reversals and where
-    |q_i'| < min_speed (rad/s or m/s; see friction_rows)."""
+    |q_i'| < min_speed (rad/s or m/s; see friction_rows).  method "observer": tau is
+    the time constant of the regression's causal filter (two first-order stages)."""
     if log.q.shape[1] != robot.n:
         raise LogError(f"the log has {log.q.shape[1]} joints, the robot {robot.n}")
     if method not in ("sg", "observer"):
