@@ -161,18 +161,19 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
         q, qd, qdd, u = savitzky_golay(log, window)
         velocity = qd
         Y, torque = body.regressor(q[used], qd[used], qdd[used]), u[used]
-        margin, slow_margin = window, 0.0
+        margin, slow_margin, memory = window, 0.0, window
     else:
         bound = 1.5 * np.abs(savitzky_golay(log, max(window, 0.05))[2]).max(axis=0) + 1e-3
         velocity = observer_velocities(log, bound)
         Y, torque = filtered_regression(body, log.q, velocity, log.u, log.step, tau, used)
         qd = low_pass(velocity, log.step, tau)
         margin = slow_margin = max(window, 4 * tau)
+        memory = max(window, tau)
     # the known part of the model (all but the unknown columns) moves to the left side
     known = np.setdiff1d(np.arange(12 * robot.n), np.union1d(base.base, base.dependent))
     nominal = robot.parameters()
     z = torque - Y[:, :, known] @ nominal[known]
-    correlation = max(1, int(np.ceil(2 * max(window, tau) / (stride * log.step))))
+    correlation = max(1, int(np.ceil(2 * memory / (stride * log.step))))
     mask = friction_rows(qd, log.step, margin, min_speed, slow_margin)[used]
     fit = torque_least_squares(base.regressor(Y), z, batch=correlation, mask=mask)
     pi = consistent_parameters(robot, base, fit.beta, fit.std_error)
