@@ -130,13 +130,15 @@ int rn_identify(const RigidBodyModel *model, RegressorIdentifier *identifier, in
  * measurement: causal), acceleration (the published perturbation, here the
  * acceleration), noise (the estimated measurement noise std) and bandwidth
  * (of the published observer, 1/h for the super-twisting one).  The bank is
- * allocated by the caller (rn_adaptive_size() bytes).  Returns 0, or -1 for a
- * bound that gives no gains. */
+ * allocated by the caller (rn_adaptive_size() bytes).  nominal (count x n, or
+ * NULL: model-free) is a known acceleration held over the interval that starts
+ * at each sample.  Returns 0, or -1 for a bound that gives no gains. */
 size_t rn_adaptive_size(void) { return sizeof(AdaptiveBank); }
 
 int rn_observe_adaptive(AdaptiveBank *bank, int n, long count, double h, const double y[],
-                        const double nominal[], const double f_plus[], double tau, double velocity[],
-                        double acceleration[], double noise[], double bandwidth[])
+                        const double nominal[], const double f_plus[], double tau,
+                        double velocity[], double acceleration[], double noise[],
+                        double bandwidth[])
 {
     for (int i = 0; i < n; ++i) {
         double alpha1 = 0.0, alpha2 = 0.0, zero = 0.0, y0 = y[i];
