@@ -18,8 +18,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help="all: every base parameter and the friction; payload: the last "
                             "link's parameters and the friction, the other links as in the URDF")
     group.add_argument("--velocity", choices=["sg", "observer"], default="sg",
-                       help="sg: zero-phase Savitzky-Golay; observer: the causal "
-                            "super-twisting observer of the C core")
+                       help="sg: zero-phase Savitzky-Golay; observer: a causal, model-free "
+                            "observer per joint (the observer FMU's default estimator: "
+                            "implicit super-twisting + noise-adaptive linear observers, C "
+                            "core) and a momentum-form regression through a causal filter")
     group.add_argument("--window", type=float, default=0.05,
                        help="Savitzky-Golay window [s] (default 0.05)")
     group.add_argument("--min-speed", type=_non_negative, default=None, metavar="V",

@@ -9,6 +9,7 @@ the checkout's fmu/src/core; an installed package has its copy in core/ (made by
 from __future__ import annotations
 
 import ctypes
+from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
@@ -54,9 +55,11 @@ def load() -> ctypes.CDLL:
                                 _int_p, _double_p, ctypes.c_double, ctypes.c_double,
                                 ctypes.c_double, count, _double_p, _double_p, _double_p,
                                 _double_p, ctypes.c_long, _double_p, _double_p, _double_p]
-    dll.rn_observe.restype = ctypes.c_int
-    dll.rn_observe.argtypes = [ctypes.c_int, count, ctypes.c_double, _double_p, _double_p,
-                               ctypes.c_double, _double_p, _double_p]
+    dll.rn_adaptive_size.restype = ctypes.c_size_t
+    dll.rn_observe_adaptive.restype = ctypes.c_int
+    dll.rn_observe_adaptive.argtypes = [ctypes.c_void_p, ctypes.c_int, count, ctypes.c_double,
+                                        _double_p, ctypes.c_void_p, _double_p, ctypes.c_double,
+                                        _double_p, _double_p, _double_p, _double_p]
     dll.rn_robot_run_size.restype = ctypes.c_size_t
     dll.rn_robot_observe.restype = ctypes.c_long
     dll.rn_robot_observe.argtypes = [
@@ -67,18 +70,39 @@ def load() -> ctypes.CDLL:
     return dll
 
 
-def observe_velocities(q: np.ndarray, h: float, acceleration_bound, tau: float = 0.01):
-    """(velocity, acceleration) of each joint from positions q (count, n) sampled every h,
-    by the super-twisting observer of the C core used as a differentiator (no model):
-    causal; acceleration_bound (per joint) bounds |q''| (Theorem 3.1 gains), tau is the
-    time constant of the injection's filter (the acceleration estimate)."""
+@dataclass
+class AdaptiveVelocities:
+    """What observe_adaptive gives per sample and joint, arrays (count, n)."""
+
+    velocity: np.ndarray      # the published velocity estimate at the sample
+    acceleration: np.ndarray  # the published perturbation: without a model, q''
+    noise: np.ndarray         # the estimated measurement noise std [rad or m]
+    bandwidth: np.ndarray     # of the published observer [rad/s] (1/h: super-twisting)
+
+
+def observe_adaptive(q: np.ndarray, h: float, acceleration_bound, tau: float = 0.002,
+                     nominal: np.ndarray | None = None) -> AdaptiveVelocities:
+    """Each joint's positions q (count, n) sampled every h through the observer FMU's
+    default estimator without a model: the implicit super-twisting observer beside the
+    bank of noise-adaptive linear observers (fmu/src/core/noise_adaptive.c), which
+    estimates the measurement noise itself and publishes the observer that fits it.
+    Causal: the estimate at a sample uses the measurements up to it.
+    acceleration_bound (per joint) bounds |q''| (Theorem 3.1 gains of the
+    super-twisting observer); tau filters its injection (the FMU's default 2 ms).
+    nominal (count, n), if given, is a known acceleration held over the interval that
+    starts at each sample (the FMU's F input); without it the observer is model-free."""
     q = np.ascontiguousarray(np.atleast_2d(q), dtype=np.float64)
     count, n = q.shape
     bound = np.ascontiguousarray(np.broadcast_to(np.asarray(acceleration_bound, float), (n,)))
-    velocity, acceleration = np.empty_like(q), np.empty_like(q)
-    if load().rn_observe(n, count, h, q, bound, tau, velocity, acceleration) != 0:
+    out = [np.empty_like(q) for _ in range(4)]
+    dll = load()
+    bank = ctypes.create_string_buffer(dll.rn_adaptive_size())
+    if nominal is not None:
+        nominal = np.ascontiguousarray(np.broadcast_to(nominal, q.shape), dtype=np.float64)
+    pointer = None if nominal is None else nominal.ctypes.data
+    if dll.rn_observe_adaptive(bank, n, count, h, q, pointer, bound, tau, *out) != 0:
         raise ValueError(f"no observer gains for the acceleration bounds {bound.tolist()}")
-    return velocity, acceleration
+    return AdaptiveVelocities(*out)
 
 
 STATUS = {-1: "the number of joints is not between 1 and 7",

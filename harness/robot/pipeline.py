@@ -4,10 +4,13 @@
 
 DATA.csv has a header and columns t, q1..qn (rad, or m for prismatic joints), u1..un
 (N.m or N); other names map with --column q1=shoulder_pos etc.  Steps:
-1. velocities and accelerations: Savitzky-Golay (zero-phase, the default) or the
-   super-twisting observer of the C core (causal), the torques filtered alike;
-2. the base regressor of the URDF's model (C core) and torque-space weighted least
-   squares with standard errors (harness.robot.least_squares);
+1. velocities: Savitzky-Golay (zero-phase, the default; with accelerations and the
+   torques filtered alike) or a causal, model-free observer per joint, the observer
+   FMU's default estimator through the C core (observer_velocities);
+2. the base regressor of the URDF's model (C core): at the smoothed signals (sg) or in
+   momentum form through a causal filter, with no acceleration (observer,
+   harness.robot.filtered_regression); torque-space weighted least squares with
+   standard errors (harness.robot.least_squares);
 3. physically consistent link parameters near the URDF's (harness.robot.consistency),
    written as DIR/identified.urdf with the joints' viscous and Coulomb friction.
 """
@@ -22,6 +25,7 @@ import numpy as np
 from scipy.signal import lfilter, savgol_filter
 
 from .base_parameters import BaseParameters, base_parameters
+from .filtered_regression import filtered_regression
 from .consistency import consistent_parameters, write_identified_urdf
 from .least_squares import Fit, torque_least_squares
 from .urdf import Robot
@@ -105,15 +109,21 @@ def savitzky_golay(log: JointLog, window: float, order: int = 4):
     return tuple(smooth)
 
 
-def observer(log: JointLog, acceleration_bound: np.ndarray, tau: float):
-    """(q, q', q'', u) with q' by the super-twisting observer (C core, causal) and q''
-    its filtered injection; q, q' and u pass through the same first-order filter as q''
-    so that every signal of the regression carries the same lag."""
-    from .native import observe_velocities
-    velocity, acceleration = observe_velocities(log.q, log.step, acceleration_bound, tau)
-    gain = -np.expm1(-log.step / tau)
-    lag = lambda x: lfilter([gain], [1.0, gain - 1.0], x - x[0], axis=0) + x[0]  # noqa: E731
-    return lag(log.q), lag(velocity), acceleration, lag(log.u)
+def observer_velocities(log: JointLog, acceleration_bound: np.ndarray) -> np.ndarray:
+    """Each joint's velocity by the observer FMU's default estimator without a model
+    (harness.robot.native.observe_adaptive: the implicit super-twisting observer beside
+    the noise-adaptive bank of linear observers, which estimates the encoder noise
+    itself): causal, the estimate at a sample from the positions up to it."""
+    from .native import observe_adaptive
+    return observe_adaptive(log.q, log.step, acceleration_bound).velocity
+
+
+def low_pass(x: np.ndarray, h: float, tau: float) -> np.ndarray:
+    """x (N, n) through two first-order stages of time constant tau, at rest at x[0]."""
+    gain = -np.expm1(-h / tau)
+    for _ in range(2):
+        x = lfilter([gain], [1.0, gain - 1.0], x - x[0], axis=0) + x[0]
+    return x
 
 
 @dataclass
@@ -126,22 +136,18 @@ class Identification:
 
 
 def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: str = "sg",
-                   window: float = 0.05, tau: float = 0.005, max_samples: int = 20000,
+                   window: float = 0.05, tau: float = 0.02, max_samples: int = 20000,
                    skip: float = 0.5, min_speed: float = MIN_SPEED) -> Identification:
     """Identify the unknown parameters ("all" or "payload") from the log.
 
     The first `skip` seconds (observer convergence, filter edges) and the last window
     are not used; at most max_samples evenly spaced samples enter the regression.
     Joint i's equation is left out near its velocity reversals and where
-    |q_i'| < min_speed (rad/s or m/s; see friction_rows)."""
+    |q_i'| < min_speed (rad/s or m/s; see friction_rows).  method "observer": tau is
+    the time constant of the regression's causal filter (two first-order stages)."""
     if log.q.shape[1] != robot.n:
         raise LogError(f"the log has {log.q.shape[1]} joints, the robot {robot.n}")
-    if method == "sg":
-        q, qd, qdd, u = savitzky_golay(log, window)
-    elif method == "observer":
-        bound = 1.5 * np.abs(savitzky_golay(log, max(window, 0.05))[2]).max(axis=0) + 1e-3
-        q, qd, qdd, u = observer(log, bound, tau)
-    else:
+    if method not in ("sg", "observer"):
         raise ValueError(f"unknown method {method!r}: 'sg' or 'observer'")
     first, last = int(skip / log.step), len(log.t) - int(window / log.step) - 1
     if last - first < 10:
@@ -151,29 +157,46 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     body = robot.rigid_body()
     types = robot.arrays()["types"]
     base = base_parameters(body, types, robot.joint_names, unknown)
-    Y = body.regressor(q[used], qd[used], qdd[used])
+    if method == "sg":
+        q, qd, qdd, u = savitzky_golay(log, window)
+        velocity = qd
+        Y, torque = body.regressor(q[used], qd[used], qdd[used]), u[used]
+        margin, slow_margin, memory = window, 0.0, window
+    else:
+        bound = 1.5 * np.abs(savitzky_golay(log, max(window, 0.05))[2]).max(axis=0) + 1e-3
+        velocity = observer_velocities(log, bound)
+        Y, torque = filtered_regression(body, log.q, velocity, log.u, log.step, tau, used)
+        qd = low_pass(velocity, log.step, tau)
+        margin = slow_margin = max(window, 4 * tau)
+        memory = max(window, tau)
     # the known part of the model (all but the unknown columns) moves to the left side
     known = np.setdiff1d(np.arange(12 * robot.n), np.union1d(base.base, base.dependent))
     nominal = robot.parameters()
-    z = u[used] - Y[:, :, known] @ nominal[known]
-    correlation = max(1, int(np.ceil(2 * max(window, tau) / (stride * log.step))))
-    mask = friction_rows(qd, log.step, max(window, 4 * tau), min_speed)[used]
+    z = torque - Y[:, :, known] @ nominal[known]
+    correlation = max(1, int(np.ceil(2 * memory / (stride * log.step))))
+    mask = friction_rows(qd, log.step, margin, min_speed, slow_margin)[used]
     fit = torque_least_squares(base.regressor(Y), z, batch=correlation, mask=mask)
     pi = consistent_parameters(robot, base, fit.beta, fit.std_error)
-    return Identification(base, fit, pi, qd, used)
+    return Identification(base, fit, pi, velocity, used)
 
 
 def friction_rows(velocity: np.ndarray, h: float, margin: float,
-                  min_speed: float = MIN_SPEED) -> np.ndarray:
+                  min_speed: float = MIN_SPEED, slow_margin: float = 0.0) -> np.ndarray:
     """(N, n) True for the joint equations whose friction is f_v q' + f_c sign(q'):
-    away from the joint's reversals (away_from_reversals) and at |q'| >= min_speed.
+    away from the joint's reversals (away_from_reversals) and at |q'| >= min_speed,
+    also over the slow_margin s on both sides.
 
     At low speed a joint's Coulomb friction is not f_c sign(q') (stiction, the
     Stribeck effect, a simulator's smoothing), also where the joint slows down
-    without reversing, which the reversal margin does not catch."""
+    without reversing, which the reversal margin does not catch.  A filtered
+    regression (filtered_regression) carries the friction of the filter's memory:
+    its rows need the speed over that memory, slow_margin."""
     if not min_speed >= 0.0:
         raise ValueError(f"min_speed must be >= 0, not {min_speed!r}")
-    return away_from_reversals(velocity, h, margin) & (np.abs(velocity) >= min_speed)
+    flips = np.zeros(velocity.shape, dtype=bool)
+    flips[1:] = np.signbit(velocity[1:]) != np.signbit(velocity[:-1])
+    slow = np.abs(velocity) < min_speed
+    return ~_near(flips, h, max(margin, h)) & ~_near(slow, h, slow_margin)
 
 
 def away_from_reversals(velocity: np.ndarray, h: float, margin: float) -> np.ndarray:
@@ -182,15 +205,19 @@ def away_from_reversals(velocity: np.ndarray, h: float, margin: float) -> np.nda
     Filtering does not commute with the Coulomb term f_c sign(q'): near a reversal
     the filtered torque and the friction of the filtered velocity differ, so those
     joint equations are left out (the other joints' equations of the sample stay)."""
-    half = max(1, int(round(margin / h)))
     flips = np.zeros(velocity.shape, dtype=bool)
     flips[1:] = np.signbit(velocity[1:]) != np.signbit(velocity[:-1])
-    # a sample is near a reversal if a flip lies within +-half samples
-    counts = np.cumsum(np.vstack([np.zeros((1, velocity.shape[1])), flips]), axis=0)
-    index = np.arange(len(velocity))
-    upper = counts[np.minimum(index + half + 1, len(velocity))]
+    return ~_near(flips, h, max(margin, h))
+
+
+def _near(events: np.ndarray, h: float, margin: float) -> np.ndarray:
+    """(N, n) True where an event of the joint lies within +-margin s (0: at the sample)."""
+    half = int(round(margin / h))
+    counts = np.cumsum(np.vstack([np.zeros((1, events.shape[1])), events]), axis=0)
+    index = np.arange(len(events))
+    upper = counts[np.minimum(index + half + 1, len(events))]
     lower = counts[np.maximum(index - half, 0)]
-    return (upper - lower) == 0
+    return (upper - lower) > 0
 
 
 def torque_prediction_error(robot: Robot, pi: np.ndarray, q, qd, qdd, u) -> float:

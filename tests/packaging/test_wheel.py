@@ -102,7 +102,7 @@ def test_the_installed_package_compiles_its_robot_core(installed, tmp_path):
     fresh cache."""
     script = ("import numpy as np, harness.robot.native as rn\n"
               "t = np.arange(3000) * 1e-3\n"
-              "v, _ = rn.observe_velocities(np.sin(2 * t)[:, None], 1e-3, 5.0)\n"
+              "v = rn.observe_adaptive(np.sin(2 * t)[:, None], 1e-3, 5.0).velocity\n"
               "print(rn.CORE)\n"
               "print(np.max(np.abs(v[1000:, 0] - 2 * np.cos(2 * t[1000:]))))\n")
     env = {**_clean_env(), "STO_HARNESS_CACHE": str(tmp_path / "cache")}

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "gains.h"
+#include "noise_adaptive.h"
 #include "regressor_identifier.h"
 #include "robot_observer.h"
 #include "rigid_body.h"
@@ -120,27 +121,41 @@ int rn_identify(const RigidBodyModel *model, RegressorIdentifier *identifier, in
     return 0;
 }
 
-/* Velocities of each joint by a super-twisting observer (implicit scheme,
- * super_twisting.c) without a model (F = 0: a robust exact differentiator),
- * gains from Theorem 3.1 for the acceleration bound f_plus[i] (p = 0.5) and
- * the injection filtered with time constant tau (the acceleration estimate).
- * y, velocity, acceleration: count x n row by row.  Returns 0, or -1 for a
- * bound that gives no gains. */
-int rn_observe(int n, long count, double h, const double y[], const double f_plus[], double tau,
-               double velocity[], double acceleration[])
+/* Velocities of each joint by the observer FMU's default estimator without a
+ * model (F = 0): the implicit super-twisting observer beside the bank of
+ * noise-adaptive linear observers (noise_adaptive.c, scheme 3), one joint at a
+ * time, one step per sample, gains from Theorem 3.1 for the acceleration bound
+ * f_plus[i] (p = 0.5), tau the injection's filter.  Outputs per sample, count x n
+ * row by row: velocity (the published estimate at the sample, after its
+ * measurement: causal), acceleration (the published perturbation, here the
+ * acceleration), noise (the estimated measurement noise std) and bandwidth
+ * (of the published observer, 1/h for the super-twisting one).  The bank is
+ * allocated by the caller (rn_adaptive_size() bytes).  nominal (count x n, or
+ * NULL: model-free) is a known acceleration held over the interval that starts
+ * at each sample.  Returns 0, or -1 for a bound that gives no gains. */
+size_t rn_adaptive_size(void) { return sizeof(AdaptiveBank); }
+
+int rn_observe_adaptive(AdaptiveBank *bank, int n, long count, double h, const double y[],
+                        const double nominal[], const double f_plus[], double tau,
+                        double velocity[], double acceleration[], double noise[],
+                        double bandwidth[])
 {
     for (int i = 0; i < n; ++i) {
         double alpha1 = 0.0, alpha2 = 0.0, zero = 0.0, y0 = y[i];
         if (gains_complete(f_plus[i], 0.5, &alpha1, &alpha2) != 0) return -1;
         SuperTwistingObserver o;
         sto_init(&o, 1, h, &alpha1, &alpha2, tau, &y0, &zero);
-        sto_configure(&o, STO_SCHEME_IMPLICIT, 0.1);
-        const StoAcceleration none = {.held = 0.0}; /* model-free: every term 0 */
+        sto_configure(&o, STO_SCHEME_ADAPTIVE, 0.05); /* the FMU's convergence window */
+        adaptive_init(bank, h);
         StoTrace trace;
         for (long k = 0; k < count; ++k) {
-            sto_run(&o, y + k * n + i, &none, 1, &trace);
+            const StoAcceleration a = {.held = nominal ? nominal[k * n + i] : 0.0};
+            adaptive_run(&o, bank, y + k * n + i, &a, 1, &trace);
             velocity[k * n + i] = trace.velocity[0][0];
             acceleration[k * n + i] = trace.z_filtered[0][0];
+            adaptive_outputs(&o, bank);
+            noise[k * n + i] = bank->noise_std[0];
+            bandwidth[k * n + i] = bank->bandwidth[0];
         }
     }
     return 0;

@@ -1,0 +1,107 @@
+"""The causal, model-free velocity path of `identify --velocity observer`
+(harness.robot.pipeline.observer_velocities: the observer FMU's default estimator per
+joint, through the C core) against an oracle-tuned causal Kalman filter on the same
+two-joint log, and the filtered regression it feeds (harness.robot.filtered_regression)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.linalg import solve_discrete_are
+from scipy.signal import lfilter, ss2tf
+
+from harness.robot.examples import example_urdf
+from harness.robot.filtered_regression import filtered_regression
+from harness.robot.pipeline import JointLog, friction_rows, observer_velocities
+from harness.robot.urdf import read_urdf
+
+from robot_helpers import FRICTION, multisine_log, payload_link
+
+H, SECONDS, SKIP = 1e-3, 6.0, 500  # the first 0.5 s (convergence) is not scored
+BOUND = 30.0  # [rad/s^2] bounds |q''| of the multi-sine (at most 14)
+
+
+def kalman_velocity(y: np.ndarray, lam: float) -> np.ndarray:
+    """Causal steady-state Kalman filter of the constant-acceleration model driven by
+    white jerk (lambda = jerk intensity h^5 / measurement variance), the estimate at
+    each sample after its measurement; states scaled [p, h v, h^2 a]."""
+    F = np.array([[1.0, 1.0, 0.5], [0.0, 1.0, 1.0], [0.0, 0.0, 1.0]])
+    Q = lam * np.array([[1 / 20, 1 / 8, 1 / 6], [1 / 8, 1 / 3, 1 / 2], [1 / 6, 1 / 2, 1.0]])
+    C = np.array([[1.0, 0.0, 0.0]])
+    P = solve_discrete_are(F.T, C.T, Q, np.array([[1.0]]))
+    K = P[:, :1] / (P[0, 0] + 1.0)
+    A = (np.eye(3) - K @ C) @ F  # x_k = A x_(k-1) + K y_k
+    b, a = ss2tf(A, K, (A[1:2] / H), K[1:2] / H)  # the velocity of x_k
+    return lfilter(b[0], a, y - y[0])
+
+
+def oracle_kalman_rms(y: np.ndarray, truth: np.ndarray) -> float:
+    """The smallest velocity RMS of the Kalman filter over lambda (tuned on the truth),
+    on a grid of 1/8 decade in lambda (1/48 decade in bandwidth)."""
+    return min(rms(kalman_velocity(y, 10.0 ** e), truth) for e in np.arange(-20, 0.01, 0.125))
+
+
+def rms(estimate: np.ndarray, truth: np.ndarray) -> float:
+    return float(np.sqrt(np.mean((estimate[SKIP:] - truth[SKIP:]) ** 2)))
+
+
+@pytest.fixture(scope="module")
+def arm_log():
+    path, _ = example_urdf("double_pendulum")
+    robot = read_urdf(path)
+    truth = robot.rigid_body(link=payload_link(robot.arrays()["link"]), friction=FRICTION)
+    return multisine_log(truth, SECONDS, H)
+
+
+def quantized(q: np.ndarray, bits: int | None) -> np.ndarray:
+    if bits is None:
+        return q
+    resolution = 2 * np.pi / 2 ** bits
+    return np.round(q / resolution) * resolution
+
+
+# Measured (this log, joints 1 and 2): exact 2.8e-5 and 2.4e-5 rad/s, the Kalman filter
+# 1.15e-4 and 9.5e-5 (ratios 0.25); 17 bits 3.97e-3 and 3.97e-3, the Kalman filter
+# 3.04e-3 and 2.83e-3 (ratios 1.31 and 1.40).
+@pytest.mark.parametrize("bits, ratio", [(None, 0.5), (17, 1.6)])
+def test_velocity_against_the_oracle_kalman_filter(arm_log, bits, ratio):
+    """Noise-free the estimator beats the oracle Kalman filter 4 times (its
+    super-twisting observer is deadbeat on exact samples); with 17-bit encoders it stays
+    within the measured factor (1.40 at most) plus a tolerance: the issue's target (no
+    larger than the Kalman filter's) is not met there, and this holds the level reached
+    (the model-free differentiator it replaces was 7-49 times the Kalman filter's)."""
+    t, q, qd, _, tau = arm_log
+    y = quantized(q, bits)
+    velocity = observer_velocities(JointLog(t, y, tau), np.full(2, BOUND))
+    for i in range(2):
+        ours, kalman = rms(velocity[:, i], qd[:, i]), oracle_kalman_rms(y[:, i], qd[:, i])
+        assert ours <= ratio * kalman, (i, ours, kalman)
+
+
+@pytest.mark.parametrize("time_constant", [0.005, 0.04])
+def test_the_filtered_regression_is_exact(arm_log, time_constant):
+    """With the true velocities the filtered torques equal the filtered regressor times
+    the true parameters at any filter time constant (measured at 5 and 20 ms: 2.0e-6
+    and 2.2-2.3e-6 of the torques' RMS): the momentum form has no q'' and evaluates no
+    nonlinear term at filtered signals."""
+    t, q, qd, _, tau = arm_log
+    path, _ = example_urdf("double_pendulum")
+    robot = read_urdf(path)
+    link = payload_link(robot.arrays()["link"])
+    pi = np.concatenate([link.ravel(), FRICTION.ravel()])
+    used = np.arange(SKIP, len(t), 3)
+    Y, z = filtered_regression(robot.rigid_body(), q, qd, tau, H, time_constant, used)
+    assert Y.shape == (len(used), 2, 24) and z.shape == (len(used), 2)
+    relative = np.sqrt(np.mean((Y @ pi - z) ** 2, axis=0) / np.mean(z ** 2, axis=0))
+    assert np.all(relative < 2e-5), relative
+
+
+def test_slow_margin_leaves_out_the_rows_after_a_slow_stretch():
+    """A filtered row carries the friction of the filter's memory: with slow_margin a
+    joint's rows within that time of a sample slower than min_speed are left out."""
+    h = 1e-3
+    speed = np.full((400, 1), 0.5)
+    speed[100:110] = 0.01  # slow, without reversing
+    plain = friction_rows(speed, h, margin=0.05, min_speed=0.05)
+    assert plain[:100].all() and not plain[100:110].any() and plain[110:].all()
+    rows = friction_rows(speed, h, margin=0.05, min_speed=0.05, slow_margin=0.08)
+    assert rows[:20].all() and not rows[20:190].any() and rows[190:].all()
