@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import csv
 import json
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,6 +29,9 @@ from .urdf import Robot
 
 
 MIN_SPEED = 0.05  # [rad/s or m/s] below it, joint equations are left out (friction_rows)
+# a joint keeping fewer of its equations than this share is an error (its friction cannot
+# be identified), fewer than FEW_ROWS a warning
+TOO_FEW_ROWS, FEW_ROWS = 0.01, 0.1
 
 
 class LogError(ValueError):
@@ -158,6 +162,7 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     z = u[used] - Y[:, :, known] @ nominal[known]
     correlation = max(1, int(np.ceil(2 * max(window, tau) / (stride * log.step))))
     mask = friction_rows(qd, log.step, max(window, 4 * tau), min_speed)[used]
+    check_friction_rows(mask, qd[used], robot.joint_names, min_speed)
     fit = torque_least_squares(base.regressor(Y), z, batch=correlation, mask=mask)
     pi = consistent_parameters(robot, base, fit.beta, fit.std_error)
     return Identification(base, fit, pi, qd, used)
@@ -174,6 +179,29 @@ def friction_rows(velocity: np.ndarray, h: float, margin: float,
     if not min_speed >= 0.0:
         raise ValueError(f"min_speed must be >= 0, not {min_speed!r}")
     return away_from_reversals(velocity, h, margin) & (np.abs(velocity) >= min_speed)
+
+
+def check_friction_rows(mask: np.ndarray, velocity: np.ndarray, names: list[str],
+                        min_speed: float) -> None:
+    """LogError naming each joint that keeps fewer than TOO_FEW_ROWS of its equations
+    (mask (N, n) from friction_rows; velocity (N, n) at the same samples): its friction
+    cannot be identified; a warning below FEW_ROWS.  The remedy: a smaller --min-speed
+    or a log in which the joint moves faster."""
+    kept = mask.mean(axis=0)
+    messages = []
+    for i in np.flatnonzero(kept < FEW_ROWS):
+        speed = np.abs(velocity[:, i])
+        messages.append(
+            f"joint {names[i]!r} keeps {100 * kept[i]:.1f} % of its equations: |q'| >= "
+            f"min_speed {min_speed:g} in {100 * np.mean(speed >= min_speed):.1f} % of the "
+            f"samples (median |q'| {np.median(speed):.3g}, largest {speed.max():.3g}); lower "
+            f"--min-speed (e.g. to {0.5 * np.median(speed):.2g}) or log a trajectory that "
+            f"moves this joint faster")
+    if np.any(kept < TOO_FEW_ROWS):
+        raise LogError("too few joint equations left to identify the friction: " +
+                       "; ".join(messages))
+    for message in messages:
+        warnings.warn(message, stacklevel=3)
 
 
 def away_from_reversals(velocity: np.ndarray, h: float, margin: float) -> np.ndarray:
