@@ -67,7 +67,7 @@ def load() -> ctypes.CDLL:
         ctypes.c_void_p, ctypes.c_void_p, count, ctypes.c_double, _double_p, _double_p, _double_p,
         ctypes.c_double, _double_p, _double_p, _double_p, _double_p, ctypes.c_int, ctypes.c_int,
         _int_p, _double_p, ctypes.c_double, ctypes.c_double, ctypes.c_double, ctypes.c_double,
-        count, _double_p, _double_p, _double_p, _double_p]
+        count, _double_p, _double_p, _double_p, _double_p, _double_p]
     return dll
 
 
@@ -185,7 +185,8 @@ class RigidBody:
         Returns {"velocity": the estimate at each sample, "prediction": for the end of
         the interval starting at each sample, "model_failures": samples at which M was
         not positive definite, "weight": the weight (0 or 1) of each sample's joint
-        equations in the regression (the last sample's NaN)}.  With identify =
+        equations in the regression, "acceleration": the observer's q'' at each sample
+        (the last sample's of both NaN)}.  With identify =
         {"columns", "kind" ("lsm"/"mff"), "rho", "R", "torque_scale", "start" (sample
         index), "min_speed", "reversal_margin"} the online identifier runs too, adding
         "delta" (base parameters minus the nominal ones), "std_error", "gamma_trace" and
@@ -196,7 +197,8 @@ class RigidBody:
         q, u = _samples(q, self.n), _samples(u, self.n)
         gains = [np.ascontiguousarray(np.broadcast_to(np.asarray(a, float), (self.n,)))
                  for a in (alpha1, alpha2, f_plus)]
-        velocity, prediction, weight = np.empty_like(q), np.empty_like(q), np.empty_like(q)
+        velocity, prediction = np.empty_like(q), np.empty_like(q)
+        weight, acceleration = np.empty_like(q), np.empty_like(q)
         options = dict(identify or {})
         rule = (float(options.get("min_speed", MIN_SPEED)),
                 float(options.get("reversal_margin", REVERSAL_MARGIN)))
@@ -209,7 +211,8 @@ class RigidBody:
         failures = dll.rn_robot_observe(
             self._buffer, run, len(q), h, *gains, tau, q, u, velocity, prediction, kind,
             len(columns), columns, scale, options.get("rho", 1e-6), options.get("R", 0.1),
-            *rule, int(options.get("start", 0)), delta, std, stats, weight)
+            *rule, int(options.get("start", 0)), delta, std, stats, weight,
+            acceleration)
         if failures == -2:
             raise ValueError(f"no observer gains for f_plus {gains[2].tolist()}")
         if failures == -3:
@@ -222,7 +225,7 @@ class RigidBody:
             raise ValueError("online identifier rejected its settings (columns, h, rho, R or "
                              "torque scales out of range)")
         result = {"velocity": velocity, "prediction": prediction, "model_failures": failures,
-                  "weight": weight}
+                  "weight": weight, "acceleration": acceleration}
         if identify:
             result.update(delta=delta, std_error=std, gamma_trace=stats[0], excitation=stats[1])
         return result

@@ -167,7 +167,8 @@ size_t rn_robot_run_size(void) { return sizeof(RobotRun); }
  * delta, std_error, stats = (trace of Gamma, excitation) are solved at the
  * end.  min_speed and reversal_margin: the rule of the joint equations left out
  * (robot_observer.h); weight (count x n): the weight of each sample's joint
- * equations (the last sample's: NaN, not decided yet).  Returns the number of
+ * equations, acceleration (count x n): the observer's q'' at each sample (the
+ * last sample's of both: NaN, not known yet).  Returns the number of
  * samples at which M was not positive definite, -1 for bad identifier settings,
  * -2 for gains that cannot be computed, -3 if the identifier's information is not
  * positive definite at the end (the observer diverged), -4 for a negative or
@@ -179,7 +180,7 @@ long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, long count, do
                       int kind, int p, const int columns[], const double torque_scale[],
                       double rho, double R, double min_speed, double reversal_margin,
                       long start, double delta[], double std_error[], double stats[2],
-                      double weight[])
+                      double weight[], double acceleration[])
 {
     const int n = model->n;
     double zero[RB_MAX_JOINTS] = {0}, alpha1[RB_MAX_JOINTS], alpha2[RB_MAX_JOINTS];
@@ -203,8 +204,11 @@ long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, long count, do
         for (int i = 0; i < n; ++i) {
             velocity[k * n + i] = ro_velocity(&run->observer, i);
             prediction[k * n + i] = run->observer.x2_hat[i];
-            if (k > 0) weight[(k - 1) * n + i] = ro_regression_weight(&run->regression, i);
-            if (k == count - 1) weight[k * n + i] = NAN;
+            if (k > 0) {
+                weight[(k - 1) * n + i] = ro_regression_weight(&run->regression, i);
+                acceleration[(k - 1) * n + i] = run->observer.previous_acceleration[i];
+            }
+            if (k == count - 1) weight[k * n + i] = acceleration[k * n + i] = NAN;
         }
     }
     if (kind) {
