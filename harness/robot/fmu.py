@@ -29,7 +29,7 @@ SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
 
 
 def fmu_parameters(robot: Robot, unknown: str = "all", h: float = 1e-3, f_plus=10.0,
-                   identifier: str = "lsm", tau: float = 0.005, rho: float = 1e-6,
+                   identifier: str = "lsm", tau: float = 0.01, rho: float = 1e-6,
                    R: float = 0.1, t_id: float = 0.2, torque_scale=None,
                    coulomb_velocity: float = 0.0, pi: np.ndarray | None = None,
                    alpha1=0.0, alpha2=0.0, min_speed: float = MIN_SPEED,

@@ -175,7 +175,7 @@ class RigidBody:
         return {"delta": delta, "std_error": std, "gamma_trace": stats[0],
                 "excitation": stats[1]}
 
-    def observe(self, q, u, h: float, f_plus, tau: float = 0.005, alpha1=0.0, alpha2=0.0,
+    def observe(self, q, u, h: float, f_plus, tau: float = 0.01, alpha1=0.0, alpha2=0.0,
                 identify: dict | None = None) -> dict:
         """Run the model-based observer of robot_observer.c over positions q and torques u
         (count, n) sampled every h, as the RobotObserver FMU does: f_plus (per joint)

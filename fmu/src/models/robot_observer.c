@@ -87,7 +87,7 @@ static const ModelVariable VARIABLES[] = {
     {.name = "base_count", .vr = 4, .type = TYPE_INTEGER, PARAM(.offset = OFF(base_count),
      .start = 4, .min = 1, .max = MAX_P,
      .description = "Number of identified base parameters (entries of base_columns)")},
-    {.name = "tau", .vr = 5, .type = TYPE_REAL, PARAM(.offset = OFF(tau), .start = 0.005,
+    {.name = "tau", .vr = 5, .type = TYPE_REAL, PARAM(.offset = OFF(tau), .start = 0.01,
      .min = 0.0, .max = NAN, .unit = "s",
      .description = "Time constant of the filter of the injection and of the regression "
                     "(the regressor Y(q, q', q'') and the torque residual); 0: none")},

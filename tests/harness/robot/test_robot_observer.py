@@ -57,7 +57,7 @@ def test_online_identification_from_the_observer_finds_the_friction(arm):
     """The URDF's inertials plus the payload, friction unknown (nominal 0): the identifier
     fed by the observer finds the viscous and Coulomb coefficients within 0.1 % and within
     3 standard errors (measured: 0.006, 0.002, 0.024, 0.007 %; 5.3, 3.2, 5.6, 3.8 % when the
-    regression filtered q, q', q'', u instead of the regressor).  On this light arm (M^-1
+    regression filtered q, q', q'', u (5 ms) instead of the regressor).  On this light arm (M^-1
     up to 1400) the missing friction is an acceleration error of up to 600 rad/s^2, hence
     f+ = 1000."""
     _, robot, truth, (t, q, _, _, tau) = arm
@@ -72,8 +72,8 @@ def test_online_identification_from_the_observer_finds_the_friction(arm):
 def test_slow_joint_equations_are_left_out_online(arm):
     """The truth's Coulomb friction is f_c sat(q'/0.05), the model's f_c sign(q'): with the
     default rule (min_speed 0.05 rad/s, reversal_margin 0.02 s) the friction comes out
-    within 0.1 % (measured 0.006, 0.002, 0.024, 0.007 %), with every equation used 0.4-0.9 %
-    off."""
+    within 0.1 % (measured 0.006, 0.002, 0.024, 0.007 %), with every equation used 0.2-0.5 %
+    off (regression filter tau 10 ms, the default)."""
     _, robot, _, _ = arm
     link = payload_link(robot.arrays()["link"])
     truth = robot.rigid_body(link=link, friction=FRICTION, coulomb_velocity=0.05)
