@@ -30,7 +30,8 @@
  * reversal_margin seconds after such a sample: there the Coulomb friction is
  * not f_c sign(q') (stiction, the Stribeck effect, a simulator's smoothing),
  * and the observer is still catching up with the reversal.  Weighting before
- * the filter keeps every filtered equation exact.
+ * the filter keeps every filtered equation exact.  The rule starts as after
+ * such a sample; min_speed and reversal_margin both 0 use every equation.
  */
 #ifndef ROBOT_OBSERVER_H
 #define ROBOT_OBSERVER_H
