@@ -143,6 +143,17 @@ def test_the_command_line_writes_the_parameter_set(arm, tmp_path, capsys):
     assert str(out) in capsys.readouterr().out
 
 
+def test_the_command_line_writes_the_rule_of_left_out_equations(arm, tmp_path):
+    path, _, _, _ = arm
+    out = tmp_path / "robot.ssv"
+    assert main(["robot-fmu-parameters", str(path), "--out", str(out)]) == 0
+    assert read_ssv(out)["min_speed"] == 0.05 and read_ssv(out)["reversal_margin"] == 0.02
+    assert main(["robot-fmu-parameters", str(path), "--out", str(out), "--min-speed", "0.1",
+                 "--reversal-margin", "0"]) == 0
+    values = read_ssv(out)
+    assert values["min_speed"] == 0.1 and values["reversal_margin"] == 0.0
+
+
 def test_the_command_line_names_a_bad_urdf(tmp_path, capsys):
     bad = tmp_path / "bad.urdf"
     bad.write_text("<robot")
