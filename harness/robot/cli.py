@@ -86,6 +86,13 @@ def register_fmu_parameters(sub, parents) -> None:
                    help="bound on the model's acceleration error [rad/s^2] (every joint)")
     p.add_argument("--coulomb-velocity", type=float, default=0.0,
                    help="Coulomb friction saturates below this velocity [rad/s] (0: sign)")
+    p.add_argument("--min-speed", type=_non_negative, default=None, metavar="V",
+                   help="the identifier leaves out joint equations at |q'| < V [rad/s or "
+                        "m/s] and at reversals, where Coulomb friction is not f_c sign(q') "
+                        "(default 0.05)")
+    p.add_argument("--reversal-margin", type=_non_negative, default=None, metavar="S",
+                   help="... and for S seconds after (default 0.02; with --min-speed 0, "
+                        "0 uses every equation)")
     p.set_defaults(func=fmu_parameters_command)
 
 
@@ -94,9 +101,12 @@ def fmu_parameters_command(args) -> int:
     from .urdf import UrdfError, read_urdf
     try:
         robot = read_urdf(args.urdf, locked=tuple(args.lock))
+        rule = {name: value for name, value in (("min_speed", args.min_speed),
+                                                ("reversal_margin", args.reversal_margin))
+                if value is not None}
         parameters = fmu_parameters(robot, unknown=args.unknown, h=args.step,
                                     f_plus=args.f_plus, identifier=args.identifier,
-                                    coulomb_velocity=args.coulomb_velocity)
+                                    coulomb_velocity=args.coulomb_velocity, **rule)
     except (UrdfError, ValueError) as error:
         print(f"harness robot-fmu-parameters: {error}", file=sys.stderr)
         return 2

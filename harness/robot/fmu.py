@@ -18,6 +18,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from .base_parameters import base_parameters
+from .native import MIN_SPEED, REVERSAL_MARGIN
 from .pipeline import JointLog
 from .urdf import Robot
 
@@ -28,10 +29,11 @@ SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
 
 
 def fmu_parameters(robot: Robot, unknown: str = "all", h: float = 1e-3, f_plus=10.0,
-                   identifier: str = "lsm", tau: float = 0.005, rho: float = 1e-6,
+                   identifier: str = "lsm", tau: float = 0.01, rho: float = 1e-6,
                    R: float = 0.1, t_id: float = 0.2, torque_scale=None,
                    coulomb_velocity: float = 0.0, pi: np.ndarray | None = None,
-                   alpha1=0.0, alpha2=0.0) -> dict[str, object]:
+                   alpha1=0.0, alpha2=0.0, min_speed: float = MIN_SPEED,
+                   reversal_margin: float = REVERSAL_MARGIN) -> dict[str, object]:
     """The RobotObserver parameters for `robot`: name -> scalar or array (the joints'
     rows only; the FMU's other rows keep their start values).
 
@@ -40,9 +42,14 @@ def fmu_parameters(robot: Robot, unknown: str = "all", h: float = 1e-3, f_plus=1
     error [rad/s^2]; alpha1, alpha2 (per joint or one value; 0: from f_plus by Theorem
     3.1) are the observer's gains; torque_scale (per joint) weighs the joints' equations; pi (12 n:
     link parameters, then friction) replaces the URDF's inertials and friction (e.g. an
-    identified model)."""
+    identified model); the identifier leaves out joint i's equation where |q_i'| <
+    min_speed [rad/s or m/s] or q_i' reverses, and for reversal_margin [s] after (both 0:
+    every equation is used)."""
     if identifier not in IDENTIFIERS:
         raise ValueError(f"identifier {identifier!r}: one of {', '.join(IDENTIFIERS)}")
+    for name, value in (("min_speed", min_speed), ("reversal_margin", reversal_margin)):
+        if not (np.isfinite(value) and value >= 0.0):
+            raise ValueError(f"{name} must be a finite number >= 0, not {value!r}")
     arrays = robot.arrays()
     n = robot.n
     if pi is not None:
@@ -53,6 +60,7 @@ def fmu_parameters(robot: Robot, unknown: str = "all", h: float = 1e-3, f_plus=1
     return {
         "h": h, "n": n, "identifier": IDENTIFIERS[identifier], "base_count": base.count,
         "tau": tau, "rho": rho, "R": R, "t_id": t_id, "coulomb_velocity": coulomb_velocity,
+        "min_speed": float(min_speed), "reversal_margin": float(reversal_margin),
         "gravity": np.asarray(arrays["gravity"], float),
         "joint_type": np.asarray(arrays["types"], int),
         "axis": arrays["axis"].reshape(n, 3), "xyz": arrays["xyz"].reshape(n, 3),

@@ -24,6 +24,10 @@ CORE = CHECKOUT_CORE if CHECKOUT_CORE.is_dir() else HERE / "core"
 CORE_SOURCES = ("rigid_body.c", "regressor_identifier.c", "robot_observer.c", "super_twisting.c",
                 "implicit_twisting.c", "noise_adaptive.c", "gains.c")
 WRAPPER = HERE / "native" / "robot_native.c"
+# the online regression's rule of the joint equations left out (robot_observer.h's
+# RO_MIN_SPEED and RO_REVERSAL_MARGIN): the FMU's defaults
+MIN_SPEED = 0.05        # [rad/s or m/s]
+REVERSAL_MARGIN = 0.02  # [s]
 _double_p = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
 _int_p = np.ctypeslib.ndpointer(dtype=np.int32, flags="C_CONTIGUOUS")
 
@@ -65,8 +69,8 @@ def load() -> ctypes.CDLL:
     dll.rn_robot_observe.argtypes = [
         ctypes.c_void_p, ctypes.c_void_p, count, ctypes.c_double, _double_p, _double_p, _double_p,
         ctypes.c_double, _double_p, _double_p, _double_p, _double_p, ctypes.c_int, ctypes.c_int,
-        _int_p, _double_p, ctypes.c_double, ctypes.c_double, count, _double_p, _double_p,
-        _double_p]
+        _int_p, _double_p, ctypes.c_double, ctypes.c_double, ctypes.c_double, ctypes.c_double,
+        count, _double_p, _double_p, _double_p, _double_p, _double_p]
     return dll
 
 
@@ -195,7 +199,7 @@ class RigidBody:
         return {"delta": delta, "std_error": std, "gamma_trace": stats[0],
                 "excitation": stats[1]}
 
-    def observe(self, q, u, h: float, f_plus, tau: float = 0.005, alpha1=0.0, alpha2=0.0,
+    def observe(self, q, u, h: float, f_plus, tau: float = 0.01, alpha1=0.0, alpha2=0.0,
                 identify: dict | None = None) -> dict:
         """Run the model-based observer of robot_observer.c over positions q and torques u
         (count, n) sampled every h, as the RobotObserver FMU does: f_plus (per joint)
@@ -204,16 +208,24 @@ class RigidBody:
 
         Returns {"velocity": the estimate at each sample, "prediction": for the end of
         the interval starting at each sample, "model_failures": samples at which M was
-        not positive definite}.  With identify = {"columns", "kind" ("lsm"/"mff"),
-        "rho", "R", "torque_scale", "start" (sample index)} the online identifier runs
-        too, adding "delta" (base parameters minus the nominal ones), "std_error",
-        "gamma_trace" and "excitation" at the end."""
+        not positive definite, "weight": the weight (0 or 1) of each sample's joint
+        equations in the regression, "acceleration": the observer's q'' at each sample
+        (the last sample's of both NaN)}.  With identify =
+        {"columns", "kind" ("lsm"/"mff"), "rho", "R", "torque_scale", "start" (sample
+        index), "min_speed", "reversal_margin"} the online identifier runs too, adding
+        "delta" (base parameters minus the nominal ones), "std_error", "gamma_trace" and
+        "excitation" at the end.  Joint i's equation weighs 0 where |q_i'| < min_speed
+        (rad/s or m/s, default MIN_SPEED), where q_i' reverses, and for reversal_margin
+        seconds after (default REVERSAL_MARGIN); both 0: every equation is used."""
         dll = load()
         q, u = _samples(q, self.n), _samples(u, self.n)
         gains = [np.ascontiguousarray(np.broadcast_to(np.asarray(a, float), (self.n,)))
                  for a in (alpha1, alpha2, f_plus)]
         velocity, prediction = np.empty_like(q), np.empty_like(q)
+        weight, acceleration = np.empty_like(q), np.empty_like(q)
         options = dict(identify or {})
+        rule = (float(options.get("min_speed", MIN_SPEED)),
+                float(options.get("reversal_margin", REVERSAL_MARGIN)))
         columns = np.ascontiguousarray(options.get("columns", [0]), dtype=np.int32)
         scale = options.get("torque_scale")
         scale = np.ascontiguousarray(np.ones(self.n) if scale is None else scale, dtype=float)
@@ -223,16 +235,21 @@ class RigidBody:
         failures = dll.rn_robot_observe(
             self._buffer, run, len(q), h, *gains, tau, q, u, velocity, prediction, kind,
             len(columns), columns, scale, options.get("rho", 1e-6), options.get("R", 0.1),
-            int(options.get("start", 0)), delta, std, stats)
+            *rule, int(options.get("start", 0)), delta, std, stats, weight,
+            acceleration)
         if failures == -2:
             raise ValueError(f"no observer gains for f_plus {gains[2].tolist()}")
         if failures == -3:
             raise ValueError("the observer diverged (estimates not finite): the model's "
                              "acceleration error exceeds what the gains correct; raise f_plus")
+        if failures == -4:
+            raise ValueError(f"min_speed {rule[0]!r} and reversal_margin {rule[1]!r} must be "
+                             f"finite and >= 0")
         if failures < 0:
             raise ValueError("online identifier rejected its settings (columns, h, rho, R or "
                              "torque scales out of range)")
-        result = {"velocity": velocity, "prediction": prediction, "model_failures": failures}
+        result = {"velocity": velocity, "prediction": prediction, "model_failures": failures,
+                  "weight": weight, "acceleration": acceleration}
         if identify:
             result.update(delta=delta, std_error=std, gamma_trace=stats[0], excitation=stats[1])
         return result

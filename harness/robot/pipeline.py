@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import csv
 import json
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -32,6 +33,9 @@ from .urdf import Robot
 
 
 MIN_SPEED = 0.05  # [rad/s or m/s] below it, joint equations are left out (friction_rows)
+# a joint keeping fewer of its equations than this share is an error (its friction cannot
+# be identified), fewer than FEW_ROWS a warning
+TOO_FEW_ROWS, FEW_ROWS = 0.01, 0.1
 
 
 class LogError(ValueError):
@@ -175,6 +179,7 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     z = torque - Y[:, :, known] @ nominal[known]
     correlation = max(1, int(np.ceil(2 * memory / (stride * log.step))))
     mask = friction_rows(qd, log.step, margin, min_speed, slow_margin)[used]
+    check_friction_rows(mask, qd[used], robot.joint_names, min_speed)
     fit = torque_least_squares(base.regressor(Y), z, batch=correlation, mask=mask)
     pi = consistent_parameters(robot, base, fit.beta, fit.std_error)
     return Identification(base, fit, pi, velocity, used)
@@ -197,6 +202,29 @@ def friction_rows(velocity: np.ndarray, h: float, margin: float,
     flips[1:] = np.signbit(velocity[1:]) != np.signbit(velocity[:-1])
     slow = np.abs(velocity) < min_speed
     return ~_near(flips, h, max(margin, h)) & ~_near(slow, h, slow_margin)
+
+
+def check_friction_rows(mask: np.ndarray, velocity: np.ndarray, names: list[str],
+                        min_speed: float) -> None:
+    """LogError naming each joint that keeps fewer than TOO_FEW_ROWS of its equations
+    (mask (N, n) from friction_rows; velocity (N, n) at the same samples): its friction
+    cannot be identified; a warning below FEW_ROWS.  The remedy: a smaller --min-speed
+    or a log in which the joint moves faster."""
+    kept = mask.mean(axis=0)
+    messages = []
+    for i in np.flatnonzero(kept < FEW_ROWS):
+        speed = np.abs(velocity[:, i])
+        messages.append(
+            f"joint {names[i]!r} keeps {100 * kept[i]:.1f} % of its equations: |q'| >= "
+            f"min_speed {min_speed:g} in {100 * np.mean(speed >= min_speed):.1f} % of the "
+            f"samples (median |q'| {np.median(speed):.3g}, largest {speed.max():.3g}); lower "
+            f"--min-speed (e.g. to {0.5 * np.median(speed):.2g}) or log a trajectory that "
+            f"moves this joint faster")
+    if np.any(kept < TOO_FEW_ROWS):
+        raise LogError("too few joint equations left to identify the friction: " +
+                       "; ".join(messages))
+    for message in messages:
+        warnings.warn(message, stacklevel=3)
 
 
 def away_from_reversals(velocity: np.ndarray, h: float, margin: float) -> np.ndarray:

@@ -53,6 +53,24 @@ def test_the_fmu_runs_the_offline_path_exactly(case):
     assert np.all(np.sqrt(np.mean(error ** 2, axis=0)) < 0.02)
 
 
+def test_the_rule_of_left_out_equations_reaches_the_fmu(case):
+    """min_speed and reversal_margin other than the defaults: still the offline numbers,
+    and not the defaults' (the parameters reach the identifier)."""
+    log, _, parameters, offline = case
+    rule = {"min_speed": 0.3, "reversal_margin": 0.05}
+    changed = {**parameters, **rule}
+    identify = {"columns": parameters["base_columns"], "kind": "lsm", "rho": parameters["rho"],
+                "start": 200, "torque_scale": parameters["torque_scale"], **rule}
+    link, n = parameters["link"], parameters["n"]
+    path, _ = example_urdf("double_pendulum")
+    model = read_urdf(path).rigid_body(link=link, friction=np.zeros((n, 2)))
+    expected = model.observe(log.q, log.u, H, F_PLUS, identify=identify)
+    result = run_fmu(fmu_path("RobotObserver"), changed, log)
+    np.testing.assert_allclose(result["base_estimate"],
+                               parameters["base_nominal"] + expected["delta"], atol=1e-12)
+    assert np.max(np.abs(expected["delta"] - offline["delta"])) > 1e-6
+
+
 def _fmi3_run(fmu: RawFMU3, parameters: dict, log: JointLog, steps: int) -> list[float]:
     """Sets the parameters as whole arrays (rows beyond n keep their start values)."""
     assert fmu.call("EnterInitializationMode", False, 0.0, 0.0, False, 0.0) == OK
@@ -110,6 +128,12 @@ def _bad(make, reals=None, integers=None) -> str:
     return fmu.messages()
 
 
+def test_a_negative_min_speed_is_refused(make):
+    fmu = make()
+    assert fmu.set_real({"min_speed": -0.1}) == ERROR
+    assert "min_speed" in fmu.messages()
+
+
 def test_more_than_seven_joints_is_refused(make):
     fmu = make()
     assert fmu.set_integer({"n": 8}) == ERROR
@@ -126,6 +150,7 @@ def test_more_than_seven_joints_is_refused(make):
      "0..23"),
     (None, {"base_columns[2]": 20}, "base_columns[1] and base_columns[2] are both 20"),
     (None, {"base_count": 30}, "base_count = 30 exceeds the 24 columns"),
+    ({"reversal_margin": float("inf")}, None, "reversal_margin = inf is not finite"),
     ({"f_plus[1]": 0.0}, None, "joint 1: no gains from f_plus[1] = 0"),
 ])
 def test_bad_parameters_are_clear_errors(make, reals, integers, message):

@@ -138,6 +138,20 @@ void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
     }
 }
 
+void rri_filter_regressor(const RegressorIdentifier *id, const RbRegressor *Y,
+                          const double weight[], double gain, RbRegressor *filtered)
+{
+    for (int i = 0; i < id->rows; ++i) {
+        const double w = weight[i], *row = Y->row[i];
+        double *out = filtered->row[i];
+        for (int r = 0; r < id->runs[i]; ++r)
+            for (int k = id->run_start[i][r]; k < id->run_end[i][r]; ++k) {
+                const int c = id->columns[k];
+                out[c] += gain * (w * row[c] - out[c]);
+            }
+    }
+}
+
 int rri_solve(RegressorIdentifier *id)
 {
     if (factorize(id) != 0) return -1;

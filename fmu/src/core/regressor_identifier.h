@@ -78,6 +78,13 @@ void rri_reset(RegressorIdentifier *id);
  * a 7-joint arm. */
 void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y);
 
+/* The entries of Y that rri_step reads (row i's base columns), weighted and
+ * through a first-order filter: filtered <- filtered + gain (weight_i Y - filtered)
+ * (gain 1: filtered = weight_i Y).  The other entries of `filtered` are left as
+ * they are (zero-initialize it).  Costs one multiply-add per entry read. */
+void rri_filter_regressor(const RegressorIdentifier *id, const RbRegressor *Y,
+                          const double weight[], double gain, RbRegressor *filtered);
+
 /* Solves Delta_hat = P^-1 b (p^3/6 multiply-adds).  Returns 0, or -1 if P is
  * not positive definite (cannot happen with rho > 0 and finite data; the
  * estimate is then kept).  Between solves, the anchor is an estimate at most

@@ -133,46 +133,65 @@ int ro_converged(const RobotObserver *o)
     return 1;
 }
 
-void ro_regression_init(RobotRegression *r, const RigidBodyModel *model, double h, double tau)
+int ro_regression_init(RobotRegression *r, const RigidBodyModel *model, double h, double tau,
+                       double min_speed, double reversal_margin)
 {
     memset(r, 0, sizeof *r);
+    if (!(min_speed >= 0.0) || !isfinite(min_speed) || !(reversal_margin >= 0.0) ||
+        !isfinite(reversal_margin))
+        return -1;
     r->gain = tau > 0.0 ? -expm1(-h / tau) : 1.0;
+    r->min_speed = min_speed;
+    /* an int: a margin of more than 1e9 samples is as good as forever */
+    r->margin_samples = (int)fmin(round(reversal_margin / h), 1e9);
+    r->reversals = min_speed > 0.0 || reversal_margin > 0.0;
     rb_get_parameters(model, r->pi_nominal);
+    return 0;
 }
 
 void ro_regression_restart(RobotRegression *r) { r->started = 0; }
 
-static inline void low_pass(double *state, double x, double gain, int started)
+/* Sample k-1's weight of joint i's equation: 0 while the joint is slow or
+ * reverses, and for margin_samples samples after. */
+static void update_weights(RobotRegression *r, int n)
 {
-    *state = started ? *state + gain * (x - *state) : x;
+    for (int i = 0; i < n; ++i) {
+        const double v = r->previous_velocity[i];
+        const int reversed = r->reversals && r->have_older &&
+                             signbit(v) != signbit(r->older_velocity[i]);
+        if (fabs(v) < r->min_speed || reversed) r->settled[i] = 0;
+        else if (r->settled[i] <= r->margin_samples) ++r->settled[i];
+        r->weight[i] = r->settled[i] > r->margin_samples ? 1.0 : 0.0;
+    }
 }
 
 void ro_regression_step(RobotRegression *r, const RigidBodyModel *model, const RobotObserver *o,
                         const double y[], const double u[], RegressorIdentifier *id)
 {
-    const int n = o->n, p = rb_parameter_count(model);
-    if (r->have_previous && id) {
-        for (int i = 0; i < n; ++i) {
-            low_pass(&r->q[i], r->previous_y[i], r->gain, r->started);
-            low_pass(&r->qd[i], r->previous_velocity[i], r->gain, r->started);
-            low_pass(&r->qdd[i], o->previous_acceleration[i], r->gain, r->started);
-            low_pass(&r->u[i], r->previous_u[i], r->gain, r->started);
+    const int n = o->n;
+    if (r->have_previous) {
+        update_weights(r, n);
+        if (id) {
+            /* sample k-1's equation, weighted, through the filter: Y and z alike */
+            RbRegressor Y;
+            double nominal[RO_MAX_JOINTS];
+            const double gain = r->started ? r->gain : 1.0; /* the first: no transient */
+            rb_regressor(model, r->previous_y, r->previous_velocity, o->previous_acceleration,
+                         &Y);
+            rb_regressor_torque(model, &Y, r->pi_nominal, nominal);
+            for (int i = 0; i < n; ++i)
+                r->z[i] += gain * (r->weight[i] * (r->previous_u[i] - nominal[i]) - r->z[i]);
+            rri_filter_regressor(id, &Y, r->weight, gain, &r->Y);
+            r->started = 1;
+            rri_step(id, r->z, &r->Y);
         }
-        r->started = 1;
-        RbRegressor Y;
-        double z[RO_MAX_JOINTS];
-        rb_regressor(model, r->q, r->qd, r->qdd, &Y);
-        for (int i = 0; i < n; ++i) {
-            double nominal = 0.0;
-            for (int k = 0; k < p; ++k) nominal += Y.row[i][k] * r->pi_nominal[k];
-            z[i] = r->u[i] - nominal;
-        }
-        rri_step(id, z, &Y);
     }
     for (int i = 0; i < n; ++i) {
+        r->older_velocity[i] = r->previous_velocity[i];
         r->previous_y[i] = y[i];
         r->previous_u[i] = u[i];
         r->previous_velocity[i] = o->dof[i].x2_now;
     }
+    r->have_older = r->have_previous;
     r->have_previous = 1;
 }

@@ -30,6 +30,7 @@ typedef struct {
     double h;
     int n, identifier, base_count;
     double tau, convergence_window, rho, R, t_id, statistics_interval, coulomb_velocity, p;
+    double min_speed, reversal_margin;
     double gravity[3];
     int joint_type[MAX_N];
     double axis[MAX_N][3], xyz[MAX_N][3], rpy[MAX_N][3];
@@ -86,10 +87,10 @@ static const ModelVariable VARIABLES[] = {
     {.name = "base_count", .vr = 4, .type = TYPE_INTEGER, PARAM(.offset = OFF(base_count),
      .start = 4, .min = 1, .max = MAX_P,
      .description = "Number of identified base parameters (entries of base_columns)")},
-    {.name = "tau", .vr = 5, .type = TYPE_REAL, PARAM(.offset = OFF(tau), .start = 0.005,
+    {.name = "tau", .vr = 5, .type = TYPE_REAL, PARAM(.offset = OFF(tau), .start = 0.01,
      .min = 0.0, .max = NAN, .unit = "s",
      .description = "Time constant of the filter of the injection and of the regression "
-                    "signals q, q', q'', u; 0: none")},
+                    "(the regressor Y(q, q', q'') and the torque residual); 0: none")},
     {.name = "convergence_window", .vr = 6, .type = TYPE_REAL,
      PARAM(.offset = OFF(convergence_window), .start = 0.05, .min = 0.0, .max = NAN,
      .min_exclusive = true, .unit = "s",
@@ -118,6 +119,17 @@ static const ModelVariable VARIABLES[] = {
     {.name = "gravity", .vr = 14, .rows = 3, .type = TYPE_REAL,
      PARAM(.offset = OFF(gravity), .starts = GRAVITY_START, UNBOUNDED, .unit = "m/s2",
      .description = "Gravity in the base frame")},
+    {.name = "min_speed", .vr = 17, .type = TYPE_REAL, PARAM(.offset = OFF(min_speed),
+     .start = RO_MIN_SPEED, .min = 0.0, .max = NAN, .unit = "rad/s",
+     .description = "The identifier leaves out joint i's equation where |q_i'| is below this "
+                    "speed (rad/s, or m/s for a prismatic joint) or q_i' reverses, and for "
+                    "reversal_margin after: there Coulomb friction is not f_c sign(q')")},
+    {.name = "reversal_margin", .vr = 18, .type = TYPE_REAL,
+     PARAM(.offset = OFF(reversal_margin), .start = RO_REVERSAL_MARGIN, .min = 0.0, .max = NAN,
+     .unit = "s",
+     .description = "Time after a slow or reversing sample of a joint during which its "
+                    "equation is still left out (min_speed and reversal_margin both 0: every "
+                    "equation is used)")},
     {.name = "joint_type", .vr = 20, .rows = MAX_N, .type = TYPE_INTEGER,
      PARAM(.offset = OFF(joint_type), .start = RB_REVOLUTE, .min = 0, .max = 1,
      .description = "0 revolute, 1 prismatic")},
@@ -332,7 +344,12 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     const double zero[MAX_N] = {0};
     ro_init(&d->obs, d->n, d->h, d->alpha1_used, d->alpha2_used, d->tau, d->convergence_window,
             d->q, zero);
-    ro_regression_init(&d->regression, &d->model, d->h, d->tau);
+    if (ro_regression_init(&d->regression, &d->model, d->h, d->tau, d->min_speed,
+                           d->reversal_margin) != 0) {
+        log->log(log->context, MODEL_ERROR, "min_speed = %g and reversal_margin = %g must be "
+                 "finite and >= 0", d->min_speed, d->reversal_margin);
+        return MODEL_ERROR;
+    }
     memset(&d->id, 0, sizeof d->id);
     if (d->identifier && rri_init(&d->id, (RriKind)d->identifier, d->n, d->base_count,
                                   d->base_columns, d->torque_scale, d->h, d->rho, d->R) != 0) {

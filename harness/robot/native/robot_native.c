@@ -1,6 +1,7 @@
 /* Batch entry points over fmu/src/core for the harness (ctypes): the model is an
  * opaque buffer of rn_model_size() bytes that rn_load fills, and every function
  * runs over `count` samples stored row by row (sample k's joint i at k n + i). */
+#include <math.h>
 #include <stddef.h>
 #include <string.h>
 
@@ -179,17 +180,22 @@ size_t rn_robot_run_size(void) { return sizeof(RobotRun); }
  * FMU's output at the next communication point).  With kind 1 or 2 the
  * identifier (columns, torque_scale, rho, R) runs from sample `start` on and
  * delta, std_error, stats = (trace of Gamma, excitation) are solved at the
- * end.  Returns the number of samples at which M was not positive definite,
- * -1 for bad identifier settings, -2 for gains that cannot be computed, -3 if the
- * identifier's information is not positive definite at the end (the observer
- * diverged). */
+ * end.  min_speed and reversal_margin: the rule of the joint equations left out
+ * (robot_observer.h); weight (count x n): the weight of each sample's joint
+ * equations, acceleration (count x n): the observer's q'' at each sample (the
+ * last sample's of both: NaN, not known yet).  Returns the number of
+ * samples at which M was not positive definite, -1 for bad identifier settings,
+ * -2 for gains that cannot be computed, -3 if the identifier's information is not
+ * positive definite at the end (the observer diverged), -4 for a negative or
+ * non-finite min_speed or reversal_margin. */
 long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, long count, double h,
                       const double alpha1_given[], const double alpha2_given[],
                       const double f_plus[], double tau,
                       const double y[], const double u[], double velocity[], double prediction[],
                       int kind, int p, const int columns[], const double torque_scale[],
-                      double rho, double R, long start, double delta[], double std_error[],
-                      double stats[2])
+                      double rho, double R, double min_speed, double reversal_margin,
+                      long start, double delta[], double std_error[], double stats[2],
+                      double weight[], double acceleration[])
 {
     const int n = model->n;
     double zero[RB_MAX_JOINTS] = {0}, alpha1[RB_MAX_JOINTS], alpha2[RB_MAX_JOINTS];
@@ -199,7 +205,8 @@ long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, long count, do
         if (gains_complete(f_plus[i], 0.5, &alpha1[i], &alpha2[i]) != 0) return -2;
     }
     ro_init(&run->observer, n, h, alpha1, alpha2, tau, 0.05, y, zero);
-    ro_regression_init(&run->regression, model, h, tau);
+    if (ro_regression_init(&run->regression, model, h, tau, min_speed, reversal_margin) != 0)
+        return -4;
     if (kind && rri_init(&run->identifier, (RriKind)kind, n, p, columns, torque_scale, h, rho,
                          R) != 0)
         return -1;
@@ -212,6 +219,11 @@ long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, long count, do
         for (int i = 0; i < n; ++i) {
             velocity[k * n + i] = ro_velocity(&run->observer, i);
             prediction[k * n + i] = run->observer.x2_hat[i];
+            if (k > 0) {
+                weight[(k - 1) * n + i] = ro_regression_weight(&run->regression, i);
+                acceleration[(k - 1) * n + i] = run->observer.previous_acceleration[i];
+            }
+            if (k == count - 1) weight[k * n + i] = acceleration[k * n + i] = NAN;
         }
     }
     if (kind) {

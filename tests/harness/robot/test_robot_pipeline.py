@@ -2,6 +2,8 @@
 unknown tip payload, logged by 17-bit encoders, and the errors for bad input."""
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -121,3 +123,40 @@ def test_a_negative_min_speed_is_refused(tmp_path, arm, capsys):
               "--out", str(tmp_path / "o")])
     assert exit_.value.code == 2
     assert "--min-speed: '-1' is not a number >= 0" in capsys.readouterr().err
+
+
+def _slow_joint_log(robot, peak_speed: float, seconds: float = 3.0, h: float = 1e-3):
+    """Joint 1 along the helpers' multi-sine, joint 2 a sine of `peak_speed` rad/s at
+    0.5 Hz: joint 2 is above a min_speed v a share 1 - 2 arcsin(v / peak) / pi of the time."""
+    from harness.robot.pipeline import JointLog
+    truth = robot.rigid_body(link=payload_link(robot.arrays()["link"]), friction=FRICTION)
+    t, q, qd, qdd, _ = multisine_log(truth, seconds, h)
+    w = 2 * np.pi * 0.5
+    q[:, 1] = peak_speed / w * np.sin(w * t)
+    qd[:, 1] = peak_speed * np.cos(w * t)
+    qdd[:, 1] = -peak_speed * w * np.sin(w * t)
+    return JointLog(t, q, truth.inverse_dynamics(q, qd, qdd))
+
+
+def test_a_joint_that_never_reaches_min_speed_is_named(arm):
+    """Joint 2 never exceeds 0.04 rad/s: with min_speed 0.05 it would lose every friction
+    equation; the error names it and the remedy."""
+    from harness.robot.pipeline import LogError, identify_robot
+    _, robot = arm
+    log = _slow_joint_log(robot, 0.04)
+    with pytest.raises(LogError, match=r"joint 'joint2' keeps 0\.0 % of its equations.*"
+                                       r"lower --min-speed"):
+        identify_robot(robot, log, unknown="payload")
+    # the remedy works, and joint 1 was never the problem
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        identify_robot(robot, log, unknown="payload", min_speed=0.01)
+
+
+def test_a_joint_that_rarely_reaches_min_speed_is_a_warning(arm):
+    """Joint 2 above 0.05 rad/s in about 6 % of the samples (peak 0.0502 rad/s): a warning
+    naming it, and the identification still runs."""
+    from harness.robot.pipeline import identify_robot
+    _, robot = arm
+    with pytest.warns(UserWarning, match=r"joint 'joint2' keeps [0-9.]+ % .*--min-speed"):
+        identify_robot(robot, _slow_joint_log(robot, 0.0502), unknown="payload")
