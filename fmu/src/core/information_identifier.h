@@ -30,17 +30,23 @@
  * - Uninformative samples are left out (MFF): a sample whose information
  *   q = h phi^T Pref^-1 phi is below INFO_SKIP_SHARE of its share
  *   m (1 - lambda_ref) of the long-run inflow Pref (the information with the
- *   longer memory INFO_REFERENCE_MEMORY / |ln R|) neither adds to the sums
- *   nor forgets them, and the drift model's clock stands still.  Without
- *   that, a motion that stops or decays to a crawl, where quantization,
- *   static friction and discretization dominate the data, is fitted with a
- *   Gamma that has grown to its bound 1/rho: measured on the 6.3 pendulum
- *   after 50 s of excitation (bench/no_excitation.py), the estimate moved
- *   160-540 % in the 3 s ring-down with a 12-bit encoder, and 4-120 % over
- *   60 s at rest on explicit-Euler plant data, whose velocity keeps
- *   alternating.  At steady excitation only the samples around velocity
- *   zeros are left out, which carry little information on any parameter
- *   whose regressor vanishes with the velocity. */
+ *   longer memory INFO_REFERENCE_MEMORY / |ln R|) does not add to the sums.
+ *   A gap of such samples up to INFO_GAP_MEMORY memories long (a velocity
+ *   zero) forgets and extrapolates the drift as before; a longer one (a
+ *   rest) freezes the sums, and the drift model's clock stands still.
+ *   Without that, a motion that stops or decays to a crawl, where
+ *   quantization, static friction and discretization dominate the data, is
+ *   fitted with a Gamma that has grown to its bound 1/rho: measured on the
+ *   6.3 pendulum after 50 s of excitation (bench/no_excitation.py), the
+ *   estimate moved 160-600 % in the 3 s ring-down with a 12-bit encoder,
+ *   and up to 850 % over 60 s at rest on explicit-Euler plant data, whose
+ *   velocity keeps alternating.  Over left-out samples Pref forgets with the
+ *   10x longer memory INFO_REST_MEMORY / |ln R|, so that an isolated pulse
+ *   after a long rest (an encoder step of a creeping plant) stays small
+ *   against it, while a lasting smaller excitation is taken up again.  At
+ *   steady excitation only the samples around velocity zeros are left out,
+ *   which carry little information on any parameter whose regressor
+ *   vanishes with the velocity. */
 #ifndef INFORMATION_IDENTIFIER_H
 #define INFORMATION_IDENTIFIER_H
 
