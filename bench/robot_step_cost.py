@@ -1,14 +1,28 @@
 """Cost of one internal step of the robot identifier in C (regressor, nominal torques
 Y pi, LSM step over every base parameter and the friction, with its anchor re-solve
-every RRI_ANCHOR_INTERVAL steps), per example robot.
+every RRI_ANCHOR_INTERVAL steps), per example robot; with --fmu, of the RobotObserver
+FMU's whole internal step.
 
-    .venv/bin/python bench/robot_step_cost.py [--steps 20000] [--runs 5] [--callgrind]
-                                              [--against REVISION]
+    .venv/bin/python bench/robot_step_cost.py [--fmu] [--steps 20000] [--runs 5]
+                                              [--callgrind] [--against REVISION]
 
 Compiles bench/robot_step.c with the core at -O2 (the FMU's flags) and prints the
 wall time per step (the median of --runs runs) and, with --callgrind, the instructions.
 --against builds the same files of a git revision too (e.g. the commit before a change)
-and interleaves the two builds' runs, so that both see the same load."""
+and interleaves the two builds' runs, so that both see the same load.
+
+--fmu compiles bench/robot_fmu_step.c with the RobotObserver's sources (the
+<SourceFiles> of fmu/robot/modelDescription.xml; FMI headers from the installed fmpy),
+sets the parameters that `python -m harness robot-fmu-parameters URDF --step 1e-4`
+writes (every base parameter and the friction identified, LSM; t_id moved to 0.02 s so
+that the warm-up is short) by value reference, and feeds a multi-sine trajectory q with
+its inverse-dynamics torques u.  After FMU_WARMUP doSteps of H = h (the identifier
+then runs; the driver checks identifier_active), it measures the cost per internal
+step of doSteps of H = h (a communication point per sample, as in a closed loop:
+the observer with the forward dynamics, the regression, the identifier, the outputs,
+and every statistics_interval = 0.1 s a solve with standard errors) and of one doStep
+of H = 2000 h (the inputs held over it).  Instructions: callgrind --toggle-collect=fmi2DoStep, the difference
+of runs with 1x and 2x the measured steps, divided by the steps."""
 from __future__ import annotations
 
 import argparse
@@ -18,6 +32,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 
 import numpy as np
@@ -25,8 +40,11 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
+from robot_trajectories import multisine  # noqa: E402
+
 from harness.robot.base_parameters import base_parameters  # noqa: E402
 from harness.robot.examples import example_urdf  # noqa: E402
+from harness.robot.fmu import read_ssv  # noqa: E402
 from harness.robot.urdf import read_urdf  # noqa: E402
 
 CFLAGS = ["-std=c11", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2", "-D_POSIX_C_SOURCE=199309L"]
@@ -51,23 +69,45 @@ def model_file(name: str, path: Path) -> int:
 SOURCES = ("bench/robot_step.c", "fmu/src/core/rigid_body.c", "fmu/src/core/regressor_identifier.c")
 HEADERS = ("fmu/src/core/rigid_body.h", "fmu/src/core/regressor_identifier.h",
            "fmu/src/core/cholesky.h")  # cholesky.h: since 1e4f058
+FMU_DESCRIPTION = REPO / "fmu/robot/modelDescription.xml"
+FMU_H = 1e-4        # [s] the sampling period: 10 kHz
+FMU_T_ID = 0.02     # [s] the identifier starts here ...
+FMU_WARMUP = 500    # ... before these doSteps of H = h end (0.05 s)
 
 
-def build(binary: Path, revision: str | None) -> None:
+def fmu_sources() -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """The RobotObserver driver's sources (its model description's) and every header."""
+    root = ElementTree.parse(FMU_DESCRIPTION).getroot()
+    files = root.iterfind("CoSimulation/SourceFiles/File")
+    sources = ("bench/robot_fmu_step.c", *(f"fmu/src/{f.get('name')}" for f in files))
+    headers = tuple(str(h.relative_to(REPO)) for h in sorted((REPO / "fmu/src").rglob("*.h")))
+    return sources, headers
+
+
+def fmi_include() -> str:
+    """The FMI 2 headers that the installed fmpy ships."""
+    import fmpy
+    return str(Path(fmpy.__file__).parent / "c-code")
+
+
+def build(binary: Path, revision: str | None, fmu: bool = False) -> None:
     """The step driver with the core of the checkout, or of a git revision."""
+    sources, headers = fmu_sources() if fmu else (SOURCES, HEADERS)
     root = REPO
     if revision is not None:
         root = binary.parent / f"src-{revision}"
-        for name in SOURCES + HEADERS:
+        for name in sources + headers:
             shown = subprocess.run(["git", "-C", str(REPO), "show", f"{revision}:{name}"],
                                    capture_output=True)
-            if shown.returncode != 0 and name in HEADERS:
+            if shown.returncode != 0 and name in headers:
                 continue  # a header the revision did not have yet
             shown.check_returncode()
             (root / name).parent.mkdir(parents=True, exist_ok=True)
             (root / name).write_bytes(shown.stdout)
-    subprocess.run(["gcc", *CFLAGS, f"-I{root / 'fmu/src/core'}", "-o", str(binary),
-                    *(str(root / name) for name in SOURCES), "-lm"], check=True)
+    includes = ([f"-I{fmi_include()}", f"-I{root / 'fmu/src/instance'}"] if fmu
+                else [f"-I{root / 'fmu/src/core'}"])
+    subprocess.run(["gcc", *CFLAGS, *includes, "-o", str(binary),
+                    *(str(root / name) for name in sources), "-lm"], check=True)
 
 
 def instructions(binary: Path, model: Path, tmp: str, steps: int = 2000) -> float:
@@ -80,11 +120,88 @@ def instructions(binary: Path, model: Path, tmp: str, steps: int = 2000) -> floa
     return (counts[1] - counts[0]) / steps
 
 
+def fmu_files(name: str, tmp: Path, rows: int) -> tuple[Path, Path, int, int]:
+    """(parameters, trajectory, n, p) of an example robot for robot_fmu_step.c."""
+    urdf, locked = example_urdf(name)
+    ssv = tmp / f"{name}.ssv"
+    subprocess.run([sys.executable, "-m", "harness", "robot-fmu-parameters", str(urdf),
+                    "--out", str(ssv), "--step", repr(FMU_H),
+                    *(f"--lock={joint}" for joint in locked)], cwd=REPO, check=True,
+                   capture_output=True)
+    values = {**read_ssv(ssv), "t_id": FMU_T_ID}
+    root = ElementTree.parse(FMU_DESCRIPTION).getroot()
+    kinds = {v.get("name"): (int(v.get("valueReference")), child.tag[0])
+             for v in root.iter("ScalarVariable") for child in v
+             if child.tag in ("Real", "Integer", "Boolean")}
+    n, p = int(values["n"]), int(values["base_count"])
+    lines = [f"{root.get('guid')} {values['h']!r} {n}"]
+    lines += [f"{kinds[key][1]} {kinds[key][0]} {value!r}" for key, value in values.items()]
+    parameters = tmp / f"{name}.parameters"
+    parameters.write_text("\n".join(lines) + "\n")
+    # a moving robot: multi-sine positions and the nominal model's torques along them
+    reference = multisine(n, seed=1)
+    q, qd = (np.array(x) for x in zip(*(reference(k * FMU_H) for k in range(rows))))
+    qdd = np.gradient(qd, FMU_H, axis=0)
+    u = read_urdf(urdf, locked=locked).rigid_body().inverse_dynamics(q, qd, qdd)
+    trajectory = tmp / f"{name}.trajectory"
+    np.savetxt(trajectory, np.hstack([q, u]), header=str(rows), comments="")
+    return parameters, trajectory, n, p
+
+
+def fmu_run(binary: Path, files: tuple[Path, Path, int, int], steps: int, calls: int,
+            callgrind: str | None = None) -> float:
+    """One run of robot_fmu_step over fmu_files' files, checked (status OK, identifying
+    at the end, the FMU's n and base_count the robot's): its wall time per step [ns], or
+    with `callgrind` (the output file) the instructions collected in fmi2DoStep."""
+    command = [str(binary), *map(str, files[:2]), str(FMU_WARMUP), str(steps), str(calls)]
+    if callgrind:
+        command = ["valgrind", "--tool=callgrind", "--toggle-collect=fmi2DoStep",
+                   f"--callgrind-out-file={callgrind}", *command]
+    run = subprocess.run(command, capture_output=True, text=True)
+    line = run.stdout.strip()
+    expected = f"n={files[2]} base_count={files[3]}"
+    if run.returncode != 0 or "status=0 identifier_active=1" not in line or \
+            not line.endswith(expected):
+        raise RuntimeError(f"{' '.join(command)}: failed or not identifying: {line!r} "
+                           f"(expected ... {expected})\n{run.stderr[-2000:]}")
+    if callgrind:
+        return float(re.search(r"Collected : (\d+)", run.stderr).group(1))
+    return float(re.search(r"ns_per_step=([\d.]+)", line).group(1))
+
+
+def fmu_cost(args, binaries: dict[str, Path], tmp: Path) -> None:
+    """The RobotObserver's internal step, per example robot, at H = h and in one doStep of
+    H = 2000 h: wall time (median of the runs, the builds' runs interleaved) and
+    callgrind's instructions."""
+    count = 2000  # measured steps of a callgrind run, and of the doStep of H = count h
+    for name in ("double_pendulum", "ur5", "panda"):
+        files = fmu_files(name, tmp, FMU_WARMUP + max(args.steps, 2 * count))
+        n, p = files[2:]
+        # H, (STEPS, CALLS) of a run measuring m times `count` steps, and of the timed runs
+        cases = (("h", lambda m: (1, m * count), (1, args.steps)),
+                 (f"{count} h", lambda m: (count, m), (count, 1)))
+        for H, measured, timed in cases:
+            times = {label: [] for label in binaries}
+            for _ in range(args.runs):
+                for label, binary in binaries.items():
+                    times[label].append(fmu_run(binary, files, *timed))
+            for label, binary in binaries.items():
+                line = (f"{name} ({label}): n = {n}, p = {p}, H = {H}: "
+                        f"{np.median(times[label]) / 1000:.2f} us per step")
+                if args.callgrind and shutil.which("valgrind"):
+                    counts = [fmu_run(binary, files, *measured(m), f"{tmp}/cg.out")
+                              for m in (1, 2)]
+                    line += f", {(counts[1] - counts[0]) / count:.0f} instructions per step"
+                print(line, flush=True)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser()
     parser.add_argument("--steps", type=int, default=20000)
     parser.add_argument("--runs", type=int, default=5, help="wall-time runs (the median is shown)")
     parser.add_argument("--callgrind", action="store_true")
+    parser.add_argument("--fmu", action="store_true",
+                        help="the RobotObserver FMU's whole internal step (bench/robot_fmu_step.c)")
     parser.add_argument("--against", metavar="REVISION",
                         help="also a git revision's core, its runs interleaved with this one's")
     args = parser.parse_args()
@@ -93,8 +210,10 @@ def main() -> int:
         if args.against:
             binaries[args.against] = Path(tmp) / "robot_step_against"
         for label, binary in binaries.items():
-            build(binary, None if label == "now" else label)
-        for name in ("double_pendulum", "ur5", "panda"):
+            build(binary, None if label == "now" else label, args.fmu)
+        if args.fmu:
+            fmu_cost(args, binaries, Path(tmp))
+        for name in () if args.fmu else ("double_pendulum", "ur5", "panda"):
             model = Path(tmp) / f"{name}.txt"
             p = model_file(name, model)
             times = {label: [] for label in binaries}
