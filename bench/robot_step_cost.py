@@ -20,8 +20,8 @@ its inverse-dynamics torques u.  After FMU_WARMUP doSteps of H = h (the identifi
 then runs; the driver checks identifier_active), it measures the cost per internal
 step of doSteps of H = h (a communication point per sample, as in a closed loop:
 the observer with the forward dynamics, the regression, the identifier, the outputs,
-and every statistics_interval = 0.1 s a solve with standard errors) and of one doStep
-of H = 2000 h (the inputs held over it).  Instructions: callgrind --toggle-collect=fmi2DoStep, the difference
+and every statistics_interval = 0.1 s a solve with standard errors) and of doSteps
+of H = 2000 h (the inputs held over each).  Instructions: callgrind --toggle-collect=fmi2DoStep, the difference
 of runs with 1x and 2x the measured steps, divided by the steps."""
 from __future__ import annotations
 
@@ -70,6 +70,7 @@ SOURCES = ("bench/robot_step.c", "fmu/src/core/rigid_body.c", "fmu/src/core/regr
 HEADERS = ("fmu/src/core/rigid_body.h", "fmu/src/core/regressor_identifier.h",
            "fmu/src/core/cholesky.h")  # cholesky.h: since 1e4f058
 FMU_DESCRIPTION = REPO / "fmu/robot/modelDescription.xml"
+FMU_DRIVER = "bench/robot_fmu_step.c"
 FMU_H = 1e-4        # [s] the sampling period: 10 kHz
 FMU_T_ID = 0.02     # [s] the identifier starts here ...
 FMU_WARMUP = 500    # ... before these doSteps of H = h end (0.05 s)
@@ -79,7 +80,7 @@ def fmu_sources() -> tuple[tuple[str, ...], tuple[str, ...]]:
     """The RobotObserver driver's sources (its model description's) and every header."""
     root = ElementTree.parse(FMU_DESCRIPTION).getroot()
     files = root.iterfind("CoSimulation/SourceFiles/File")
-    sources = ("bench/robot_fmu_step.c", *(f"fmu/src/{f.get('name')}" for f in files))
+    sources = (FMU_DRIVER, *(f"fmu/src/{f.get('name')}" for f in files))
     headers = tuple(str(h.relative_to(REPO)) for h in sorted((REPO / "fmu/src").rglob("*.h")))
     return sources, headers
 
@@ -96,7 +97,11 @@ def build(binary: Path, revision: str | None, fmu: bool = False) -> None:
     root = REPO
     if revision is not None:
         root = binary.parent / f"src-{revision}"
-        for name in sources + headers:
+        if fmu:  # the checkout's driver, so that revisions before it can be measured
+            driver = root / FMU_DRIVER
+            driver.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(REPO / FMU_DRIVER, driver)
+        for name in [s for s in sources if s != FMU_DRIVER] + list(headers):
             shown = subprocess.run(["git", "-C", str(REPO), "show", f"{revision}:{name}"],
                                    capture_output=True)
             if shown.returncode != 0 and name in headers:
@@ -170,16 +175,17 @@ def fmu_run(binary: Path, files: tuple[Path, Path, int, int], steps: int, calls:
 
 
 def fmu_cost(args, binaries: dict[str, Path], tmp: Path) -> None:
-    """The RobotObserver's internal step, per example robot, at H = h and in one doStep of
-    H = 2000 h: wall time (median of the runs, the builds' runs interleaved) and
-    callgrind's instructions."""
+    """The RobotObserver's internal step, per example robot, at H = h and in doSteps of
+    H = 2000 h: wall time (median of the runs of --steps internal steps, the builds' runs
+    interleaved) and callgrind's instructions."""
     count = 2000  # measured steps of a callgrind run, and of the doStep of H = count h
     for name in ("double_pendulum", "ur5", "panda"):
         files = fmu_files(name, tmp, FMU_WARMUP + max(args.steps, 2 * count))
         n, p = files[2:]
         # H, (STEPS, CALLS) of a run measuring m times `count` steps, and of the timed runs
+        # (--steps internal steps each)
         cases = (("h", lambda m: (1, m * count), (1, args.steps)),
-                 (f"{count} h", lambda m: (count, m), (count, 1)))
+                 (f"{count} h", lambda m: (count, m), (count, max(1, args.steps // count))))
         for H, measured, timed in cases:
             times = {label: [] for label in binaries}
             for _ in range(args.runs):
