@@ -3,8 +3,8 @@ Y pi, LSM step over every base parameter and the friction, with its anchor re-so
 every RRI_ANCHOR_INTERVAL steps), per example robot; with --fmu, of the RobotObserver
 FMU's whole internal step.
 
-    .venv/bin/python bench/robot_step_cost.py [--fmu] [--steps 20000] [--runs 5]
-                                              [--callgrind] [--against REVISION]
+    .venv/bin/python bench/robot_step_cost.py [--fmu [--statistics-interval S]] [--steps 20000]
+                                              [--runs 5] [--callgrind] [--against REVISION]
 
 Compiles bench/robot_step.c with the core at -O2 (the FMU's flags) and prints the
 wall time per step (the median of --runs runs) and, with --callgrind, the instructions.
@@ -20,9 +20,10 @@ its inverse-dynamics torques u.  After FMU_WARMUP doSteps of H = h (the identifi
 then runs; the driver checks identifier_active), it measures the cost per internal
 step of doSteps of H = h (a communication point per sample, as in a closed loop:
 the observer with the forward dynamics, the regression, the identifier, the outputs,
-and every statistics_interval = 0.1 s a solve with standard errors) and of doSteps
-of H = 2000 h (the inputs held over each).  Instructions: callgrind --toggle-collect=fmi2DoStep, the difference
-of runs with 1x and 2x the measured steps, divided by the steps."""
+and every statistics_interval = 0.1 s a solve with standard errors: the slowest doStep)
+and of doSteps of H = 2000 h (the inputs held over each).  Instructions: callgrind
+--toggle-collect=fmi2DoStep, the difference of runs with 1x and 2x the measured steps,
+divided by the steps."""
 from __future__ import annotations
 
 import argparse
@@ -125,8 +126,10 @@ def instructions(binary: Path, model: Path, tmp: str, steps: int = 2000) -> floa
     return (counts[1] - counts[0]) / steps
 
 
-def fmu_files(name: str, tmp: Path, rows: int) -> tuple[Path, Path, int, int]:
-    """(parameters, trajectory, n, p) of an example robot for robot_fmu_step.c."""
+def fmu_files(name: str, tmp: Path, rows: int,
+              statistics_interval: float | None = None) -> tuple[Path, Path, int, int]:
+    """(parameters, trajectory, n, p) of an example robot for robot_fmu_step.c; the
+    FMU's statistics_interval [s] unless given."""
     urdf, locked = example_urdf(name)
     ssv = tmp / f"{name}.ssv"
     subprocess.run([sys.executable, "-m", "harness", "robot-fmu-parameters", str(urdf),
@@ -134,6 +137,8 @@ def fmu_files(name: str, tmp: Path, rows: int) -> tuple[Path, Path, int, int]:
                     *(f"--lock={joint}" for joint in locked)], cwd=REPO, check=True,
                    capture_output=True)
     values = {**read_ssv(ssv), "t_id": FMU_T_ID}
+    if statistics_interval is not None:
+        values["statistics_interval"] = statistics_interval
     root = ElementTree.parse(FMU_DESCRIPTION).getroot()
     kinds = {v.get("name"): (int(v.get("valueReference")), child.tag[0])
              for v in root.iter("ScalarVariable") for child in v
@@ -154,10 +159,11 @@ def fmu_files(name: str, tmp: Path, rows: int) -> tuple[Path, Path, int, int]:
 
 
 def fmu_run(binary: Path, files: tuple[Path, Path, int, int], steps: int, calls: int,
-            callgrind: str | None = None) -> float:
+            callgrind: str | None = None) -> dict[str, float]:
     """One run of robot_fmu_step over fmu_files' files, checked (status OK, identifying
-    at the end, the FMU's n and base_count the robot's): its wall time per step [ns], or
-    with `callgrind` (the output file) the instructions collected in fmi2DoStep."""
+    at the end, the FMU's n and base_count the robot's): {"ns": wall time per internal
+    step, "slowest": of the slowest doStep [ns]}, with `callgrind` (the output file) and
+    "instructions" collected in fmi2DoStep."""
     command = [str(binary), *map(str, files[:2]), str(FMU_WARMUP), str(steps), str(calls)]
     if callgrind:
         command = ["valgrind", "--tool=callgrind", "--toggle-collect=fmi2DoStep",
@@ -169,34 +175,40 @@ def fmu_run(binary: Path, files: tuple[Path, Path, int, int], steps: int, calls:
             not line.endswith(expected):
         raise RuntimeError(f"{' '.join(command)}: failed or not identifying: {line!r} "
                            f"(expected ... {expected})\n{run.stderr[-2000:]}")
+    result = {key: float(re.search(rf"{name}=([\d.]+)", line).group(1))
+              for key, name in (("ns", "ns_per_step"), ("slowest", "slowest_call_ns"))}
     if callgrind:
-        return float(re.search(r"Collected : (\d+)", run.stderr).group(1))
-    return float(re.search(r"ns_per_step=([\d.]+)", line).group(1))
+        result["instructions"] = float(re.search(r"Collected : (\d+)", run.stderr).group(1))
+    return result
 
 
 def fmu_cost(args, binaries: dict[str, Path], tmp: Path) -> None:
     """The RobotObserver's internal step, per example robot, at H = h and in doSteps of
     H = 2000 h: wall time (median of the runs of --steps internal steps, the builds' runs
-    interleaved) and callgrind's instructions."""
+    interleaved), that of the slowest doStep (median over the runs) and callgrind's
+    instructions."""
     count = 2000  # measured steps of a callgrind run, and of the doStep of H = count h
     for name in ("double_pendulum", "ur5", "panda"):
-        files = fmu_files(name, tmp, FMU_WARMUP + max(args.steps, 2 * count))
+        files = fmu_files(name, tmp, FMU_WARMUP + max(args.steps, 2 * count),
+                          args.statistics_interval)
         n, p = files[2:]
         # H, (STEPS, CALLS) of a run measuring m times `count` steps, and of the timed runs
         # (--steps internal steps each)
         cases = (("h", lambda m: (1, m * count), (1, args.steps)),
                  (f"{count} h", lambda m: (count, m), (count, max(1, args.steps // count))))
         for H, measured, timed in cases:
-            times = {label: [] for label in binaries}
+            runs = {label: [] for label in binaries}
             for _ in range(args.runs):
                 for label, binary in binaries.items():
-                    times[label].append(fmu_run(binary, files, *timed))
+                    runs[label].append(fmu_run(binary, files, *timed))
             for label, binary in binaries.items():
-                line = (f"{name} ({label}): n = {n}, p = {p}, H = {H}: "
-                        f"{np.median(times[label]) / 1000:.2f} us per step")
+                ns, slowest = (np.median([r[key] for r in runs[label]]) / 1000
+                               for key in ("ns", "slowest"))
+                line = (f"{name} ({label}): n = {n}, p = {p}, H = {H}: {ns:.2f} us per step, "
+                        f"slowest doStep {slowest:.0f} us")
                 if args.callgrind and shutil.which("valgrind"):
                     counts = [fmu_run(binary, files, *measured(m), f"{tmp}/cg.out")
-                              for m in (1, 2)]
+                              ["instructions"] for m in (1, 2)]
                     line += f", {(counts[1] - counts[0]) / count:.0f} instructions per step"
                 print(line, flush=True)
 
@@ -208,6 +220,8 @@ def main() -> int:
     parser.add_argument("--callgrind", action="store_true")
     parser.add_argument("--fmu", action="store_true",
                         help="the RobotObserver FMU's whole internal step (bench/robot_fmu_step.c)")
+    parser.add_argument("--statistics-interval", type=float, metavar="S",
+                        help="--fmu: the FMU's statistics_interval (default its 0.1 s)")
     parser.add_argument("--against", metavar="REVISION",
                         help="also a git revision's core, its runs interleaved with this one's")
     args = parser.parse_args()
