@@ -3,8 +3,10 @@ Y pi, LSM step over every base parameter and the friction, with its anchor re-so
 every RRI_ANCHOR_INTERVAL steps), per example robot; with --fmu, of the RobotObserver
 FMU's whole internal step.
 
-    .venv/bin/python bench/robot_step_cost.py [--fmu [--statistics-interval S]] [--steps 20000]
-                                              [--runs 5] [--callgrind] [--against REVISION]
+    .venv/bin/python bench/robot_step_cost.py [--steps 20000] [--runs 5] [--callgrind]
+                                              [--against REVISION]
+                                              [--fmu [--statistics-interval S]
+                                               [--sample-period H] [--keep DIR]]
 
 Compiles bench/robot_step.c with the core at -O2 (the FMU's flags) and prints the
 wall time per step (the median of --runs runs) and, with --callgrind, the instructions.
@@ -13,9 +15,10 @@ and interleaves the two builds' runs, so that both see the same load.
 
 --fmu compiles bench/robot_fmu_step.c with the RobotObserver's sources (the
 <SourceFiles> of fmu/robot/modelDescription.xml; FMI headers from the installed fmpy),
-sets the parameters that `python -m harness robot-fmu-parameters URDF --step 1e-4`
-writes (every base parameter and the friction identified, LSM; t_id moved to 0.02 s so
-that the warm-up is short) by value reference, and feeds a multi-sine trajectory q with
+sets the parameters that `python -m harness robot-fmu-parameters URDF --step h`
+writes (h = --sample-period, default 1e-4 s; every base parameter and the friction
+identified, LSM; t_id moved to 0.02 s so that the warm-up is short) by value
+reference, and feeds a multi-sine trajectory q with
 its inverse-dynamics torques u.  After FMU_WARMUP doSteps of H = h (the identifier
 then runs; the driver checks identifier_active), it measures the cost per internal
 step of doSteps of H = h (a communication point per sample, as in a closed loop:
@@ -126,14 +129,14 @@ def instructions(binary: Path, model: Path, tmp: str, steps: int = 2000) -> floa
     return (counts[1] - counts[0]) / steps
 
 
-def fmu_files(name: str, tmp: Path, rows: int,
-              statistics_interval: float | None = None) -> tuple[Path, Path, int, int]:
-    """(parameters, trajectory, n, p) of an example robot for robot_fmu_step.c; the
-    FMU's statistics_interval [s] unless given."""
+def fmu_files(name: str, tmp: Path, rows: int, statistics_interval: float | None = None,
+              h: float = FMU_H) -> tuple[Path, Path, int, int]:
+    """(parameters, trajectory, n, p) of an example robot for robot_fmu_step.c, sampled
+    every h [s]; the FMU's statistics_interval [s] unless given."""
     urdf, locked = example_urdf(name)
     ssv = tmp / f"{name}.ssv"
     subprocess.run([sys.executable, "-m", "harness", "robot-fmu-parameters", str(urdf),
-                    "--out", str(ssv), "--step", repr(FMU_H),
+                    "--out", str(ssv), "--step", repr(h),
                     *(f"--lock={joint}" for joint in locked)], cwd=REPO, check=True,
                    capture_output=True)
     values = {**read_ssv(ssv), "t_id": FMU_T_ID}
@@ -150,8 +153,8 @@ def fmu_files(name: str, tmp: Path, rows: int,
     parameters.write_text("\n".join(lines) + "\n")
     # a moving robot: multi-sine positions and the nominal model's torques along them
     reference = multisine(n, seed=1)
-    q, qd = (np.array(x) for x in zip(*(reference(k * FMU_H) for k in range(rows))))
-    qdd = np.gradient(qd, FMU_H, axis=0)
+    q, qd = (np.array(x) for x in zip(*(reference(k * h) for k in range(rows))))
+    qdd = np.gradient(qd, h, axis=0)
     u = read_urdf(urdf, locked=locked).rigid_body().inverse_dynamics(q, qd, qdd)
     trajectory = tmp / f"{name}.trajectory"
     np.savetxt(trajectory, np.hstack([q, u]), header=str(rows), comments="")
@@ -190,7 +193,7 @@ def fmu_cost(args, binaries: dict[str, Path], tmp: Path) -> None:
     count = 2000  # measured steps of a callgrind run, and of the doStep of H = count h
     for name in ("double_pendulum", "ur5", "panda"):
         files = fmu_files(name, tmp, FMU_WARMUP + max(args.steps, 2 * count),
-                          args.statistics_interval)
+                          args.statistics_interval, args.sample_period)
         n, p = files[2:]
         # H, (STEPS, CALLS) of a run measuring m times `count` steps, and of the timed runs
         # (--steps internal steps each)
@@ -207,7 +210,9 @@ def fmu_cost(args, binaries: dict[str, Path], tmp: Path) -> None:
                 line = (f"{name} ({label}): n = {n}, p = {p}, H = {H}: {ns:.2f} us per step, "
                         f"slowest doStep {slowest:.0f} us")
                 if args.callgrind and shutil.which("valgrind"):
-                    counts = [fmu_run(binary, files, *measured(m), f"{tmp}/cg.out")
+                    case = f"{name}-{label}-H={H.replace(' ', '')}"
+                    out = f"{args.keep or tmp}/callgrind.out.{case}"
+                    counts = [fmu_run(binary, files, *measured(m), f"{out}-{m}x")
                               ["instructions"] for m in (1, 2)]
                     line += f", {(counts[1] - counts[0]) / count:.0f} instructions per step"
                 print(line, flush=True)
@@ -222,6 +227,10 @@ def main() -> int:
                         help="the RobotObserver FMU's whole internal step (bench/robot_fmu_step.c)")
     parser.add_argument("--statistics-interval", type=float, metavar="S",
                         help="--fmu: the FMU's statistics_interval (default its 0.1 s)")
+    parser.add_argument("--sample-period", type=float, default=FMU_H, metavar="H",
+                        help="--fmu: the sampling period h [s] (default 1e-4)")
+    parser.add_argument("--keep", type=Path, metavar="DIR",
+                        help="--fmu: keep the callgrind outputs in DIR")
     parser.add_argument("--against", metavar="REVISION",
                         help="also a git revision's core, its runs interleaved with this one's")
     args = parser.parse_args()
@@ -231,6 +240,8 @@ def main() -> int:
             binaries[args.against] = Path(tmp) / "robot_step_against"
         for label, binary in binaries.items():
             build(binary, None if label == "now" else label, args.fmu)
+        if args.keep:
+            args.keep.mkdir(parents=True, exist_ok=True)
         if args.fmu:
             fmu_cost(args, binaries, Path(tmp))
         for name in () if args.fmu else ("double_pendulum", "ur5", "panda"):
