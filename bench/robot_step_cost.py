@@ -6,7 +6,7 @@ FMU's whole internal step.
     .venv/bin/python bench/robot_step_cost.py [--steps 20000] [--runs 5] [--callgrind]
                                               [--against REVISION]
                                               [--fmu [--statistics-interval S]
-                                               [--sample-period H] [--keep DIR]]
+                                               [--sample-period h] [--keep DIR]]
 
 Compiles bench/robot_step.c with the core at -O2 (the FMU's flags) and prints the
 wall time per step (the median of --runs runs) and, with --callgrind, the instructions.
@@ -227,7 +227,7 @@ def main() -> int:
                         help="the RobotObserver FMU's whole internal step (bench/robot_fmu_step.c)")
     parser.add_argument("--statistics-interval", type=float, metavar="S",
                         help="--fmu: the FMU's statistics_interval (default its 0.1 s)")
-    parser.add_argument("--sample-period", type=float, default=FMU_H, metavar="H",
+    parser.add_argument("--sample-period", type=float, default=FMU_H, metavar="h",
                         help="--fmu: the sampling period h [s] (default 1e-4)")
     parser.add_argument("--keep", type=Path, metavar="DIR",
                         help="--fmu: keep the callgrind outputs in DIR")
