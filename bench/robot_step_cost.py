@@ -26,7 +26,8 @@ the observer with the forward dynamics, the regression, the identifier, the outp
 and every statistics_interval = 0.1 s a solve with standard errors: the slowest doStep)
 and of doSteps of H = 2000 h (the inputs held over each).  Instructions: callgrind
 --toggle-collect=fmi2DoStep, the difference of runs with 1x and 2x the measured steps,
-divided by the steps."""
+divided by the steps.  With --against, the revision's FMU sources with this checkout's
+driver (the model description's source list is this checkout's)."""
 from __future__ import annotations
 
 import argparse
