@@ -22,11 +22,10 @@ static inline double correct(DofState *s, double y, StoAcceleration a, double h,
                              double inverse_h2, double reach, double b, double alpha1,
                              double rate_gain)
 {
-    const double w = y - s->z1 - h * s->mid - h2 * s->a_mean, innovation = w - h2 * s->v;
-    const double e = implicit_inject(w, reach, b, alpha1, inverse_h2, &s->v, &s->rate,
-                                     &s->previous_sign, rate_gain);
-    s->mid += h * (s->a_mean + s->v);
-    s->z1 = y - e;
+    const double v_before = s->v;
+    const double w = implicit_correct(y, s->a_mean, h, h2, reach, b, alpha1, inverse_h2, rate_gain,
+                                      &s->z1, &s->mid, &s->v, &s->rate, &s->previous_sign);
+    const double innovation = w - h2 * v_before;
     s->x2_previous = s->x2_now;
     a.coulomb += s->learned;
     s->x2_now = implicit_advance(s->mid, s->v, a, h, &s->a_free, &s->a_mean);

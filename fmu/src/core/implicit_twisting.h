@@ -103,6 +103,24 @@ static inline double implicit_inject(double w, double reach, double b, double al
     return e;
 }
 
+/* The corrector at sample y (the super-twisting observer's and the robot
+ * observer's): the innovation w against the leapfrog prediction without
+ * injection from the corrected position z1, the mid-interval velocity mid and
+ * the nominal mean acceleration a_mean; sets the injection (implicit_inject),
+ * completes the interval (mid) and corrects the position (z1).  Returns w. */
+static inline double implicit_correct(double y, double a_mean, double h, double h2, double reach,
+                                      double b, double alpha1, double inverse_h2,
+                                      double rate_gain, double *z1, double *mid, double *v,
+                                      double *rate, double *previous_sign)
+{
+    const double w = y - *z1 - h * *mid - h2 * a_mean;
+    const double e =
+        implicit_inject(w, reach, b, alpha1, inverse_h2, v, rate, previous_sign, rate_gain);
+    *mid += h * (a_mean + *v);
+    *z1 = y - e;
+    return w;
+}
+
 /* Runs `count` steps (sto_run): at each sample the corrector completes the
  * interval that ends there (the first sample only takes the initial
  * estimates), then the nominal acceleration of the interval that starts is

@@ -92,14 +92,11 @@ int ro_step(RobotObserver *o, const RigidBodyModel *model, const double y[], con
     } else {
         for (int i = 0; i < n; ++i) { /* each joint's corrector (implicit_twisting.h) */
             RobotDof *s = &o->dof[i];
-            const double w = y[i] - s->z1 - h * s->mid - o->h_squared * s->a_mean;
-            const double e = implicit_inject(w, o->h_squared * o->alpha1[i], h * o->alpha2[i],
-                                             o->alpha1[i], o->inverse_h_squared, &s->v, &s->rate,
-                                             &s->previous_sign, o->rate_gain);
+            implicit_correct(y[i], s->a_mean, h, o->h_squared, o->h_squared * o->alpha1[i],
+                             h * o->alpha2[i], o->alpha1[i], o->inverse_h_squared, o->rate_gain,
+                             &s->z1, &s->mid, &s->v, &s->rate, &s->previous_sign);
             /* the velocity difference across the previous sample over h */
             o->previous_acceleration[i] = s->a_mean + s->v;
-            s->mid += h * (s->a_mean + s->v);
-            s->z1 = y[i] - e;
             s->x2_now = s->mid + 0.5 * h * (s->a_current + s->v);
         }
         status = nominal_acceleration(o, model, y, u, a);
