@@ -22,7 +22,6 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from scipy.signal import lfilter
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -31,6 +30,7 @@ from robot_trajectories import quantize, simulate  # noqa: E402
 from robots import pinocchio_truth, prediction_error, truth_of  # noqa: E402
 
 from harness.robot.base_parameters import base_parameters  # noqa: E402
+from harness.robot.filtered_regression import low_pass  # noqa: E402
 from harness.robot.examples import example_urdf  # noqa: E402
 from harness.robot.pipeline import JointLog, identify_robot  # noqa: E402
 from harness.robot.urdf import read_urdf  # noqa: E402
@@ -44,9 +44,7 @@ TAU, CORE_TAU, START = 0.005, 0.01, 0.2  # the filter before; the core's default
 
 def lag(x: np.ndarray, h: float, tau: float = TAU) -> np.ndarray:
     """The regression's first-order filter, started at x[0] (no transient)."""
-    gain = -np.expm1(-h / tau)
-    flat = x.reshape(len(x), -1)
-    return (lfilter([gain], [1.0, gain - 1.0], flat - flat[0], axis=0) + flat[0]).reshape(x.shape)
+    return low_pass(x, h, tau, stages=1)
 
 
 def main() -> int:

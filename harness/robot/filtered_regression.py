@@ -25,9 +25,19 @@ CHUNK = 4096      # samples per batch of regressors
 EPSILON = 1e-6    # [s] of the central difference along q' that gives M'(q, q') q'
 
 
-def _stages(tau: float, h: float):
+def first_order(tau: float, h: float) -> tuple[list[float], list[float]]:
+    """lfilter's (b, a) of one first-order stage of time constant tau, sampled every h."""
     gain = -np.expm1(-h / tau)
     return [gain], [1.0, gain - 1.0]
+
+
+def low_pass(x: np.ndarray, h: float, tau: float, stages: int = 2) -> np.ndarray:
+    """x (N, ...) through `stages` first-order stages of time constant tau, at rest at
+    x[0] (no start transient)."""
+    b, a = first_order(tau, h)
+    for _ in range(stages):
+        x = lfilter(b, a, x - x[0], axis=0) + x[0]
+    return x
 
 
 def filtered_regression(body, q: np.ndarray, velocity: np.ndarray, u: np.ndarray, h: float,
@@ -36,7 +46,7 @@ def filtered_regression(body, q: np.ndarray, velocity: np.ndarray, u: np.ndarray
     filtered torques z (len(used), n) with z = Y pi, from positions q, velocity estimates
     and torques u (N, n) sampled every h.  The filter starts at rest at the first sample."""
     count, n = q.shape
-    b, a = _stages(tau, h)
+    b, a = first_order(tau, h)
     # the state of each filter stage: (momentum, the rest) regressors and the torque
     states = None
     previous = None  # the last filtered sample of the chunk before: (momentum, rest, torque)

@@ -23,10 +23,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy.signal import lfilter, savgol_filter
+from scipy.signal import savgol_filter
 
 from .base_parameters import BaseParameters, base_parameters
-from .filtered_regression import filtered_regression
+from .filtered_regression import filtered_regression, low_pass
 from .consistency import consistent_parameters, write_identified_urdf
 from .least_squares import Fit, torque_least_squares
 from .urdf import Robot
@@ -120,14 +120,6 @@ def observer_velocities(log: JointLog, acceleration_bound: np.ndarray) -> np.nda
     itself): causal, the estimate at a sample from the positions up to it."""
     from .native import observe_adaptive
     return observe_adaptive(log.q, log.step, acceleration_bound).velocity
-
-
-def low_pass(x: np.ndarray, h: float, tau: float) -> np.ndarray:
-    """x (N, n) through two first-order stages of time constant tau, at rest at x[0]."""
-    gain = -np.expm1(-h / tau)
-    for _ in range(2):
-        x = lfilter([gain], [1.0, gain - 1.0], x - x[0], axis=0) + x[0]
-    return x
 
 
 @dataclass
