@@ -38,7 +38,7 @@ setup_venv() {
 # ---- FMUs --------------------------------------------------------------------
 # model identifier | model file | core files | committed modelDescription.xml
 MODELS=(
-    "SuperTwistingObserver|models/observer.c|core/super_twisting.c core/implicit_twisting.c core/noise_adaptive.c core/identifier.c core/information_identifier.c core/gains.c|fmu/modelDescription.xml"
+    "SuperTwistingObserver|models/observer.c|core/super_twisting.c core/implicit_twisting.c core/noise_adaptive.c core/identifier.c core/information_identifier.c core/block_scores.c core/gains.c|fmu/modelDescription.xml"
     "Pendulum|models/pendulum.c||fmu/bench/Pendulum/modelDescription.xml"
     "TwistingController|models/twisting_controller.c||fmu/bench/TwistingController/modelDescription.xml"
     "RobotObserver|models/robot_observer.c|core/robot_observer.c core/rigid_body.c core/regressor_identifier.c core/gains.c|fmu/robot/modelDescription.xml"

@@ -22,6 +22,7 @@ CASES = [
     "observer_unknown_perturbation",             # F = 0, bounded unknown acceleration
     "filtered_injection_recovers_perturbation",  # zbar_eq = xi up to the filter lag (9)-(10)
     "lsm_exact_data",                            # (18)-(19) on z = Delta phi
+    "lsm_standard_errors",                       # against the exact covariance, white and blue
     "mff_tracking",                              # (36)-(37), theta(t) = 1 + 0.5 sin 0.2t
     "mff_without_excitation",                    # wind-up: Gamma and the estimate, phi = 0
     "mff_pulses_and_resumption",                 # a rest with wrong pulses; less excitation

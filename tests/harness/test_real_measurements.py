@@ -99,23 +99,20 @@ def test_the_velocity_beats_the_paper_scheme_on_a_12_bit_encoder(observer_fmu, s
 
 
 def test_standard_errors_match_the_spread_over_noise_seeds(observer_fmu, swing):
-    """The reported standard error against the spread of the estimates over 32 noise
-    seeds (noise 1e-3 rad, where the noise dominates the error): within a factor 1.5
-    for viscous, Coulomb and b (measured over 48 seeds: 0.98, 0.97, 1.24; the spread
-    of 12 seeds is itself uncertain by 20 %, too much for the factor).  The gravity
-    term's is 3 times its spread (conservative: the residual of the sampled model,
-    the same for every seed, counts as noise there), and it must never be below the
-    spread."""
+    """The reported standard error against the spread of the estimates over 96 noise
+    seeds (noise 1e-3 rad, where the noise dominates the error): within the issue's
+    factor 1.5 for every parameter (measured: gravity 1.22, viscous 0.96, Coulomb
+    0.96, b 0.86; over 32 seeds the spread is itself uncertain by 13 %, and the same
+    ratios came out 1.48 to 0.95)."""
     t, theta, _, u = swing
     estimates, reported = [], []
-    for seed in range(32):
+    for seed in range(96):
         y = theta + np.random.default_rng(seed).normal(0.0, 1e-3, theta.size)
         out = _identify(observer_fmu, t, y, u)
         estimates.append([out[f"theta_hat[1,{k}]"][-1] for k in (1, 2, 3)] + [out["b_hat"][-1]])
         reported.append([out[f"theta_std[1,{k}]"][-1] for k in (1, 2, 3)] + [out["b_std"][-1]])
     ratio = np.mean(reported, axis=0) / np.std(estimates, axis=0, ddof=1)
-    assert np.all((ratio[1:] > 1 / 1.5) & (ratio[1:] < 1.5)), ratio
-    assert 1 / 1.5 < ratio[0] < 5.0, ratio
+    assert np.all((ratio > 1 / 1.5) & (ratio < 1.5)), ratio
 
 
 @pytest.mark.parametrize("noise", [1e-5, 1e-4])

@@ -29,7 +29,7 @@ void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, 
     id->rest_lambda = pow(id->lambda, 1.0 / INFO_REST_MEMORY);
     id->rest_pull = (1.0 - id->rest_lambda) * rho;
     id->skip_threshold = INFO_SKIP_SHARE * m * (1.0 - id->reference_lambda) / h;
-    /* LSM re-solves its anchor (used for the residuals) every 32 samples */
+    /* LSM takes its scores' block increments every 32 samples */
     const double interval = id->forgetting_rate > 0.0 ? 0.01 / (h * id->forgetting_rate)
                                                       : INFO_ANCHOR_MAX_INTERVAL;
     id->anchor_interval = interval >= INFO_ANCHOR_MAX_INTERVAL ? INFO_ANCHOR_MAX_INTERVAL
@@ -63,6 +63,8 @@ void info_reset(InformationIdentifier *id)
         id->P[k][k] = id->rho;
         id->eigvec[k] = k < id->m ? 1.0 / sqrt((double)id->m) : 0.0;
     }
+    if (id->lambda == 1.0)
+        bs_init(&id->blocks, id->rows, id->m, INFO_BATCH_WINDOW, &id->P[0][0], &id->theta[0][0]);
     id->active_time = 0.0;
     id->gamma_trace = id->m / id->rho;
     id->excitation = 0.0;
@@ -88,6 +90,7 @@ KERNEL recentre(InformationIdentifier *id, const int m)
 }
 
 static void refresh_anchor(InformationIdentifier *id);
+static void update_standard_errors(InformationIdentifier *id);
 
 /* LSM: plain accumulation. */
 KERNEL lsm_accumulate(InformationIdentifier *id, const double z[], const double phi[], const int m,
@@ -181,7 +184,7 @@ void info_step(InformationIdentifier *id, const double z[], const double phi[])
     info_run(id, &sample, 1);
 }
 
-/* The score w = phi r of a sample (r = z - anchor phi, the residual)
+/* MFF: the score w = phi r of a sample (r = z - anchor phi, the residual)
  * through the batch-mean filter (window INFO_BATCH_WINDOW).  Every
  * INFO_STD_INTERVAL samples the mean's outer product enters its running mean
  * (growing window first, then INFO_POWER_WINDOW) and the standard errors are
@@ -189,8 +192,6 @@ void info_step(InformationIdentifier *id, const double z[], const double phi[])
  * batch window, E[mean mean^T] = S_w / (2 T_b), S_w the scores' spectral
  * density at zero frequency, whose integral over the data is the covariance
  * of int phi r dt = P (Delta_hat - Delta). */
-static void update_standard_errors(InformationIdentifier *id);
-
 KERNEL track_residual(InformationIdentifier *id, const double z[], const double phi[],
                       const int m, const int rows)
 {
@@ -210,8 +211,11 @@ KERNEL lsm_run(InformationIdentifier *id, const IdSample samples[], int count, c
     for (int k = 0; k < count; ++k) {
         id->active_time += id->h;
         lsm_accumulate(id, samples[k].z, samples[k].phi, m, rows);
-        track_residual(id, samples[k].z, samples[k].phi, m, rows);
-        if (++id->anchor_age >= id->anchor_interval) refresh_anchor(id);
+        if (++id->anchor_age >= id->anchor_interval) {
+            id->anchor_age = 0;
+            bs_block(&id->blocks, id->anchor_interval * id->h, &id->P[0][0], &id->theta[0][0]);
+            if ((id->std_age += id->anchor_interval) >= INFO_STD_INTERVAL) update_standard_errors(id);
+        }
     }
 }
 
@@ -275,18 +279,25 @@ static void update_standard_errors(InformationIdentifier *id)
     id->std_age = 0;
     /* the first INFO_SCORE_DELAY seconds hold the estimate's own transient */
     if (id->active_time < INFO_SCORE_DELAY) return;
-    /* MFF: in proportion to the samples used, so that a rest (no data, no
-     * forgetting) leaves the standard errors where the excitation left them */
-    const double gp = id->residual_samples * id->power_gain < 1.0
-                          ? 1.0 / ++id->residual_samples
-                          : id->power_gain * (id->lambda < 1.0 ? id->used_mean : 1.0);
-    for (int i = 0; i < id->rows; ++i)
-        for (int a = 0; a < m; ++a)
-            for (int b = a; b < m; ++b)
-                id->score_power[i][a][b] +=
-                    gp * (id->score_mean[i][a] * id->score_mean[i][b] - id->score_power[i][a][b]);
+    const int lsm = id->lambda == 1.0;
+    if (lsm) {
+        bs_update_power(&id->blocks, id->power_gain);
+    } else {
+        /* MFF: in proportion to the samples used, so that a rest (no data, no
+         * forgetting) leaves the standard errors where the excitation left them */
+        const double gp = id->residual_samples * id->power_gain < 1.0
+                              ? 1.0 / ++id->residual_samples
+                              : id->power_gain * id->used_mean;
+        for (int i = 0; i < id->rows; ++i)
+            for (int a = 0; a < m; ++a)
+                for (int b = a; b < m; ++b)
+                    id->score_power[i][a][b] +=
+                        gp * (id->score_mean[i][a] * id->score_mean[i][b] - id->score_power[i][a][b]);
+    }
     double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS], gamma[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
     if (cholesky(id, n, L) != 0) return; /* keep the last ones */
+    double estimate[ID_MAX_ROWS][ID_MAX_REGRESSORS];
+    if (lsm) solve_estimate(id, n, L, estimate);
     for (int j = 0; j < m; ++j) {
         double e[ID_MAX_REGRESSORS] = {0};
         e[j] = 1.0;
@@ -299,13 +310,17 @@ static void update_standard_errors(InformationIdentifier *id)
     const double memory = id->lambda < 1.0 ? 0.5 / id->forgetting_rate : id->active_time;
     const double scale = memory < id->active_time ? memory : id->active_time;
     for (int i = 0; i < id->rows; ++i) {
+        double power[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
+        if (lsm) {
+            bs_score_power(&id->blocks, i, estimate[i], power);
+        } else {
+            for (int a = 0; a < m; ++a)
+                for (int b = a; b < m; ++b) power[a][b] = power[b][a] = id->score_power[i][a][b];
+        }
         for (int k = 0; k < m; ++k) {
             double variance = 0.0;
             for (int a = 0; a < m; ++a)
-                for (int b = 0; b < m; ++b) {
-                    const double s = a <= b ? id->score_power[i][a][b] : id->score_power[i][b][a];
-                    variance += gamma[k][a] * s * gamma[k][b];
-                }
+                for (int b = 0; b < m; ++b) variance += gamma[k][a] * power[a][b] * gamma[k][b];
             id->std_error[i][k] = sqrt(fmax(0.0, 2.0 * INFO_BATCH_WINDOW * scale * variance));
         }
     }

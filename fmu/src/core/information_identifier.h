@@ -16,7 +16,8 @@
  * - Delta_hat = Theta P^-1 is solved by Cholesky only when asked (at
  *   communication points), so the internal step costs O(m^2) multiply-adds.
  * - A reset restarts from the nominal parameters (Delta_hat = 0, P = rho I).
- * - Standard errors by the sandwich formula from the scores' low-frequency power.
+ * - Standard errors by the sandwich formula from the scores' low-frequency power
+ *   (LSM: at the current estimate, block_scores.h).
  * - Drift model (MFF, optional): forgetting makes the estimate lag a moving
  *   parameter by about the memory 1/|ln R| (0.43 s at R = 0.1).  With
  *   drift on, each parameter is modelled locally as Delta(s) = Delta0 +
@@ -50,6 +51,7 @@
 #ifndef INFORMATION_IDENTIFIER_H
 #define INFORMATION_IDENTIFIER_H
 
+#include "block_scores.h"
 #include "identifier.h"
 
 #define INFO_ANCHOR_MAX_INTERVAL 32
@@ -91,12 +93,15 @@ typedef struct {
     double gap_time;       /* time since the last sample used [s] */
     double gamma_trace;   /* trace(P^-1), from the last solve */
     /* Standard errors of Delta_hat (sandwich form, correlated residuals
-     * included): the scores phi (z - anchor phi) through a batch-mean filter
-     * give their low-frequency spectral density (track_residual). */
+     * included), from the scores' low-frequency spectral density.  LSM: the
+     * scores at the current estimate, from the sums' block increments
+     * (block_scores.h).  MFF, whose estimate moves: the scores
+     * phi (z - anchor phi) through a batch-mean filter (track_residual). */
     double batch_gain, power_gain, residual_samples;
     int std_age;          /* samples since the last update of the standard errors */
-    double score_mean[ID_MAX_ROWS][ID_MAX_REGRESSORS];
-    double score_power[ID_MAX_ROWS][ID_MAX_REGRESSORS][ID_MAX_REGRESSORS]; /* upper triangle */
+    BlockScores blocks;   /* LSM */
+    double score_mean[ID_MAX_ROWS][ID_MAX_REGRESSORS];                     /* MFF */
+    double score_power[ID_MAX_ROWS][ID_MAX_REGRESSORS][ID_MAX_REGRESSORS]; /* MFF, upper triangle */
     double std_error[ID_MAX_ROWS][ID_MAX_REGRESSORS]; /* from the last solve */
     double excitation;    /* smallest eigenvalue of the information per unit time */
     double eigvec[ID_MAX_REGRESSORS]; /* inverse-iteration vector for that eigenvalue */
