@@ -2,6 +2,7 @@
 
     .venv/bin/python bench/robot_no_excitation.py [--robots double_pendulum,ur5,panda]
         [--excite 10] [--quiet 60] [--R 0.1] [--rho 1e-6] [--out FILE.md]
+        [--logs DIR [--simulate-only]]
 
 Issue 10's target "60 s without excitation: the estimate moves less than 1 %", for the
 robots' regressor identifier (fmu/src/core/regressor_identifier.c, MFF).  Each robot of
@@ -54,6 +55,8 @@ from harness.robot.urdf import read_urdf  # noqa: E402
 RATE = 1000.0
 CREEP = 0.01  # rad/s
 JOG, JOG_TIME, JOG_START, JOG_PERIOD = 0.02, 0.5, 3.0, 10.0  # rad, s: 0.13 rad/s at most
+VARIANTS = {"rest": (0.0, False), "creep": (CREEP, False), "jogs": (0.0, True)}  # creep, jogs
+QUIET_RTOL = 1e-8  # the quiet phase's tolerance (the excitation's: 1e-10)
 CHECKPOINTS = (0.5, 1.0, 2.0, 5.0, 20.0, 60.0)  # s after the excitation
 SETTLED = 2.0  # s: the arm has come to rest (or to its creep) by then
 START = 0.2  # s: the identifier starts after the observer's transient
@@ -83,26 +86,39 @@ def quiet_reference(n: int, seed: int, excite: float, creep: float, jogs: bool =
     return reference
 
 
-def make_logs(name: str, excite: float, quiet: float, seed: int = 1) -> dict:
-    """The bench's robot and truth; per quiet phase (t, q, qd, qdd, tau) of the whole run."""
+def make_logs(name: str, excite: float, quiet: float, seed: int = 1,
+              cache: Path | None = None) -> dict:
+    """The bench's robot and truth; per quiet phase (t, q, qd, qdd, tau) of the whole run
+    (kept in, or read from, cache/NAME-EXCITE-QUIET.npz: the runs of two checkouts share
+    the simulation)."""
     path, locked = example_urdf(name)
     robot = read_urdf(path, locked=locked)
     rng = np.random.default_rng(seed)
     link, friction, unknown = truth_of(name, robot, rng)
+    case = {"name": name, "robot": robot, "unknown": unknown, "runs": {}}
+    stored = cache / f"{name}-{excite:g}-{quiet:g}-{seed}.npz" if cache else None
+    if stored is not None and stored.exists():
+        data = np.load(stored)
+        for variant in VARIANTS:
+            case["runs"][variant] = [data[f"{variant}-{k}"] for k in range(5)]
+        return case
     forward = pinocchio_truth(path, locked, link, friction)
     nominal = robot.rigid_body()
     gravity = lambda q: nominal.gravity(q)[0]  # noqa: E731
     h, (kp, kd) = 1.0 / RATE, GAINS[name]
     first = simulate(forward, gravity, robot.n, excite, h, seed=seed, kp=kp, kd=kd)
-    runs = {}
-    for variant, creep in (("rest", 0.0), ("creep", CREEP), ("jogs", 0.0)):
-        reference = quiet_reference(robot.n, seed, excite, creep, variant == "jogs")
+    for variant, (creep, jogs) in VARIANTS.items():
+        reference = quiet_reference(robot.n, seed, excite, creep, jogs)
         start = (first[0][-1], first[1][-1], first[2][-1])
+        # Radau: at rest the saturated Coulomb friction is stiff (DOP853 and LSODA crawl)
         second = simulate(forward, gravity, robot.n, quiet, h, seed=seed, kp=kp, kd=kd,
-                          reference=reference, start=start, method="LSODA")
-        runs[variant] = [np.concatenate([a, b[1:]]) for a, b in zip(first, second)]
-    return {"name": name, "robot": robot, "unknown": unknown, "runs": runs,
-            "truth": np.concatenate([link.ravel(), friction.ravel()])}
+                          reference=reference, start=start, method="Radau", rtol=QUIET_RTOL)
+        case["runs"][variant] = [np.concatenate([a, b[1:]]) for a, b in zip(first, second)]
+    if stored is not None:
+        stored.parent.mkdir(parents=True, exist_ok=True)
+        np.savez(stored, **{f"{variant}-{k}": a for variant, run in case["runs"].items()
+                            for k, a in enumerate(run)})
+    return case
 
 
 def standard(base, pi_nominal: np.ndarray, beta: np.ndarray) -> np.ndarray:
@@ -187,13 +203,18 @@ def main() -> int:
     parser.add_argument("--variants", default="rest,creep,jogs")
     parser.add_argument("--rules", default="default,every")
     parser.add_argument("--out", default=None, help="write the table (Markdown) here")
+    parser.add_argument("--logs", type=Path, default=None,
+                        help="keep the simulated runs here (and read them if there)")
+    parser.add_argument("--simulate-only", action="store_true", help="with --logs")
     args = parser.parse_args()
     checkpoints = tuple(c for c in CHECKPOINTS if c <= args.quiet)
     started = time.perf_counter()
     lines = [HEADER]
     print(HEADER, flush=True)
     for name in args.robots.split(","):
-        case = make_logs(name, args.excite, args.quiet)
+        case = make_logs(name, args.excite, args.quiet, cache=args.logs)
+        if args.simulate_only:
+            continue
         for variant in args.variants.split(","):
             for bits in (None, 17):
                 for rule in args.rules.split(","):
