@@ -1,12 +1,13 @@
 /* Cost of one internal step of the robot identifier: the regressor, the nominal
  * torques (Y pi), the weighted regressor and residual through the regression's
- * first-order filter (as robot_observer.c's ro_regression_step) and the LSM step
- * over the base columns (bench/robot_step_cost.py).
- * Usage: robot_step MODEL.txt STEPS; MODEL.txt: n, then per joint a line
+ * first-order filter (as robot_observer.c's ro_regression_step) and the LSM (or
+ * MFF, R = 0.1) step over the base columns (bench/robot_step_cost.py).
+ * Usage: robot_step MODEL.txt STEPS [lsm|mff]; MODEL.txt: n, then per joint a line
  * "type ax ay az x y z roll pitch yaw m mx my mz Ixx Ixy Iyy Ixz Iyz Izz fv fc",
  * then p and the p base columns.  Prints nanoseconds per step. */
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 #include "regressor_identifier.h"
@@ -14,7 +15,9 @@
 
 int main(int argc, char **argv)
 {
-    if (argc != 3) return 2;
+    if (argc != 3 && argc != 4) return 2;
+    const int mff = argc == 4 && strcmp(argv[3], "mff") == 0;
+    if (argc == 4 && !mff && strcmp(argv[3], "lsm") != 0) return 2;
     FILE *f = fopen(argv[1], "r");
     if (!f) return 2;
     int n = 0, p = 0, type[RB_MAX_JOINTS], columns[RB_MAX_PARAMETERS];
@@ -38,7 +41,8 @@ int main(int argc, char **argv)
     static RigidBodyModel model;
     static RegressorIdentifier id;
     if (rb_load(&model, n, type, axis, xyz, rpy, link, friction, gravity, 0.0) != RB_OK) return 2;
-    if (rri_init(&id, RRI_LSM, n, p, columns, NULL, 1e-4, 1e-6, 0.0) != 0) return 2;
+    if (rri_init(&id, mff ? RRI_MFF : RRI_LSM, n, p, columns, NULL, 1e-4, 1e-6, 0.1) != 0)
+        return 2;
     double pi[RB_MAX_PARAMETERS];
     rb_get_parameters(&model, pi);
     const long steps = atol(argv[2]);

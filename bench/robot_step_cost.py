@@ -4,14 +4,16 @@ every RRI_ANCHOR_INTERVAL steps), per example robot; with --fmu, of the RobotObs
 FMU's whole internal step.
 
     .venv/bin/python bench/robot_step_cost.py [--steps 20000] [--runs 5] [--callgrind]
-                                              [--against REVISION]
+                                              [--against REVISION] [--identifier lsm|mff]
                                               [--fmu [--statistics-interval S]
                                                [--sample-period h] [--keep DIR]]
 
 Compiles bench/robot_step.c with the core at -O2 (the FMU's flags) and prints the
 wall time per step (the median of --runs runs) and, with --callgrind, the instructions.
---against builds the same files of a git revision too (e.g. the commit before a change)
-and interleaves the two builds' runs, so that both see the same load.
+--against builds the same files of a git revision too (e.g. the commit before a change;
+the checkout's driver with the revision's core) and interleaves the two builds' runs, so
+that both see the same load.  --identifier mff: MFF (R = 0.1, the FMU's default) instead
+of LSM, in both (--fmu: the FMU's parameter identifier = 2).
 
 --fmu compiles bench/robot_fmu_step.c with the RobotObserver's sources (the
 <SourceFiles> of fmu/robot/modelDescription.xml; FMI headers from the installed fmpy),
@@ -73,7 +75,9 @@ def model_file(name: str, path: Path) -> int:
 
 SOURCES = ("bench/robot_step.c", "fmu/src/core/rigid_body.c", "fmu/src/core/regressor_identifier.c")
 HEADERS = ("fmu/src/core/rigid_body.h", "fmu/src/core/regressor_identifier.h",
-           "fmu/src/core/cholesky.h")  # cholesky.h: since 1e4f058
+           "fmu/src/core/cholesky.h",   # since 1e4f058
+           "fmu/src/core/leave_out.h")  # since MFF's leave-out rule in the regressor form
+STEP_DRIVER = "bench/robot_step.c"
 FMU_DESCRIPTION = REPO / "fmu/robot/modelDescription.xml"
 FMU_DRIVER = "bench/robot_fmu_step.c"
 FMU_H = 1e-4        # [s] the sampling period: 10 kHz
@@ -102,11 +106,12 @@ def build(binary: Path, revision: str | None, fmu: bool = False) -> None:
     root = REPO
     if revision is not None:
         root = binary.parent / f"src-{revision}"
-        if fmu:  # the checkout's driver, so that revisions before it can be measured
-            driver = root / FMU_DRIVER
-            driver.parent.mkdir(parents=True, exist_ok=True)
-            shutil.copyfile(REPO / FMU_DRIVER, driver)
-        for name in [s for s in sources if s != FMU_DRIVER] + list(headers):
+        # the checkout's driver, so that revisions before it can be measured
+        driver_name = FMU_DRIVER if fmu else STEP_DRIVER
+        driver = root / driver_name
+        driver.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(REPO / driver_name, driver)
+        for name in [s for s in sources if s != driver_name] + list(headers):
             shown = subprocess.run(["git", "-C", str(REPO), "show", f"{revision}:{name}"],
                                    capture_output=True)
             if shown.returncode != 0 and name in headers:
@@ -120,24 +125,26 @@ def build(binary: Path, revision: str | None, fmu: bool = False) -> None:
                     *(str(root / name) for name in sources), "-lm"], check=True)
 
 
-def instructions(binary: Path, model: Path, tmp: str, steps: int = 2000) -> float:
+def instructions(binary: Path, model: Path, tmp: str, steps: int = 2000,
+                 identifier: str = "lsm") -> float:
     """Instructions per step: callgrind's count of 2 steps runs minus steps runs, / steps."""
     counts = []
     for count in (steps, 2 * steps):
         run = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={tmp}/cg.out",
-                              str(binary), str(model), str(count)], capture_output=True, text=True)
+                              str(binary), str(model), str(count), identifier],
+                             capture_output=True, text=True)
         counts.append(int(re.search(r"Collected : (\d+)", run.stderr).group(1)))
     return (counts[1] - counts[0]) / steps
 
 
 def fmu_files(name: str, tmp: Path, rows: int, statistics_interval: float | None = None,
-              h: float = FMU_H) -> tuple[Path, Path, int, int]:
+              h: float = FMU_H, identifier: str = "lsm") -> tuple[Path, Path, int, int]:
     """(parameters, trajectory, n, p) of an example robot for robot_fmu_step.c, sampled
     every h [s]; the FMU's statistics_interval [s] unless given."""
     urdf, locked = example_urdf(name)
     ssv = tmp / f"{name}.ssv"
     subprocess.run([sys.executable, "-m", "harness", "robot-fmu-parameters", str(urdf),
-                    "--out", str(ssv), "--step", repr(h),
+                    "--out", str(ssv), "--step", repr(h), "--identifier", identifier,
                     *(f"--lock={joint}" for joint in locked)], cwd=REPO, check=True,
                    capture_output=True)
     values = {**read_ssv(ssv), "t_id": FMU_T_ID}
@@ -194,7 +201,7 @@ def fmu_cost(args, binaries: dict[str, Path], tmp: Path) -> None:
     count = 2000  # measured steps of a callgrind run, and of the doStep of H = count h
     for name in ("double_pendulum", "ur5", "panda"):
         files = fmu_files(name, tmp, FMU_WARMUP + max(args.steps, 2 * count),
-                          args.statistics_interval, args.sample_period)
+                          args.statistics_interval, args.sample_period, args.identifier)
         n, p = files[2:]
         # H, (STEPS, CALLS) of a run measuring m times `count` steps, and of the timed runs
         # (--steps internal steps each)
@@ -232,6 +239,8 @@ def main() -> int:
                         help="--fmu: the sampling period h [s] (default 1e-4)")
     parser.add_argument("--keep", type=Path, metavar="DIR",
                         help="--fmu: keep the callgrind outputs in DIR")
+    parser.add_argument("--identifier", choices=("lsm", "mff"), default="lsm",
+                        help="the identifier's kind (MFF: R = 0.1)")
     parser.add_argument("--against", metavar="REVISION",
                         help="also a git revision's core, its runs interleaved with this one's")
     args = parser.parse_args()
@@ -252,13 +261,14 @@ def main() -> int:
             for _ in range(args.runs):
                 for label, binary in binaries.items():
                     times[label].append(float(subprocess.run(
-                        [str(binary), str(model), str(args.steps)], capture_output=True,
-                        text=True, check=True).stdout))
+                        [str(binary), str(model), str(args.steps), args.identifier],
+                        capture_output=True, text=True, check=True).stdout))
             for label, binary in binaries.items():
                 median = np.median(times[label]) / 1000
                 line = f"{name} ({label}): p = {p}, {median:.2f} us per step"
                 if args.callgrind and shutil.which("valgrind"):
-                    line += f", {instructions(binary, model, tmp):.0f} instructions per step"
+                    line += (f", {instructions(binary, model, tmp, identifier=args.identifier):.0f}"
+                             " instructions per step")
                 print(line, flush=True)
     print(f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     return 0

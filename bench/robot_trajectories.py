@@ -27,10 +27,15 @@ def multisine(n: int, seed: int, amplitude: float = 0.6, frequencies=(0.15, 0.35
 
 
 def simulate(forward_dynamics: Callable, gravity: Callable, n: int, duration: float, h: float,
-             seed: int, kp: float = 400.0, kd: float = 40.0, rtol: float = 1e-10):
+             seed: int, kp: float = 400.0, kd: float = 40.0, rtol: float = 1e-10,
+             reference: Callable | None = None, start: tuple | None = None,
+             method: str = "DOP853"):
     """(t, q, qd, qdd, tau) sampled every h of the closed loop; forward_dynamics(q, qd, tau)
-    and gravity(q) of the true robot / the nominal model."""
-    reference = multisine(n, seed)
+    and gravity(q) of the true robot / the nominal model.  reference(t) -> (q_ref, q_ref')
+    defaults to multisine(n, seed); start = (t0, q0, qd0) continues a run from its state
+    (default: t0 = 0 at rest on the reference); method: solve_ivp's ("Radau" for a robot at
+    rest, where the saturated Coulomb friction is stiff)."""
+    reference = reference or multisine(n, seed)
 
     def torque(t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         q_ref, qd_ref = reference(t)
@@ -40,9 +45,9 @@ def simulate(forward_dynamics: Callable, gravity: Callable, n: int, duration: fl
         q, qd = x[:n], x[n:]
         return np.concatenate([qd, forward_dynamics(q, qd, torque(t, q, qd))])
 
-    t = np.arange(0.0, duration + h / 2, h)
-    q0, _ = reference(0.0)
-    solution = solve_ivp(rhs, (0.0, t[-1]), np.concatenate([q0, np.zeros(n)]), method="DOP853",
+    t0, q0, qd0 = start if start is not None else (0.0, reference(0.0)[0], np.zeros(n))
+    t = t0 + np.arange(0.0, duration + h / 2, h)
+    solution = solve_ivp(rhs, (t0, t[-1]), np.concatenate([q0, qd0]), method=method,
                          t_eval=t, rtol=rtol, atol=rtol * 1e-2)
     if not solution.success:
         raise RuntimeError(f"integration failed: {solution.message}")

@@ -26,6 +26,7 @@ CASES = [
     "mff_tracking",                              # (36)-(37), theta(t) = 1 + 0.5 sin 0.2t
     "mff_without_excitation",                    # wind-up: Gamma and the estimate, phi = 0
     "mff_pulses_and_resumption",                 # a rest with wrong pulses; less excitation
+    "rri_mff_pulses_and_resumption",             # the same for the robots' regressor form
     "theorem_gains",                             # condition (6) by hand
     "coulomb_level_learned",                     # reversals: the Coulomb level learned
     "mean_sign_of_a_reversal",                   # the Coulomb regressor around a sample

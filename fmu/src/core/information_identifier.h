@@ -53,17 +53,13 @@
 
 #include "block_scores.h"
 #include "identifier.h"
+#include "leave_out.h"
 
 #define INFO_ANCHOR_MAX_INTERVAL 32
 #define INFO_BATCH_WINDOW 1.0   /* [s] batch-mean filter of the residuals */
 #define INFO_POWER_WINDOW 30.0  /* [s] mean square of that mean (growing window first) */
 #define INFO_SCORE_DELAY 2.0    /* [s] of identification before the scores count */
 #define INFO_STD_INTERVAL 256   /* samples between updates of the standard errors */
-#define INFO_REFERENCE_MEMORY 10.0 /* Pref's memory, in MFF memories 1/|ln R| */
-#define INFO_REST_MEMORY 100.0  /* Pref's memory over the samples left out */
-#define INFO_SKIP_SHARE 0.04    /* below this share of the long-run inflow a sample is left
-                                 * out: |v| < 0.2 RMS(v) for a velocity regressor */
-#define INFO_GAP_MEMORY 0.25    /* gaps longer than this many memories freeze the sums */
 
 typedef struct {
     int rows, m;          /* m: the identified regressors; the sums have 2m with drift */

@@ -50,6 +50,12 @@ int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int c
     /* an int: a tiny h (below RRI_BATCH_TIME / RRI_MAX_BATCH_SAMPLES) gets shorter batches */
     id->batch_samples = (int)fmin(ceil(RRI_BATCH_TIME / h), RRI_MAX_BATCH_SAMPLES);
     id->batch_lambda = pow(id->lambda, 2.0 * id->batch_samples); /* variances forget twice as fast */
+    id->reference_lambda = pow(id->lambda, 1.0 / INFO_REFERENCE_MEMORY);
+    id->reference_pull = (1.0 - id->reference_lambda) * rho;
+    id->rest_lambda = pow(id->lambda, 1.0 / INFO_REST_MEMORY);
+    id->rest_pull = (1.0 - id->rest_lambda) * rho;
+    id->skip_threshold = INFO_SKIP_SHARE * p * (1.0 - id->reference_lambda);
+    id->gap_limit = kind == RRI_MFF ? INFO_GAP_MEMORY / -log(R) : 0.0;
     rri_reset(id);
     return 0;
 }
@@ -63,7 +69,11 @@ void rri_reset(RegressorIdentifier *id)
     memset(id->score, 0, sizeof id->score);
     memset(id->score_power, 0, sizeof id->score_power);
     memset(id->std_error, 0, sizeof id->std_error);
-    for (int k = 0; k < id->p; ++k) id->P[k][k] = id->rho;
+    for (int k = 0; k < id->p; ++k) {
+        id->P[k][k] = id->reference[k] = id->rho;
+        id->reference_inverse[k] = 1.0 / id->rho;
+    }
+    id->gap_time = 0.0;
     id->anchor_age = id->batch_age = 0;
     id->active_time = 0.0;
     id->gamma_trace = id->p / id->rho;
@@ -89,10 +99,54 @@ static void solve_anchor(RegressorIdentifier *id)
     solve(id, id->anchor);
 }
 
+/* MFF's leave-out rule (regressor_identifier.h): adds the sample's inflow to the
+ * diagonal of Pref and tells whether the sample is used (1), left out within a short
+ * gap, which forgets (0), or left out in a rest, which freezes the sums (-1). */
+static int leave_out_rule(RegressorIdentifier *id, const RbRegressor *Y)
+{
+    double inflow[RRI_MAX_PARAMETERS] = {0};
+    for (int i = 0; i < id->rows; ++i) {
+        const double *row = Y->row[i], c = id->h * id->weight[i];
+        for (int r = 0; r < id->runs[i]; ++r)
+            for (int k = id->run_start[i][r]; k < id->run_end[i][r]; ++k) {
+                const double y = row[id->columns[k]];
+                inflow[k] += c * y * y;
+            }
+    }
+    double q = 0.0;
+    for (int k = 0; k < id->p; ++k) q += inflow[k] * id->reference_inverse[k];
+    const int used = q >= id->skip_threshold;
+    /* over left-out samples Pref forgets slower, so that a pulse after a long rest
+     * stays small against it, while a lasting smaller excitation is taken up again */
+    const double lambda = used ? id->reference_lambda : id->rest_lambda;
+    const double pull = used ? id->reference_pull : id->rest_pull;
+    for (int k = 0; k < id->p; ++k) id->reference[k] = lambda * id->reference[k] + pull + inflow[k];
+    if (used) {
+        id->gap_time = 0.0;
+        return 1;
+    }
+    id->gap_time += id->h;
+    return id->gap_time > id->gap_limit ? -1 : 0;
+}
+
+static void refresh_anchor(RegressorIdentifier *id, int frozen)
+{
+    if (!frozen) solve_anchor(id); /* frozen sums: the same anchor */
+    for (int k = 0; k < id->p; ++k) id->reference_inverse[k] = 1.0 / id->reference[k];
+    id->anchor_age = 0;
+}
+
 void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
 {
     const int p = id->p;
+    int use = 1;
+    id->active_time += id->h;
     if (id->lambda < 1.0) {
+        use = leave_out_rule(id, Y);
+        if (use < 0) { /* a rest: nothing forgotten, nothing added, the batch stands still */
+            if (++id->anchor_age >= RRI_ANCHOR_INTERVAL) refresh_anchor(id, 1);
+            return;
+        }
         const double lambda = id->lambda, pull = id->one_minus_lambda_rho;
         for (int j = 0; j < p; ++j) {
             for (int k = j; k < p; ++k) id->P[j][k] *= lambda;
@@ -102,7 +156,7 @@ void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
     }
     /* row i adds h w_i y_i^T (y_i, z_i, residual_i) over the columns where y_i
      * can be nonzero (its runs): the upper triangle of P row by row */
-    for (int i = 0; i < id->rows; ++i) {
+    for (int i = 0; i < id->rows && use; ++i) {
         const int runs = id->runs[i];
         const int *start = id->run_start[i], *end = id->run_end[i];
         const double *row = Y->row[i], c = id->h * id->weight[i];
@@ -123,7 +177,6 @@ void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
                     for (int k = start[s]; k < end[s]; ++k) P[k] += a * y[k];
             }
     }
-    id->active_time += id->h;
     if (++id->batch_age >= id->batch_samples) {
         for (int j = 0; j < p; ++j)
             for (int k = j; k < p; ++k)
@@ -132,10 +185,7 @@ void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
         memset(id->score, 0, sizeof id->score);
         id->batch_age = 0;
     }
-    if (++id->anchor_age >= RRI_ANCHOR_INTERVAL) {
-        solve_anchor(id);
-        id->anchor_age = 0;
-    }
+    if (++id->anchor_age >= RRI_ANCHOR_INTERVAL) refresh_anchor(id, 0);
 }
 
 void rri_filter_regressor(const RegressorIdentifier *id, const RbRegressor *Y,

@@ -20,12 +20,31 @@
  *   batches of RRI_BATCH_TIME seconds, so that residuals correlated over less
  *   than a batch (filtered signals) are accounted for;
  * - trust outputs: trace(Gamma) and the excitation (smallest eigenvalue of the
- *   information per unit time).
+ *   information per unit time);
+ * - uninformative samples left out (MFF), the rule of information_identifier.h: a
+ *   sample whose information q = h sum_i w_i sum_k y_ik^2 / Pref_kk, the trace
+ *   tr(D^-1 Y^T W Y) with D the diagonal of the long-run inflow Pref (memory
+ *   INFO_REFERENCE_MEMORY / |ln R|), is below INFO_SKIP_SHARE of its share
+ *   p (1 - lambda_ref) of Pref does not add to the sums; a gap of such samples up to
+ *   INFO_GAP_MEMORY memories forgets as before, a longer one (a rest: the joint
+ *   equations weighted 0 below min_speed, the filter decayed) freezes the sums, so
+ *   that Gamma stays where the excitation left it instead of growing to I / rho, and
+ *   a later short or wrong pulse cannot move the estimate far.  Over left-out samples
+ *   Pref forgets with the memory INFO_REST_MEMORY / |ln R|, so that a lasting smaller
+ *   excitation is taken up again.  The diagonal, not Pref^-1: one multiply-add per
+ *   regressor entry read instead of n p^2 / 2 (a forward substitution per row, 11 k
+ *   for the Panda arm, about the whole rank-n update again); what the rule must tell
+ *   apart is rows of the excitation's size from rows that have collapsed (weight 0,
+ *   a decayed filter, velocity columns at a crawl), which the column-scaled norm sees
+ *   as the full form does.  Its blind spot, a small row along a direction that Pref
+ *   holds little of (a difference of nearly collinear columns), is left out where the
+ *   full form would take it: information lost at low excitation, never a wind-up.
  * The columns of Y taken are the base columns (an index list that the harness
  * computes offline from the URDF, harness/robot/base_parameters.py). */
 #ifndef REGRESSOR_IDENTIFIER_H
 #define REGRESSOR_IDENTIFIER_H
 
+#include "leave_out.h"
 #include "rigid_body.h"
 
 #define RRI_MAX_ROWS RB_MAX_JOINTS
@@ -58,6 +77,14 @@ typedef struct {
     double std_error[RRI_MAX_PARAMETERS];   /* from the last solve */
     double gamma_trace, excitation;
     double factor[RRI_MAX_PARAMETERS][RRI_MAX_PARAMETERS]; /* Cholesky workspace */
+    /* MFF's leave-out rule: the diagonal of the long-run inflow Pref, its inverse
+     * from the last anchor refresh, and the rule's constants */
+    double reference[RRI_MAX_PARAMETERS], reference_inverse[RRI_MAX_PARAMETERS];
+    double reference_lambda, reference_pull; /* lambda^(1/INFO_REFERENCE_MEMORY), its rho pull */
+    double rest_lambda, rest_pull;   /* the same over left-out samples (INFO_REST_MEMORY) */
+    double skip_threshold;           /* INFO_SKIP_SHARE p (1 - reference_lambda) */
+    double gap_limit;                /* INFO_GAP_MEMORY / |ln R| [s] */
+    double gap_time;                 /* since the last sample used [s] */
 } RegressorIdentifier;
 
 typedef enum { RRI_LSM = 1, RRI_MFF = 2 } RriKind;
