@@ -26,7 +26,9 @@ the observer with the forward dynamics, the regression, the identifier, the outp
 and every statistics_interval = 0.1 s a solve with standard errors: the slowest doStep)
 and of doSteps of H = 2000 h (the inputs held over each).  Instructions: callgrind
 --toggle-collect=fmi2DoStep, the difference of runs with 1x and 2x the measured steps,
-divided by the steps.  With --against, the revision's FMU sources with this checkout's
+divided by the steps; at H = h also the distribution of the instructions per doStep
+over 2000 doSteps (callgrind --dump-after=fmi2DoStep: one profile per call), with the
+maximum: the doStep that a hard real-time loop must fit in its period.  With --against, the revision's FMU sources with this checkout's
 driver (the model description's source list is this checkout's)."""
 from __future__ import annotations
 
@@ -186,6 +188,35 @@ def fmu_run(binary: Path, files: tuple[Path, Path, int, int], steps: int, calls:
     return result
 
 
+def per_call_instructions(binary: Path, files: tuple[Path, Path, int, int], calls: int,
+                          directory: Path) -> np.ndarray:
+    """Instructions of each of `calls` doSteps of H = h (after the warm-up): callgrind
+    --dump-after=fmi2DoStep writes one profile per call, whose total is that call's count
+    (collected in fmi2DoStep only)."""
+    directory.mkdir(parents=True, exist_ok=True)
+    out = directory / "cg.out"
+    command = ["valgrind", "--tool=callgrind", "--toggle-collect=fmi2DoStep",
+               "--dump-after=fmi2DoStep", f"--callgrind-out-file={out}", str(binary),
+               *map(str, files[:2]), str(FMU_WARMUP), "1", str(calls)]
+    run = subprocess.run(command, capture_output=True, text=True)
+    if run.returncode != 0 or "identifier_active=1" not in run.stdout:
+        raise RuntimeError(f"{' '.join(command)}: failed or not identifying: {run.stdout!r}")
+    dumps = sorted(directory.glob("cg.out.*"), key=lambda f: int(f.suffix[1:]))
+    counts = np.array([int(re.search(r"^totals: (\d+)", f.read_text(), re.M).group(1))
+                       for f in dumps], dtype=float)
+    shutil.rmtree(directory)
+    if len(counts) != FMU_WARMUP + calls:
+        raise RuntimeError(f"{len(counts)} profiles for {FMU_WARMUP + calls} doSteps")
+    return counts[FMU_WARMUP:]
+
+
+def distribution(counts: np.ndarray) -> str:
+    """The per-doStep instructions: maximum, high percentiles, median, mean."""
+    p50, p99, p999 = np.percentile(counts, [50, 99, 99.9])
+    return (f"per doStep: max {counts.max():.0f} (call {int(np.argmax(counts))}), "
+            f"99.9 % {p999:.0f}, 99 % {p99:.0f}, median {p50:.0f}, mean {counts.mean():.0f}")
+
+
 def fmu_cost(args, binaries: dict[str, Path], tmp: Path) -> None:
     """The RobotObserver's internal step, per example robot, at H = h and in doSteps of
     H = 2000 h: wall time (median of the runs of --steps internal steps, the builds' runs
@@ -216,6 +247,10 @@ def fmu_cost(args, binaries: dict[str, Path], tmp: Path) -> None:
                     counts = [fmu_run(binary, files, *measured(m), f"{out}-{m}x")
                               ["instructions"] for m in (1, 2)]
                     line += f", {(counts[1] - counts[0]) / count:.0f} instructions per step"
+                    if H == "h":
+                        per_call = per_call_instructions(binary, files, count,
+                                                         tmp / f"dumps-{case}")
+                        line += f"; {distribution(per_call)}"
                 print(line, flush=True)
 
 

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "cholesky.h"
+#include "statistics_job.h"
 
 int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int columns[],
              const double torque_scale[], double h, double rho, double R)
@@ -170,27 +171,17 @@ void rri_statistics(RegressorIdentifier *id)
         g[k] = 1.0;
         solve(id, g);
         trace += g[k];
-        double variance = 0.0;
-        for (int j = 0; j < p; ++j) {
-            double row = id->score_power[j][j] * g[j];
-            for (int i = j + 1; i < p; ++i) row += 2.0 * id->score_power[j][i] * g[i];
-            variance += g[j] * row;
-        }
+        const double variance = sj_sandwich(&id->score_power[0][0], p, g);
         id->std_error[k] = sqrt(variance > 0.0 ? variance : 0.0);
     }
     id->gamma_trace = trace;
     /* smallest eigenvalue of P by inverse iteration, per unit of remembered time */
     double v[RRI_MAX_PARAMETERS], norm = 0.0;
     for (int k = 0; k < p; ++k) v[k] = 1.0 / sqrt((double)p);
-    for (int iteration = 0; iteration < 30; ++iteration) {
-        solve(id, v);
-        norm = 0.0;
-        for (int k = 0; k < p; ++k) norm += v[k] * v[k];
-        norm = sqrt(norm);
-        for (int k = 0; k < p; ++k) v[k] /= norm;
+    for (int iteration = 0; iteration < SJ_EIGEN_ITERATIONS; ++iteration) {
+        const double previous = norm;
+        norm = sj_inverse_iteration(&id->factor[0][0], p, v);
+        if (sj_eigen_converged(norm, previous)) break;
     }
-    const double rate = id->lambda < 1.0 ? -log(id->lambda) / id->h : 0.0;
-    const double memory = rate > 0.0 ? -expm1(-rate * id->active_time) / rate : id->active_time;
-    id->excitation = memory > 0.0 ? (1.0 / norm - id->rho) / memory : 0.0;
-    if (id->excitation < 0.0) id->excitation = 0.0;
+    id->excitation = sj_excitation(norm, id->rho, id->lambda, id->h, id->active_time);
 }

@@ -93,7 +93,11 @@ void rri_filter_regressor(const RegressorIdentifier *id, const RbRegressor *Y,
 int rri_solve(RegressorIdentifier *id);
 
 /* After rri_solve: the standard errors, trace(Gamma) and the excitation
- * (p^3 multiply-adds: at a slower rate than the estimate). */
+ * (p^3 multiply-adds: at a slower rate than the estimate, or spread over
+ * internal steps by statistics_job.h in the same arithmetic).  The inverse
+ * iteration for the smallest eigenvalue starts from the uniform vector and
+ * stops at convergence (statistics_job.h's SJ_EIGEN_TOLERANCE), after
+ * SJ_EIGEN_ITERATIONS iterations at most. */
 void rri_statistics(RegressorIdentifier *id);
 
 #endif
