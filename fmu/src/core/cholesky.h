@@ -33,17 +33,29 @@ static inline int cholesky_factor(const double *P, double *L, int n, int stride)
     return 0;
 }
 
-/* x <- P^-1 x with the factor L of cholesky_factor. */
-static inline void cholesky_solve(const double *L, int n, int stride, double x[])
+/* x <- L^-1 x and x <- L^-T x with the factor L of cholesky_factor: the two
+ * halves of cholesky_solve. */
+static inline void cholesky_forward(const double *L, int n, int stride, double x[])
 {
     for (int i = 0; i < n; ++i) {
         for (int k = 0; k < i; ++k) x[i] -= L[i * stride + k] * x[k];
         x[i] /= L[i * stride + i];
     }
+}
+
+static inline void cholesky_backward(const double *L, int n, int stride, double x[])
+{
     for (int i = n - 1; i >= 0; --i) {
         for (int k = i + 1; k < n; ++k) x[i] -= L[k * stride + i] * x[k];
         x[i] /= L[i * stride + i];
     }
+}
+
+/* x <- P^-1 x with the factor L of cholesky_factor. */
+static inline void cholesky_solve(const double *L, int n, int stride, double x[])
+{
+    cholesky_forward(L, n, stride, x);
+    cholesky_backward(L, n, stride, x);
 }
 
 #endif

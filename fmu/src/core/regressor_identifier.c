@@ -6,6 +6,8 @@
 #include "cholesky.h"
 #include "statistics_job.h"
 
+static void anchor_snapshot(RegressorIdentifier *id);
+
 int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int columns[],
              const double torque_scale[], double h, double rho, double R)
 {
@@ -65,7 +67,8 @@ void rri_reset(RegressorIdentifier *id)
     memset(id->score_power, 0, sizeof id->score_power);
     memset(id->std_error, 0, sizeof id->std_error);
     for (int k = 0; k < id->p; ++k) id->P[k][k] = id->rho;
-    id->anchor_age = id->batch_age = 0;
+    id->batch_age = 0;
+    anchor_snapshot(id);
     id->active_time = 0.0;
     id->gamma_trace = id->p / id->rho;
     id->excitation = 0.0;
@@ -83,11 +86,59 @@ static void solve(const RegressorIdentifier *id, double x[])
     cholesky_solve(&id->factor[0][0], id->p, RRI_MAX_PARAMETERS, x);
 }
 
-static void solve_anchor(RegressorIdentifier *id)
+/* The anchor's next solve starts from the state after this sample. */
+static void anchor_snapshot(RegressorIdentifier *id)
 {
-    if (factorize(id) != 0) return;
-    memcpy(id->anchor, id->b, sizeof id->b);
-    solve(id, id->anchor);
+    const int p = id->p;
+    for (int j = 0; j < p; ++j)
+        memcpy(&id->anchor_factor[j][j], &id->P[j][j], (size_t)(p - j) * sizeof(double));
+    memcpy(id->anchor_solution, id->b, (size_t)p * sizeof(double));
+    id->anchor_age = 0;
+    id->anchor_unit = id->anchor_failed = 0;
+    id->anchor_work = 0.0;
+}
+
+/* Multiply-adds of the anchor solve's unit u, and of the whole solve. */
+static double anchor_unit_cost(int p, int u)
+{
+    return u < p ? (u + 1.0) * (double)(p - u) : 0.5 * p * p;
+}
+
+static double anchor_total_cost(int p)
+{
+    return p * (p + 1.0) * (p + 2.0) / 6.0 + (double)p * p;
+}
+
+/* After anchor_age samples of the interval, the units whose work fits in that
+ * share of the whole; at the end of the interval the rest, the solution becomes
+ * the anchor (kept if P was not positive definite) and the next snapshot is taken. */
+static void anchor_slice(RegressorIdentifier *id)
+{
+    const int p = id->p;
+    double *L = &id->anchor_factor[0][0];
+    const int last = id->anchor_age >= RRI_ANCHOR_INTERVAL;
+    const double share = id->anchor_age * anchor_total_cost(p) / RRI_ANCHOR_INTERVAL;
+    while (id->anchor_unit < p + 2) {
+        const int u = id->anchor_unit;
+        const double cost = anchor_unit_cost(p, u);
+        if (!last && id->anchor_work + cost > share) break;
+        if (u < p) {
+            if (cholesky_factor_column(L, L, p, RRI_MAX_PARAMETERS, u) != 0) {
+                id->anchor_failed = 1;
+                id->anchor_unit = p + 2;
+                break;
+            }
+        } else if (u == p) {
+            cholesky_forward(L, p, RRI_MAX_PARAMETERS, id->anchor_solution);
+        } else {
+            cholesky_backward(L, p, RRI_MAX_PARAMETERS, id->anchor_solution);
+        }
+        id->anchor_work += cost;
+        ++id->anchor_unit;
+    }
+    if (!last) return;
+    if (!id->anchor_failed) memcpy(id->anchor, id->anchor_solution, (size_t)p * sizeof(double));
+    anchor_snapshot(id);
 }
 
 void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
@@ -133,10 +184,8 @@ void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
         memset(id->score, 0, sizeof id->score);
         id->batch_age = 0;
     }
-    if (++id->anchor_age >= RRI_ANCHOR_INTERVAL) {
-        solve_anchor(id);
-        id->anchor_age = 0;
-    }
+    ++id->anchor_age;
+    anchor_slice(id);
 }
 
 void rri_filter_regressor(const RegressorIdentifier *id, const RbRegressor *Y,

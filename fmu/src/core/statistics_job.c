@@ -57,12 +57,13 @@ double sj_interval_steps(double seconds, double h)
 
 const double *sj_freshest_estimate(const StatisticsJob *job, const RegressorIdentifier *id)
 {
-    return job->completed > 0.0 && job->age < id->anchor_age ? job->delta : id->anchor;
+    return job->completed > 0.0 && job->age < rri_anchor_age(id) ? job->delta : id->anchor;
 }
 
 void sj_reset(StatisticsJob *job)
 {
     job->stage = SJ_IDLE;
+    job->age = HUGE_VAL; /* its estimate is of the identifier before the reset */
     job->since = job->interval; /* a snapshot at the next step */
 }
 

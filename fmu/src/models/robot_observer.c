@@ -445,6 +445,7 @@ static ModelStatus check_restored(const void *data, const ModelLogger *log)
              (d->id.rows == 0 || d->id.rows == d->n) && d->id.p >= 0 && d->id.p <= columns;
     for (int k = 0; ok && k < d->id.p; ++k)
         ok = d->id.columns[k] >= 0 && d->id.columns[k] < columns;
+    ok = ok && d->id.anchor_unit >= 0 && d->id.anchor_unit <= d->id.p + 2;
     const StatisticsJob *job = &d->statistics;
     /* the statistics job's stage and the column or iteration within it */
     ok = ok && job->p >= 0 && job->p <= (d->id.p > 0 ? d->id.p : 1) &&

@@ -682,6 +682,47 @@ static int statistics_job_equals_full_solve(void)
     return failures;
 }
 
+/* The running solution (the anchor) solved in shares over the samples after its
+ * snapshot: each installed anchor must be rri_solve of the identifier at the snapshot
+ * RRI_ANCHOR_INTERVAL samples before (the same arithmetic: to 1e-12, measured 0). */
+static int anchor_solve_spread(void)
+{
+    static RegressorIdentifier id, snapshot;
+    int failures = 0;
+    for (int kind = RRI_LSM; kind <= RRI_MFF; ++kind) {
+        const int rows = 7, p = 57;
+        int columns[RRI_MAX_PARAMETERS];
+        for (int k = 0; k < p; ++k) columns[k] = k + 12;
+        if (rri_init(&id, (RriKind)kind, rows, p, columns, NULL, 1e-4, 1e-6, 0.5) != 0) return 1;
+        snapshot = id;
+        unsigned long state = 777;
+        int installs = 0, before_snapshot = 1;
+        double worst = 0.0;
+        for (int step = 0; step < 40 * RRI_ANCHOR_INTERVAL; ++step) {
+            RbRegressor Y;
+            double z[RRI_MAX_ROWS];
+            memset(&Y, 0, sizeof Y);
+            for (int i = 0; i < rows; ++i) {
+                for (int c = 0; c < RRI_PARAMETERS_OF(rows); ++c) Y.row[i][c] = uniform_random(&state);
+                z[i] = uniform_random(&state);
+            }
+            rri_step(&id, z, &Y);
+            if (id.anchor_age != 0) continue;
+            /* a new anchor (of the last snapshot) and the next snapshot, both here */
+            if (rri_solve(&snapshot) != 0) return 1;
+            for (int k = 0; k < p; ++k) worst = fmax(worst, relative(id.anchor[k], snapshot.delta[k]));
+            installs += !before_snapshot;
+            before_snapshot = 0;
+            snapshot = id;
+        }
+        const char *name = kind == RRI_LSM ? "LSM" : "MFF";
+        failures += check(installs == 39 && worst <= 1e-12, "%s: %d anchors installed, each the "
+                          "solve of P and b %d samples before: worst relative difference %.3g "
+                          "(bound 1e-12)", name, installs, RRI_ANCHOR_INTERVAL, worst);
+    }
+    return failures;
+}
+
 int main(int argc, char **argv)
 {
     static const struct {
@@ -699,6 +740,7 @@ int main(int argc, char **argv)
         {"coulomb_level_learned", coulomb_level_learned},
         {"mean_sign_of_a_reversal", mean_sign_of_a_reversal},
         {"statistics_job_equals_full_solve", statistics_job_equals_full_solve},
+        {"anchor_solve_spread", anchor_solve_spread},
     };
     const size_t n_cases = sizeof cases / sizeof cases[0];
     if (argc < 2) {
