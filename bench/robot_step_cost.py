@@ -73,14 +73,16 @@ def model_file(name: str, path: Path) -> int:
     return base.count
 
 
-SOURCES = ("bench/robot_step.c", "fmu/src/core/rigid_body.c", "fmu/src/core/regressor_identifier.c")
+SOURCES = ("bench/robot_step.c", "fmu/src/core/rigid_body.c", "fmu/src/core/regressor_identifier.c",
+           "fmu/src/core/statistics_job.c")  # statistics_job.c: since dd0ff2f
 HEADERS = ("fmu/src/core/rigid_body.h", "fmu/src/core/regressor_identifier.h",
-           "fmu/src/core/cholesky.h")  # cholesky.h: since 1e4f058
+           "fmu/src/core/cholesky.h", "fmu/src/core/statistics_job.h")  # cholesky.h: 1e4f058
 FMU_DESCRIPTION = REPO / "fmu/robot/modelDescription.xml"
 FMU_DRIVER = "bench/robot_fmu_step.c"
 FMU_H = 1e-4        # [s] the sampling period: 10 kHz
 FMU_T_ID = 0.02     # [s] the identifier starts here ...
 FMU_WARMUP = 500    # ... before these doSteps of H = h end (0.05 s)
+FMU_STATISTICS_INTERVAL = 0.1  # [s] the FMU's default statistics_interval
 
 
 def fmu_sources() -> tuple[tuple[str, ...], tuple[str, ...]]:
@@ -111,15 +113,15 @@ def build(binary: Path, revision: str | None, fmu: bool = False) -> None:
         for name in [s for s in sources if s != FMU_DRIVER] + list(headers):
             shown = subprocess.run(["git", "-C", str(REPO), "show", f"{revision}:{name}"],
                                    capture_output=True)
-            if shown.returncode != 0 and name in headers:
-                continue  # a header the revision did not have yet
-            shown.check_returncode()
+            if shown.returncode != 0:
+                continue  # a file the revision did not have yet (statistics_job.c: dd0ff2f)
             (root / name).parent.mkdir(parents=True, exist_ok=True)
             (root / name).write_bytes(shown.stdout)
     includes = ([f"-I{fmi_include()}", f"-I{root / 'fmu/src/instance'}"] if fmu
                 else [f"-I{root / 'fmu/src/core'}"])
     subprocess.run(["gcc", *CFLAGS, *includes, "-o", str(binary),
-                    *(str(root / name) for name in sources), "-lm"], check=True)
+                    *(str(root / name) for name in sources if (root / name).exists()), "-lm"],
+                   check=True)
 
 
 def instructions(binary: Path, model: Path, tmp: str, steps: int = 2000) -> float:
@@ -175,7 +177,7 @@ def fmu_run(binary: Path, files: tuple[Path, Path, int, int], steps: int, calls:
         command = ["valgrind", "--tool=callgrind", "--toggle-collect=fmi2DoStep",
                    f"--callgrind-out-file={callgrind}", *command]
     run = subprocess.run(command, capture_output=True, text=True)
-    line = run.stdout.strip()
+    line, _, watched = run.stdout.strip().partition("\n")
     expected = f"n={files[2]} base_count={files[3]}"
     if run.returncode != 0 or "status=0 identifier_active=1" not in line or \
             not line.endswith(expected):
@@ -185,6 +187,9 @@ def fmu_run(binary: Path, files: tuple[Path, Path, int, int], steps: int, calls:
               for key, name in (("ns", "ns_per_step"), ("slowest", "slowest_call_ns"))}
     if callgrind:
         result["instructions"] = float(re.search(r"Collected : (\d+)", run.stderr).group(1))
+    started = re.search(r"identifier_started=(-?\d+) statistics_published=([\d,]*)", watched)
+    result["started"] = int(started.group(1))
+    result["published"] = [int(x) for x in started.group(2).split(",") if x]
     return result
 
 
@@ -210,6 +215,18 @@ def per_call_instructions(binary: Path, files: tuple[Path, Path, int, int], call
     return counts[FMU_WARMUP:]
 
 
+def statistics_lag(run: dict, interval: int) -> str:
+    """Steps from each snapshot of the solve with statistics to its publication, at H = h:
+    the first snapshot is taken in the identifier's first step, the next every `interval`
+    steps while each job is done within the interval (the lag is then the publication's
+    step after the identifier's start, modulo the interval; a publication that changes
+    nothing, as before any equation entered the regression, is not seen)."""
+    after = [c - run["started"] for c in run["published"]]
+    return (f"statistics published {', '.join(map(str, after))} steps after the "
+            f"identifier's start: {', '.join(str(a % interval) for a in after)} steps after "
+            f"their snapshots if each job took less than the interval ({interval} steps)")
+
+
 def distribution(counts: np.ndarray) -> str:
     """The per-doStep instructions: maximum, high percentiles, median, mean."""
     p50, p99, p999 = np.percentile(counts, [50, 99, 99.9])
@@ -227,6 +244,7 @@ def fmu_cost(args, binaries: dict[str, Path], tmp: Path) -> None:
         files = fmu_files(name, tmp, FMU_WARMUP + max(args.steps, 2 * count),
                           args.statistics_interval, args.sample_period)
         n, p = files[2:]
+        files_h = args.sample_period
         # H, (STEPS, CALLS) of a run measuring m times `count` steps, and of the timed runs
         # (--steps internal steps each)
         cases = (("h", lambda m: (1, m * count), (1, args.steps)),
@@ -241,6 +259,10 @@ def fmu_cost(args, binaries: dict[str, Path], tmp: Path) -> None:
                                for key in ("ns", "slowest"))
                 line = (f"{name} ({label}): n = {n}, p = {p}, H = {H}: {ns:.2f} us per step, "
                         f"slowest doStep {slowest:.0f} us")
+                if H == "h":
+                    interval = args.statistics_interval
+                    interval = FMU_STATISTICS_INTERVAL if interval is None else interval
+                    line += f"; {statistics_lag(runs[label][0], round(interval / files_h))}"
                 if args.callgrind and shutil.which("valgrind"):
                     case = f"{name}-{label}-H={H.replace(' ', '')}"
                     out = f"{args.keep or tmp}/callgrind.out.{case}"
