@@ -54,10 +54,17 @@ def test_the_fmu_runs_the_offline_path_exactly(case):
     np.testing.assert_allclose(result["base_std"], published["std_error"], rtol=1e-12)
     assert result["gamma_trace"] == pytest.approx(published["gamma_trace"], rel=1e-12)
     assert result["excitation"] == pytest.approx(published["excitation"], rel=1e-12)
-    # a few samples behind the full solve at the end
-    np.testing.assert_allclose(published["std_error"], offline["std_error"], rtol=0.01)
-    np.testing.assert_allclose(published["delta"], offline["delta"],
-                               atol=0.01 * np.max(offline["std_error"]))
+    # which is the full solve at a snapshot a few samples before the end (here the
+    # statistics change by up to 2.4 % a sample)
+    body = read_urdf(example_urdf("double_pendulum")[0]).rigid_body(
+        link=parameters["link"], friction=np.zeros((2, 2)))
+    identify = {"columns": parameters["base_columns"], "kind": "lsm", "rho": parameters["rho"],
+                "start": 200, "torque_scale": parameters["torque_scale"]}
+    lags = [lag for lag in range(1, 6)
+            if np.allclose(body.observe(log.q[:-lag], log.u[:-lag], H, F_PLUS,
+                                        identify=identify)["std_error"],
+                           published["std_error"], rtol=1e-12, atol=0)]
+    assert len(lags) == 1, lags
     # and it observes: RMS 0.009 and 0.013 rad/s with the friction unknown to the model
     error = result["velocity"][200:-1] - qd[201:]
     assert np.all(np.sqrt(np.mean(error ** 2, axis=0)) < 0.02)

@@ -171,10 +171,14 @@ int sj_advance(StatisticsJob *job, double budget)
     return 0;
 }
 
-int sj_step(StatisticsJob *job, const RegressorIdentifier *id)
+int sj_step(StatisticsJob *job)
 {
     job->since += 1.0;
     job->age += 1.0;
-    if (job->stage == SJ_IDLE && job->since >= job->interval) sj_start(job, id);
     return sj_advance(job, job->budget);
+}
+
+void sj_schedule(StatisticsJob *job, const RegressorIdentifier *id)
+{
+    if (job->stage == SJ_IDLE && job->since >= job->interval) sj_start(job, id);
 }

@@ -4,8 +4,9 @@
  * that no step of a hard real-time loop carries its O(p^3) work at once.
  *
  * A job starts from a snapshot of P (upper triangle), b and S (the scores'
- * outer products) taken after an identifier step, at most every `interval`
- * internal steps; each later step does units of work (a column of the Cholesky
+ * outer products) taken at a communication point (sj_schedule), at least
+ * `interval` internal steps after the last and when no job runs; each later
+ * internal step (sj_step) does units of work (a column of the Cholesky
  * factor, a solve, a sandwich row, an inverse iteration) up to `budget`
  * multiply-adds; the results are published when the job completes.  Every unit
  * is the arithmetic of rri_solve and rri_statistics, in their order: the
@@ -61,7 +62,7 @@ typedef struct {
 
 /* p the identifier's parameters; interval >= 0 internal steps between
  * snapshots (0: a job as soon as the last completes); budget > 0.  The first
- * snapshot is taken at the first sj_step. */
+ * snapshot is taken at the first sj_schedule. */
 void sj_init(StatisticsJob *job, int p, double interval, double budget);
 
 /* Internal steps of h in an interval of `seconds` >= 0 (rounded up, a few ulp of
@@ -72,15 +73,22 @@ double sj_interval_steps(double seconds, double h);
  * or the last completed job's if its snapshot is more recent. */
 const double *sj_freshest_estimate(const StatisticsJob *job, const RegressorIdentifier *id);
 
-/* The identifier was reset: the running job is dropped, the next sj_step takes
- * a snapshot; the last results stay (until a job completes). */
+/* The identifier was reset: the running job is dropped, the next sj_schedule
+ * takes a snapshot; the last results stay (until a job completes), its estimate
+ * no longer counts as fresher than the identifier's running solution. */
 void sj_reset(StatisticsJob *job);
 
-/* After an identifier step (rri_step): a snapshot when one is due and no job
- * runs, then a slice of the job.  Returns 1 if a job completed in this step. */
-int sj_step(StatisticsJob *job, const RegressorIdentifier *id);
+/* An internal step (after rri_step): a slice of the running job.  Returns 1 if
+ * the job completed in this step. */
+int sj_step(StatisticsJob *job);
 
-/* The snapshot (what sj_step takes): copies P, b, S and the settings. */
+/* At a communication point: a snapshot (sj_start) if one is due and no job runs.
+ * At most one job per communication step: at H = h one every `interval` steps, in
+ * a long communication step one per step, as the solve at communication points
+ * was. */
+void sj_schedule(StatisticsJob *job, const RegressorIdentifier *id);
+
+/* The snapshot (what sj_schedule takes): copies P, b, S and the settings. */
 void sj_start(StatisticsJob *job, const RegressorIdentifier *id);
 
 /* Units of the running job up to `budget` multiply-adds (one unit at least).

@@ -9,8 +9,9 @@
  * held over each communication step.  Each internal step: the observer's
  * corrector, the forward dynamics at the corrected state, and (identifier on)
  * the regressor, one identifier step and a slice of the solve with standard
- * errors (statistics_job.h: a snapshot every statistics_interval seconds, its
- * O(p^3) work spread over the following internal steps).  At communication
+ * errors (statistics_job.h: a snapshot at a communication point at least
+ * statistics_interval seconds after the last, its O(p^3) work spread over the
+ * following internal steps).  At communication
  * points: the estimates (the fresher of the identifier's running solution and
  * the last completed solve) and the last completed solve's statistics.
  * Value references are stable and documented in docs/robots.md. */
@@ -405,7 +406,7 @@ static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
         if (d->identifier)
             ro_regression_step(&d->regression, &d->model, &d->obs, d->q, d->u,
                                d->identifier_active ? &d->id : NULL);
-        if (d->identifier_active) sj_step(&d->statistics, &d->id);
+        if (d->identifier_active) sj_step(&d->statistics);
     }
 }
 
@@ -414,6 +415,7 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
     RobotData *d = data;
     ro_outputs(&d->obs);
     publish_estimates(d);
+    if (d->identifier_active) sj_schedule(&d->statistics, &d->id); /* the next solve's */
     if (d->obs.model_failures > d->failures_seen) {
         d->failures_seen = d->obs.model_failures;
         log->log(log->context, MODEL_ERROR,

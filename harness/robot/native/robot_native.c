@@ -224,8 +224,10 @@ long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, long count, do
         if (kind && k == start) ro_regression_restart(&run->regression);
         ro_regression_step(&run->regression, model, &run->observer, y + k * n, u + k * n,
                            kind && k >= start ? &run->identifier : NULL);
-        if (kind && k >= start) sj_step(&run->statistics, &run->identifier);
+        if (kind && k >= start) sj_step(&run->statistics);
         ro_outputs(&run->observer);
+        /* the FMU's communication point after the sample (doStep(t_k, h)) */
+        if (kind && k >= start) sj_schedule(&run->statistics, &run->identifier);
         for (int i = 0; i < n; ++i) {
             velocity[k * n + i] = ro_velocity(&run->observer, i);
             prediction[k * n + i] = run->observer.x2_hat[i];

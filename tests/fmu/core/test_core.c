@@ -645,11 +645,12 @@ static int statistics_job_equals_full_solve(void)
                 z[i] = 0.1 * uniform_random(&state);
             }
             rri_step(&id, z, &Y);
-            const int done = sj_step(&job, &id);
-            if (job.since == 0.0) snapshot = id; /* sj_step took its snapshot here */
+            const int done = sj_step(&job);
+            sj_schedule(&job, &id); /* a communication point after every step */
+            if (job.since == 0.0) snapshot = id; /* sj_schedule took its snapshot here */
             if (!done) continue;
             ++jobs;
-            sliced += job.age > 0.0;
+            sliced += job.age > 1.0;
             if (rri_solve(&snapshot) != 0) return 1;
             rri_statistics(&snapshot);
             for (int k = 0; k < p; ++k) {
