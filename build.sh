@@ -41,7 +41,7 @@ MODELS=(
     "SuperTwistingObserver|models/observer.c|core/super_twisting.c core/implicit_twisting.c core/noise_adaptive.c core/identifier.c core/information_identifier.c core/block_scores.c core/gains.c|fmu/modelDescription.xml"
     "Pendulum|models/pendulum.c||fmu/bench/Pendulum/modelDescription.xml"
     "TwistingController|models/twisting_controller.c||fmu/bench/TwistingController/modelDescription.xml"
-    "RobotObserver|models/robot_observer.c|core/robot_observer.c core/rigid_body.c core/regressor_identifier.c core/gains.c|fmu/robot/modelDescription.xml"
+    "RobotObserver|models/robot_observer.c|core/robot_observer.c core/rigid_body.c core/regressor_identifier.c core/statistics_job.c core/gains.c|fmu/robot/modelDescription.xml"
 )
 
 # Sources of one FMU, relative to fmu/src: the API file, the instance core, the model

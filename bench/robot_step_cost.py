@@ -28,7 +28,9 @@ the observer with the forward dynamics, the regression, the identifier, the outp
 and every statistics_interval = 0.1 s a solve with standard errors: the slowest doStep)
 and of doSteps of H = 2000 h (the inputs held over each).  Instructions: callgrind
 --toggle-collect=fmi2DoStep, the difference of runs with 1x and 2x the measured steps,
-divided by the steps.  With --against, the revision's FMU sources with this checkout's
+divided by the steps; at H = h also the distribution of the instructions per doStep
+over 2000 doSteps (callgrind --dump-after=fmi2DoStep: one profile per call), with the
+maximum: the doStep that a hard real-time loop must fit in its period.  With --against, the revision's FMU sources with this checkout's
 driver (the model description's source list is this checkout's)."""
 from __future__ import annotations
 
@@ -73,9 +75,11 @@ def model_file(name: str, path: Path) -> int:
     return base.count
 
 
-SOURCES = ("bench/robot_step.c", "fmu/src/core/rigid_body.c", "fmu/src/core/regressor_identifier.c")
+SOURCES = ("bench/robot_step.c", "fmu/src/core/rigid_body.c", "fmu/src/core/regressor_identifier.c",
+           "fmu/src/core/statistics_job.c")  # statistics_job.c: since dd0ff2f
 HEADERS = ("fmu/src/core/rigid_body.h", "fmu/src/core/regressor_identifier.h",
            "fmu/src/core/cholesky.h",   # since 1e4f058
+           "fmu/src/core/statistics_job.h",  # since dd0ff2f
            "fmu/src/core/leave_out.h")  # since MFF's leave-out rule in the regressor form
 STEP_DRIVER = "bench/robot_step.c"
 FMU_DESCRIPTION = REPO / "fmu/robot/modelDescription.xml"
@@ -83,6 +87,7 @@ FMU_DRIVER = "bench/robot_fmu_step.c"
 FMU_H = 1e-4        # [s] the sampling period: 10 kHz
 FMU_T_ID = 0.02     # [s] the identifier starts here ...
 FMU_WARMUP = 500    # ... before these doSteps of H = h end (0.05 s)
+FMU_STATISTICS_INTERVAL = 0.1  # [s] the FMU's default statistics_interval
 
 
 def fmu_sources() -> tuple[tuple[str, ...], tuple[str, ...]]:
@@ -114,15 +119,15 @@ def build(binary: Path, revision: str | None, fmu: bool = False) -> None:
         for name in [s for s in sources if s != driver_name] + list(headers):
             shown = subprocess.run(["git", "-C", str(REPO), "show", f"{revision}:{name}"],
                                    capture_output=True)
-            if shown.returncode != 0 and name in headers:
-                continue  # a header the revision did not have yet
-            shown.check_returncode()
+            if shown.returncode != 0:
+                continue  # a file the revision did not have yet (statistics_job.c: dd0ff2f)
             (root / name).parent.mkdir(parents=True, exist_ok=True)
             (root / name).write_bytes(shown.stdout)
     includes = ([f"-I{fmi_include()}", f"-I{root / 'fmu/src/instance'}"] if fmu
                 else [f"-I{root / 'fmu/src/core'}"])
     subprocess.run(["gcc", *CFLAGS, *includes, "-o", str(binary),
-                    *(str(root / name) for name in sources), "-lm"], check=True)
+                    *(str(root / name) for name in sources if (root / name).exists()), "-lm"],
+                   check=True)
 
 
 def instructions(binary: Path, model: Path, tmp: str, steps: int = 2000,
@@ -180,7 +185,7 @@ def fmu_run(binary: Path, files: tuple[Path, Path, int, int], steps: int, calls:
         command = ["valgrind", "--tool=callgrind", "--toggle-collect=fmi2DoStep",
                    f"--callgrind-out-file={callgrind}", *command]
     run = subprocess.run(command, capture_output=True, text=True)
-    line = run.stdout.strip()
+    line, _, watched = run.stdout.strip().partition("\n")
     expected = f"n={files[2]} base_count={files[3]}"
     if run.returncode != 0 or "status=0 identifier_active=1" not in line or \
             not line.endswith(expected):
@@ -190,7 +195,51 @@ def fmu_run(binary: Path, files: tuple[Path, Path, int, int], steps: int, calls:
               for key, name in (("ns", "ns_per_step"), ("slowest", "slowest_call_ns"))}
     if callgrind:
         result["instructions"] = float(re.search(r"Collected : (\d+)", run.stderr).group(1))
+    started = re.search(r"identifier_started=(-?\d+) statistics_published=([\d,]*)", watched)
+    result["started"] = int(started.group(1))
+    result["published"] = [int(x) for x in started.group(2).split(",") if x]
     return result
+
+
+def per_call_instructions(binary: Path, files: tuple[Path, Path, int, int], calls: int,
+                          directory: Path) -> np.ndarray:
+    """Instructions of each of `calls` doSteps of H = h (after the warm-up): callgrind
+    --dump-after=fmi2DoStep writes one profile per call, whose total is that call's count
+    (collected in fmi2DoStep only)."""
+    directory.mkdir(parents=True, exist_ok=True)
+    out = directory / "cg.out"
+    command = ["valgrind", "--tool=callgrind", "--toggle-collect=fmi2DoStep",
+               "--dump-after=fmi2DoStep", f"--callgrind-out-file={out}", str(binary),
+               *map(str, files[:2]), str(FMU_WARMUP), "1", str(calls)]
+    run = subprocess.run(command, capture_output=True, text=True)
+    if run.returncode != 0 or "identifier_active=1" not in run.stdout:
+        raise RuntimeError(f"{' '.join(command)}: failed or not identifying: {run.stdout!r}")
+    dumps = sorted(directory.glob("cg.out.*"), key=lambda f: int(f.suffix[1:]))
+    counts = np.array([int(re.search(r"^totals: (\d+)", f.read_text(), re.M).group(1))
+                       for f in dumps], dtype=float)
+    shutil.rmtree(directory)
+    if len(counts) != FMU_WARMUP + calls:
+        raise RuntimeError(f"{len(counts)} profiles for {FMU_WARMUP + calls} doSteps")
+    return counts[FMU_WARMUP:]
+
+
+def statistics_lag(run: dict, interval: int) -> str:
+    """Steps from each snapshot of the solve with statistics to its publication, at H = h:
+    the first snapshot is taken in the identifier's first step, the next every `interval`
+    steps while each job is done within the interval (the lag is then the publication's
+    step after the identifier's start, modulo the interval; a publication that changes
+    nothing, as before any equation entered the regression, is not seen)."""
+    after = [c - run["started"] for c in run["published"]]
+    return (f"statistics published {', '.join(map(str, after))} steps after the "
+            f"identifier's start: {', '.join(str(a % interval) for a in after)} steps after "
+            f"their snapshots if each job took less than the interval ({interval} steps)")
+
+
+def distribution(counts: np.ndarray) -> str:
+    """The per-doStep instructions: maximum, high percentiles, median, mean."""
+    p50, p99, p999 = np.percentile(counts, [50, 99, 99.9])
+    return (f"per doStep: max {counts.max():.0f} (call {int(np.argmax(counts))}), "
+            f"99.9 % {p999:.0f}, 99 % {p99:.0f}, median {p50:.0f}, mean {counts.mean():.0f}")
 
 
 def fmu_cost(args, binaries: dict[str, Path], tmp: Path) -> None:
@@ -203,6 +252,7 @@ def fmu_cost(args, binaries: dict[str, Path], tmp: Path) -> None:
         files = fmu_files(name, tmp, FMU_WARMUP + max(args.steps, 2 * count),
                           args.statistics_interval, args.sample_period, args.identifier)
         n, p = files[2:]
+        files_h = args.sample_period
         # H, (STEPS, CALLS) of a run measuring m times `count` steps, and of the timed runs
         # (--steps internal steps each)
         cases = (("h", lambda m: (1, m * count), (1, args.steps)),
@@ -217,12 +267,20 @@ def fmu_cost(args, binaries: dict[str, Path], tmp: Path) -> None:
                                for key in ("ns", "slowest"))
                 line = (f"{name} ({label}): n = {n}, p = {p}, H = {H}: {ns:.2f} us per step, "
                         f"slowest doStep {slowest:.0f} us")
+                if H == "h":
+                    interval = args.statistics_interval
+                    interval = FMU_STATISTICS_INTERVAL if interval is None else interval
+                    line += f"; {statistics_lag(runs[label][0], round(interval / files_h))}"
                 if args.callgrind and shutil.which("valgrind"):
                     case = f"{name}-{label}-H={H.replace(' ', '')}"
                     out = f"{args.keep or tmp}/callgrind.out.{case}"
                     counts = [fmu_run(binary, files, *measured(m), f"{out}-{m}x")
                               ["instructions"] for m in (1, 2)]
                     line += f", {(counts[1] - counts[0]) / count:.0f} instructions per step"
+                    if H == "h":
+                        per_call = per_call_instructions(binary, files, count,
+                                                         tmp / f"dumps-{case}")
+                        line += f"; {distribution(per_call)}"
                 print(line, flush=True)
 
 

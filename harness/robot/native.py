@@ -21,13 +21,14 @@ HERE = Path(__file__).resolve().parent
 CHECKOUT_CORE = HERE.parents[1] / "fmu" / "src" / "core"
 # the checkout's sources win, so that an edit is compiled without rebuilding the package
 CORE = CHECKOUT_CORE if CHECKOUT_CORE.is_dir() else HERE / "core"
-CORE_SOURCES = ("rigid_body.c", "regressor_identifier.c", "robot_observer.c", "super_twisting.c",
-                "implicit_twisting.c", "noise_adaptive.c", "gains.c")
+CORE_SOURCES = ("rigid_body.c", "regressor_identifier.c", "statistics_job.c", "robot_observer.c",
+                "super_twisting.c", "implicit_twisting.c", "noise_adaptive.c", "gains.c")
 WRAPPER = HERE / "native" / "robot_native.c"
 # the online regression's rule of the joint equations left out (robot_observer.h's
 # RO_MIN_SPEED and RO_REVERSAL_MARGIN): the FMU's defaults
 MIN_SPEED = 0.05        # [rad/s or m/s]
 REVERSAL_MARGIN = 0.02  # [s]
+STATISTICS_INTERVAL = 0.1  # [s] the FMU's default statistics_interval
 _double_p = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
 _int_p = np.ctypeslib.ndpointer(dtype=np.int32, flags="C_CONTIGUOUS")
 
@@ -70,7 +71,8 @@ def load() -> ctypes.CDLL:
         ctypes.c_void_p, ctypes.c_void_p, count, ctypes.c_double, _double_p, _double_p, _double_p,
         ctypes.c_double, _double_p, _double_p, _double_p, _double_p, ctypes.c_int, ctypes.c_int,
         _int_p, _double_p, ctypes.c_double, ctypes.c_double, ctypes.c_double, ctypes.c_double,
-        count, _double_p, _double_p, _double_p, _double_p, _double_p]
+        count, ctypes.c_double, _double_p, _double_p, _double_p, _double_p, _double_p,
+        _double_p]
     return dll
 
 
@@ -214,7 +216,11 @@ class RigidBody:
         {"columns", "kind" ("lsm"/"mff"), "rho", "R", "torque_scale", "start" (sample
         index), "min_speed", "reversal_margin"} the online identifier runs too, adding
         "delta" (base parameters minus the nominal ones), "std_error", "gamma_trace" and
-        "excitation" at the end.  Joint i's equation weighs 0 where |q_i'| < min_speed
+        "excitation" at the end, and "published": what the FMU publishes after the last
+        sample (identify's "statistics_interval", default STATISTICS_INTERVAL: the
+        solves with standard errors spread over the samples after each snapshot,
+        fmu/src/core/statistics_job.h) as {"delta", "std_error", "gamma_trace",
+        "excitation"}.  Joint i's equation weighs 0 where |q_i'| < min_speed
         (rad/s or m/s, default MIN_SPEED), where q_i' reverses, and for reversal_margin
         seconds after (default REVERSAL_MARGIN); both 0: every equation is used."""
         dll = load()
@@ -230,13 +236,15 @@ class RigidBody:
         scale = options.get("torque_scale")
         scale = np.ascontiguousarray(np.ones(self.n) if scale is None else scale, dtype=float)
         delta, std, stats = np.zeros(len(columns)), np.zeros(len(columns)), np.zeros(2)
+        published = np.zeros(2 * len(columns) + 2)
         kind = {"lsm": 1, "mff": 2}[options.get("kind", "lsm")] if identify else 0
         run = ctypes.create_string_buffer(dll.rn_robot_run_size())
         failures = dll.rn_robot_observe(
             self._buffer, run, len(q), h, *gains, tau, q, u, velocity, prediction, kind,
             len(columns), columns, scale, options.get("rho", 1e-6), options.get("R", 0.1),
-            *rule, int(options.get("start", 0)), delta, std, stats, weight,
-            acceleration)
+            *rule, int(options.get("start", 0)),
+            float(options.get("statistics_interval", STATISTICS_INTERVAL)), delta, std, stats,
+            published, weight, acceleration)
         if failures == -2:
             raise ValueError(f"no observer gains for f_plus {gains[2].tolist()}")
         if failures == -3:
@@ -251,7 +259,11 @@ class RigidBody:
         result = {"velocity": velocity, "prediction": prediction, "model_failures": failures,
                   "weight": weight, "acceleration": acceleration}
         if identify:
-            result.update(delta=delta, std_error=std, gamma_trace=stats[0], excitation=stats[1])
+            p = len(columns)
+            result.update(delta=delta, std_error=std, gamma_trace=stats[0], excitation=stats[1],
+                          published={"delta": published[:p], "std_error": published[p:2 * p],
+                                     "gamma_trace": published[2 * p],
+                                     "excitation": published[2 * p + 1]})
         return result
 
     def regressor(self, q, qd, qdd) -> np.ndarray:

@@ -30,6 +30,8 @@ CASES = [
     "theorem_gains",                             # condition (6) by hand
     "coulomb_level_learned",                     # reversals: the Coulomb level learned
     "mean_sign_of_a_reversal",                   # the Coulomb regressor around a sample
+    "statistics_job_equals_full_solve",          # sliced solve = rri_statistics at the snapshot
+    "anchor_solve_spread",                       # the anchor = rri_solve at its snapshot
 ]
 
 

@@ -34,7 +34,8 @@ def case():
     offline = robot.rigid_body(link=link, friction=np.zeros((2, 2))).observe(
         q, tau, H, F_PLUS, identify={"columns": parameters["base_columns"], "kind": "lsm",
                                      "rho": parameters["rho"], "start": 200,
-                                     "torque_scale": parameters["torque_scale"]})
+                                     "torque_scale": parameters["torque_scale"],
+                                     "statistics_interval": 0.0})  # run_fmu's
     return JointLog(t, q, tau), qd, parameters, offline
 
 
@@ -45,9 +46,25 @@ def test_the_fmu_runs_the_offline_path_exactly(case):
     np.testing.assert_allclose(result["velocity"], offline["prediction"], rtol=0, atol=1e-12)
     np.testing.assert_allclose(result["velocity_sample"], offline["velocity"], rtol=0,
                                atol=1e-12)
+    # what it publishes after the last sample: the same schedule of the solves with
+    # standard errors (each spread over the samples after its snapshot)
+    published = offline["published"]
     np.testing.assert_allclose(result["base_estimate"],
-                               parameters["base_nominal"] + offline["delta"], atol=1e-12)
-    np.testing.assert_allclose(result["base_std"], offline["std_error"], rtol=1e-9)
+                               parameters["base_nominal"] + published["delta"], atol=1e-12)
+    np.testing.assert_allclose(result["base_std"], published["std_error"], rtol=1e-12)
+    assert result["gamma_trace"] == pytest.approx(published["gamma_trace"], rel=1e-12)
+    assert result["excitation"] == pytest.approx(published["excitation"], rel=1e-12)
+    # which is the full solve at a snapshot a few samples before the end (here the
+    # statistics change by up to 2.4 % a sample)
+    body = read_urdf(example_urdf("double_pendulum")[0]).rigid_body(
+        link=parameters["link"], friction=np.zeros((2, 2)))
+    identify = {"columns": parameters["base_columns"], "kind": "lsm", "rho": parameters["rho"],
+                "start": 200, "torque_scale": parameters["torque_scale"]}
+    lags = [lag for lag in range(1, 6)
+            if np.allclose(body.observe(log.q[:-lag], log.u[:-lag], H, F_PLUS,
+                                        identify=identify)["std_error"],
+                           published["std_error"], rtol=1e-12, atol=0)]
+    assert len(lags) == 1, lags
     # and it observes: RMS 0.009 and 0.013 rad/s with the friction unknown to the model
     error = result["velocity"][200:-1] - qd[201:]
     assert np.all(np.sqrt(np.mean(error ** 2, axis=0)) < 0.02)
@@ -60,15 +77,17 @@ def test_the_rule_of_left_out_equations_reaches_the_fmu(case):
     rule = {"min_speed": 0.3, "reversal_margin": 0.05}
     changed = {**parameters, **rule}
     identify = {"columns": parameters["base_columns"], "kind": "lsm", "rho": parameters["rho"],
-                "start": 200, "torque_scale": parameters["torque_scale"], **rule}
+                "start": 200, "torque_scale": parameters["torque_scale"],
+                "statistics_interval": 0.0, **rule}
     link, n = parameters["link"], parameters["n"]
     path, _ = example_urdf("double_pendulum")
     model = read_urdf(path).rigid_body(link=link, friction=np.zeros((n, 2)))
     expected = model.observe(log.q, log.u, H, F_PLUS, identify=identify)
     result = run_fmu(fmu_path("RobotObserver"), changed, log)
     np.testing.assert_allclose(result["base_estimate"],
-                               parameters["base_nominal"] + expected["delta"], atol=1e-12)
-    assert np.max(np.abs(expected["delta"] - offline["delta"])) > 1e-6
+                               parameters["base_nominal"] + expected["published"]["delta"],
+                               atol=1e-12)
+    assert np.max(np.abs(expected["published"]["delta"] - offline["published"]["delta"])) > 1e-6
 
 
 def _fmi3_run(fmu: RawFMU3, parameters: dict, log: JointLog, steps: int) -> list[float]:

@@ -4,6 +4,9 @@
 #include <string.h>
 
 #include "cholesky.h"
+#include "statistics_job.h"
+
+static void anchor_snapshot(RegressorIdentifier *id);
 
 int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int columns[],
              const double torque_scale[], double h, double rho, double R)
@@ -74,7 +77,8 @@ void rri_reset(RegressorIdentifier *id)
         id->reference_inverse[k] = 1.0 / id->rho;
     }
     id->gap_time = 0.0;
-    id->anchor_age = id->batch_age = 0;
+    id->batch_age = 0;
+    anchor_snapshot(id);
     id->active_time = 0.0;
     id->gamma_trace = id->p / id->rho;
     id->excitation = 0.0;
@@ -92,11 +96,61 @@ static void solve(const RegressorIdentifier *id, double x[])
     cholesky_solve(&id->factor[0][0], id->p, RRI_MAX_PARAMETERS, x);
 }
 
-static void solve_anchor(RegressorIdentifier *id)
+/* The anchor's next solve starts from the state after this sample. */
+static void anchor_snapshot(RegressorIdentifier *id)
 {
-    if (factorize(id) != 0) return;
-    memcpy(id->anchor, id->b, sizeof id->b);
-    solve(id, id->anchor);
+    const int p = id->p;
+    for (int j = 0; j < p; ++j)
+        memcpy(&id->anchor_factor[j][j], &id->P[j][j], (size_t)(p - j) * sizeof(double));
+    memcpy(id->anchor_solution, id->b, (size_t)p * sizeof(double));
+    id->anchor_age = 0;
+    id->anchor_unit = id->anchor_failed = 0;
+    id->anchor_work = 0.0;
+}
+
+/* Multiply-adds of the anchor solve's unit u, and of the whole solve. */
+static double anchor_unit_cost(int p, int u)
+{
+    return u < p ? (u + 1.0) * (double)(p - u) : 0.5 * p * p;
+}
+
+static double anchor_total_cost(int p)
+{
+    return p * (p + 1.0) * (p + 2.0) / 6.0 + (double)p * p;
+}
+
+/* After anchor_age samples of the interval, the units whose work fits in that
+ * share of the whole; at the end of the interval the rest, the solution becomes
+ * the anchor (kept if P was not positive definite) and the next snapshot is taken. */
+static void anchor_slice(RegressorIdentifier *id)
+{
+    const int p = id->p;
+    double *L = &id->anchor_factor[0][0];
+    const int last = id->anchor_age >= RRI_ANCHOR_INTERVAL;
+    const double share = id->anchor_age * anchor_total_cost(p) / RRI_ANCHOR_INTERVAL;
+    while (id->anchor_unit < p + 2) {
+        const int u = id->anchor_unit;
+        const double cost = anchor_unit_cost(p, u);
+        if (!last && id->anchor_work + cost > share) break;
+        if (u < p) {
+            if (cholesky_factor_column(L, L, p, RRI_MAX_PARAMETERS, u) != 0) {
+                id->anchor_failed = 1;
+                id->anchor_unit = p + 2;
+                break;
+            }
+        } else if (u == p) {
+            cholesky_forward(L, p, RRI_MAX_PARAMETERS, id->anchor_solution);
+        } else {
+            cholesky_backward(L, p, RRI_MAX_PARAMETERS, id->anchor_solution);
+        }
+        id->anchor_work += cost;
+        ++id->anchor_unit;
+    }
+    if (!last) return;
+    if (!id->anchor_failed) memcpy(id->anchor, id->anchor_solution, (size_t)p * sizeof(double));
+    /* MFF's leave-out rule reads Pref's diagonal as refreshed with the anchor */
+    for (int k = 0; k < p; ++k) id->reference_inverse[k] = 1.0 / id->reference[k];
+    anchor_snapshot(id);
 }
 
 /* MFF's leave-out rule (regressor_identifier.h): adds the sample's inflow to the
@@ -129,13 +183,6 @@ static int leave_out_rule(RegressorIdentifier *id, const RbRegressor *Y)
     return id->gap_time > id->gap_limit ? -1 : 0;
 }
 
-static void refresh_anchor(RegressorIdentifier *id, int frozen)
-{
-    if (!frozen) solve_anchor(id); /* frozen sums: the same anchor */
-    for (int k = 0; k < id->p; ++k) id->reference_inverse[k] = 1.0 / id->reference[k];
-    id->anchor_age = 0;
-}
-
 void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
 {
     const int p = id->p;
@@ -144,7 +191,8 @@ void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
     if (id->lambda < 1.0) {
         use = leave_out_rule(id, Y);
         if (use < 0) { /* a rest: nothing forgotten, nothing added, the batch stands still */
-            if (++id->anchor_age >= RRI_ANCHOR_INTERVAL) refresh_anchor(id, 1);
+            ++id->anchor_age; /* (the anchor's solve goes on, of the same sums) */
+            anchor_slice(id);
             return;
         }
         const double lambda = id->lambda, pull = id->one_minus_lambda_rho;
@@ -185,7 +233,8 @@ void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
         memset(id->score, 0, sizeof id->score);
         id->batch_age = 0;
     }
-    if (++id->anchor_age >= RRI_ANCHOR_INTERVAL) refresh_anchor(id, 0);
+    ++id->anchor_age;
+    anchor_slice(id);
 }
 
 void rri_filter_regressor(const RegressorIdentifier *id, const RbRegressor *Y,
@@ -220,27 +269,17 @@ void rri_statistics(RegressorIdentifier *id)
         g[k] = 1.0;
         solve(id, g);
         trace += g[k];
-        double variance = 0.0;
-        for (int j = 0; j < p; ++j) {
-            double row = id->score_power[j][j] * g[j];
-            for (int i = j + 1; i < p; ++i) row += 2.0 * id->score_power[j][i] * g[i];
-            variance += g[j] * row;
-        }
+        const double variance = sj_sandwich(&id->score_power[0][0], p, g);
         id->std_error[k] = sqrt(variance > 0.0 ? variance : 0.0);
     }
     id->gamma_trace = trace;
     /* smallest eigenvalue of P by inverse iteration, per unit of remembered time */
     double v[RRI_MAX_PARAMETERS], norm = 0.0;
     for (int k = 0; k < p; ++k) v[k] = 1.0 / sqrt((double)p);
-    for (int iteration = 0; iteration < 30; ++iteration) {
-        solve(id, v);
-        norm = 0.0;
-        for (int k = 0; k < p; ++k) norm += v[k] * v[k];
-        norm = sqrt(norm);
-        for (int k = 0; k < p; ++k) v[k] /= norm;
+    for (int iteration = 0; iteration < SJ_EIGEN_ITERATIONS; ++iteration) {
+        const double previous = norm;
+        norm = sj_inverse_iteration(&id->factor[0][0], p, v);
+        if (sj_eigen_converged(norm, previous)) break;
     }
-    const double rate = id->lambda < 1.0 ? -log(id->lambda) / id->h : 0.0;
-    const double memory = rate > 0.0 ? -expm1(-rate * id->active_time) / rate : id->active_time;
-    id->excitation = memory > 0.0 ? (1.0 / norm - id->rho) / memory : 0.0;
-    if (id->excitation < 0.0) id->excitation = 0.0;
+    id->excitation = sj_excitation(norm, id->rho, id->lambda, id->h, id->active_time);
 }

@@ -13,7 +13,11 @@
  *   scales (so that joints with large torques do not drown the others);
  * - stabilized forgetting toward rho I: Gamma = P^-1 <= I / rho always;
  * - Delta_hat = P^-1 b by Cholesky only when asked (rri_solve), so the
- *   internal step costs at most n p (p + 3) / 2 multiply-adds;
+ *   internal step costs at most n p (p + 3) / 2 multiply-adds, plus the
+ *   running solution (the anchor): the solve of a snapshot of P and b taken every
+ *   RRI_ANCHOR_INTERVAL samples, spread in equal shares of work over the
+ *   samples up to the next snapshot (about (p^3 / 6 + p^2) / RRI_ANCHOR_INTERVAL
+ *   multiply-adds per sample: no sample carries the whole factorization);
  * - reset back to the nominal parameters (Delta = 0, P = rho I);
  * - standard errors by the sandwich formula P^-1 S P^-1, S the (forgotten) sum
  *   of the outer products of the scores h Y^T W (z - Y Delta_anchor) summed over
@@ -52,7 +56,7 @@
 #define RRI_PARAMETERS_OF(rows) (RB_PARAMETERS_PER_JOINT * (rows)) /* full regressor's columns */
 #define RRI_BATCH_TIME 0.5       /* [s] of scores summed into one batch */
 #define RRI_MAX_BATCH_SAMPLES 1e9 /* samples in a batch at most (an int) */
-#define RRI_ANCHOR_INTERVAL 32   /* samples between re-solves of the anchor (MFF) */
+#define RRI_ANCHOR_INTERVAL 32   /* samples between snapshots of the anchor's solve */
 
 typedef struct {
     int rows, p;                 /* joints n; identified (base) parameters p */
@@ -68,7 +72,14 @@ typedef struct {
     double b[RRI_MAX_PARAMETERS];
     double delta[RRI_MAX_PARAMETERS];       /* last solved Delta_hat */
     double anchor[RRI_MAX_PARAMETERS];      /* what MFF forgets toward; the scores' estimate */
-    int anchor_age;
+    int anchor_age;              /* samples since the snapshot of the anchor's next solve */
+    /* that solve, spread over the RRI_ANCHOR_INTERVAL samples after its snapshot:
+     * P (upper triangle) then its Cholesky factor, b then the solution, the next
+     * unit (column j < p, forward solve p, backward solve p + 1) and the work done */
+    double anchor_factor[RRI_MAX_PARAMETERS][RRI_MAX_PARAMETERS];
+    double anchor_solution[RRI_MAX_PARAMETERS];
+    int anchor_unit, anchor_failed;
+    double anchor_work;
     /* scores over the current batch, and the sum of their outer products */
     double score[RRI_MAX_PARAMETERS];
     double score_power[RRI_MAX_PARAMETERS][RRI_MAX_PARAMETERS]; /* upper triangle */
@@ -114,13 +125,25 @@ void rri_filter_regressor(const RegressorIdentifier *id, const RbRegressor *Y,
 
 /* Solves Delta_hat = P^-1 b (p^3/6 multiply-adds).  Returns 0, or -1 if P is
  * not positive definite (cannot happen with rho > 0 and finite data; the
- * estimate is then kept).  Between solves, the anchor is an estimate at most
- * RRI_ANCHOR_INTERVAL samples old, which the step keeps at no extra cost per
- * step on average: what an FMU can output at every communication point. */
+ * estimate is then kept).  Between solves, the anchor is an estimate of P and b
+ * RRI_ANCHOR_INTERVAL to 2 RRI_ANCHOR_INTERVAL - 1 samples old (rri_anchor_age),
+ * which the step keeps at a bounded cost per step: what an FMU can output at
+ * every communication point. */
 int rri_solve(RegressorIdentifier *id);
 
+/* Samples since the snapshot of P and b that the anchor solves (after the first
+ * solve since the reset; before it the anchor is the reset's 0, exact). */
+static inline int rri_anchor_age(const RegressorIdentifier *id)
+{
+    return id->anchor_age + RRI_ANCHOR_INTERVAL;
+}
+
 /* After rri_solve: the standard errors, trace(Gamma) and the excitation
- * (p^3 multiply-adds: at a slower rate than the estimate). */
+ * (p^3 multiply-adds: at a slower rate than the estimate, or spread over
+ * internal steps by statistics_job.h in the same arithmetic).  The inverse
+ * iteration for the smallest eigenvalue starts from the uniform vector and
+ * stops at convergence (statistics_job.h's SJ_EIGEN_TOLERANCE), after
+ * SJ_EIGEN_ITERATIONS iterations at most. */
 void rri_statistics(RegressorIdentifier *id);
 
 #endif

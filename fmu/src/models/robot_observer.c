@@ -8,9 +8,12 @@
  * the nominal base parameters).  Inputs: joint positions q and torques u,
  * held over each communication step.  Each internal step: the observer's
  * corrector, the forward dynamics at the corrected state, and (identifier on)
- * the regressor and one identifier step.  At communication points: the
- * estimates (the identifier's running solution, or a fresh solve with the
- * standard errors every statistics_interval seconds).
+ * the regressor, one identifier step and a slice of the solve with standard
+ * errors (statistics_job.h: a snapshot at a communication point at least
+ * statistics_interval seconds after the last, its O(p^3) work spread over the
+ * following internal steps).  At communication
+ * points: the estimates (the fresher of the identifier's running solution and
+ * the last completed solve) and the last completed solve's statistics.
  * Value references are stable and documented in docs/robots.md. */
 #include <math.h>
 #include <stddef.h>
@@ -20,6 +23,7 @@
 #include "../core/regressor_identifier.h"
 #include "../core/rigid_body.h"
 #include "../core/robot_observer.h"
+#include "../core/statistics_job.h"
 #include "../instance/model_interface.h"
 
 #define MAX_N RB_MAX_JOINTS
@@ -53,9 +57,10 @@ typedef struct {
     RobotObserver obs;
     RobotRegression regression;
     RegressorIdentifier id;
+    StatisticsJob statistics;
     int reset_seen;
     double failures_seen;   /* obs.model_failures at the last communication point */
-    double last_statistics; /* time of the last solve with statistics */
+    double statistics_seen; /* statistics.completed at the last communication point */
 } RobotData;
 
 #define OFF(field) offsetof(RobotData, field)
@@ -106,9 +111,10 @@ static const ModelVariable VARIABLES[] = {
      .description = "Time at which the identifier starts (after the observer's transient)")},
     {.name = "statistics_interval", .vr = 11, .type = TYPE_REAL,
      PARAM(.offset = OFF(statistics_interval), .start = 0.1, .min = 0.0, .max = NAN, .unit = "s",
-     .description = "Least time between solves with standard errors (p^3 operations); in "
-                    "between the outputs carry the identifier's running solution; 0: at every "
-                    "communication point")},
+     .description = "Least time between the snapshots of solves with standard errors, whose "
+                    "p^3 operations are spread over the internal steps after each (published "
+                    "when complete); the estimates in between: the identifier's running "
+                    "solution; 0: a solve as soon as the last completes")},
     {.name = "coulomb_velocity", .vr = 12, .type = TYPE_REAL,
      PARAM(.offset = OFF(coulomb_velocity), .start = 0.0, .min = 0.0, .max = NAN,
      .unit = "rad/s",
@@ -198,8 +204,8 @@ static const ModelVariable VARIABLES[] = {
      .description = "Identified base parameters (base_nominal plus the identified change)")},
     {.name = "base_std", .vr = 900, .rows = MAX_P, .type = TYPE_REAL,
      OUTPUT(.offset = OFF(base_std),
-     .description = "Standard errors of base_estimate (sandwich formula, at the last solve "
-                    "with statistics)")},
+     .description = "Standard errors of base_estimate (sandwich formula, at the snapshot of "
+                    "the last completed solve with statistics)")},
     {.name = "gamma_trace", .vr = 1000, .type = TYPE_REAL,
      OUTPUT(.offset = OFF(gamma_trace), .description = "Trace of the identifier's Gamma")},
     {.name = "excitation", .vr = 1001, .type = TYPE_REAL,
@@ -316,15 +322,16 @@ static ModelStatus complete_gains(RobotData *d, const ModelLogger *log)
     return MODEL_OK;
 }
 
-static void publish_estimates(RobotData *d, int with_statistics)
+static void publish_estimates(RobotData *d)
 {
-    const double *delta = d->id.anchor; /* the running solution, at most 32 samples old */
-    if (d->identifier && with_statistics && rri_solve(&d->id) == 0) {
-        rri_statistics(&d->id);
-        delta = d->id.delta;
-        for (int k = 0; k < d->base_count; ++k) d->base_std[k] = d->id.std_error[k];
-        d->gamma_trace = d->id.gamma_trace;
-        d->excitation = d->id.excitation;
+    const StatisticsJob *job = &d->statistics;
+    /* the running solution (at most 32 samples old), or the last solve's if fresher */
+    const double *delta = sj_freshest_estimate(job, &d->id);
+    if (d->identifier && job->completed > d->statistics_seen) {
+        d->statistics_seen = job->completed;
+        for (int k = 0; k < d->base_count; ++k) d->base_std[k] = job->std_error[k];
+        d->gamma_trace = job->gamma_trace;
+        d->excitation = job->excitation;
     }
     for (int k = 0; k < d->base_count; ++k)
         d->base_estimate[k] = d->base_nominal[k] + (d->identifier ? delta[k] : 0.0);
@@ -338,6 +345,7 @@ static void publish_estimates(RobotData *d, int with_statistics)
 
 static ModelStatus initialize(void *data, double start_time, const ModelLogger *log)
 {
+    (void)start_time;
     RobotData *d = data;
     if (load_model(d, log) != MODEL_OK || complete_gains(d, log) != MODEL_OK) return MODEL_ERROR;
     if (d->identifier && check_columns(d, log) != MODEL_OK) return MODEL_ERROR;
@@ -364,8 +372,10 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     d->identifier_active = 0;
     d->reset_seen = d->identifier_reset;
     d->failures_seen = 0.0;
-    d->last_statistics = start_time;
-    publish_estimates(d, 0);
+    sj_init(&d->statistics, d->identifier ? d->base_count : 1,
+            sj_interval_steps(d->statistics_interval, d->h), SJ_BUDGET);
+    d->statistics_seen = 0.0;
+    publish_estimates(d);
     return MODEL_OK;
 }
 
@@ -383,6 +393,7 @@ static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
         d->reset_seen = d->identifier_reset;
         if (d->identifier_reset) {
             rri_reset(&d->id);
+            sj_reset(&d->statistics);
             d->identifier_active = 0;
         }
     }
@@ -395,6 +406,7 @@ static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
         if (d->identifier)
             ro_regression_step(&d->regression, &d->model, &d->obs, d->q, d->u,
                                d->identifier_active ? &d->id : NULL);
+        if (d->identifier_active) sj_step(&d->statistics);
     }
 }
 
@@ -402,9 +414,8 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
 {
     RobotData *d = data;
     ro_outputs(&d->obs);
-    const int statistics = t - d->last_statistics >= d->statistics_interval;
-    if (statistics) d->last_statistics = t;
-    publish_estimates(d, statistics && d->identifier_active);
+    publish_estimates(d);
+    if (d->identifier_active) sj_schedule(&d->statistics, &d->id); /* the next solve's */
     if (d->obs.model_failures > d->failures_seen) {
         d->failures_seen = d->obs.model_failures;
         log->log(log->context, MODEL_ERROR,
@@ -436,6 +447,14 @@ static ModelStatus check_restored(const void *data, const ModelLogger *log)
              (d->id.rows == 0 || d->id.rows == d->n) && d->id.p >= 0 && d->id.p <= columns;
     for (int k = 0; ok && k < d->id.p; ++k)
         ok = d->id.columns[k] >= 0 && d->id.columns[k] < columns;
+    ok = ok && d->id.anchor_unit >= 0 && d->id.anchor_unit <= d->id.p + 2;
+    const StatisticsJob *job = &d->statistics;
+    /* the statistics job's stage and the column or iteration within it */
+    ok = ok && job->p >= 0 && job->p <= (d->id.p > 0 ? d->id.p : 1) &&
+         job->stage >= SJ_IDLE && job->stage <= SJ_EIGEN &&
+         (job->stage == SJ_IDLE || job->stage == SJ_ESTIMATE ||
+          (job->index >= 0 && job->index < (job->stage == SJ_EIGEN ? SJ_EIGEN_ITERATIONS
+                                                                   : job->p)));
     for (int i = 0; ok && d->obs.n && i < d->n; ++i)
         ok = d->model.type[i] == RB_REVOLUTE || d->model.type[i] == RB_PRISMATIC;
     if (!ok) {

@@ -10,6 +10,7 @@
 #include "regressor_identifier.h"
 #include "robot_observer.h"
 #include "rigid_body.h"
+#include "statistics_job.h"
 #include "super_twisting.h"
 
 size_t rn_model_size(void) { return sizeof(RigidBodyModel); }
@@ -169,6 +170,7 @@ typedef struct {
     RobotObserver observer;
     RobotRegression regression;
     RegressorIdentifier identifier;
+    StatisticsJob statistics;
 } RobotRun;
 
 size_t rn_robot_run_size(void) { return sizeof(RobotRun); }
@@ -180,7 +182,12 @@ size_t rn_robot_run_size(void) { return sizeof(RobotRun); }
  * FMU's output at the next communication point).  With kind 1 or 2 the
  * identifier (columns, torque_scale, rho, R) runs from sample `start` on and
  * delta, std_error, stats = (trace of Gamma, excitation) are solved at the
- * end.  min_speed and reversal_margin: the rule of the joint equations left out
+ * end, and `published` (2 p + 2) holds what the FMU publishes after the last
+ * sample under the same schedule (statistics_job.h: a snapshot every
+ * statistics_interval seconds, its work spread over the following samples):
+ * the estimate Delta (the fresher of the running solution and the last
+ * completed solve), the standard errors, trace of Gamma and the excitation of
+ * the last completed solve (before any: 0, p / rho and 0).  min_speed and reversal_margin: the rule of the joint equations left out
  * (robot_observer.h); weight (count x n): the weight of each sample's joint
  * equations, acceleration (count x n): the observer's q'' at each sample (the
  * last sample's of both: NaN, not known yet).  Returns the number of
@@ -194,7 +201,8 @@ long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, long count, do
                       const double y[], const double u[], double velocity[], double prediction[],
                       int kind, int p, const int columns[], const double torque_scale[],
                       double rho, double R, double min_speed, double reversal_margin,
-                      long start, double delta[], double std_error[], double stats[2],
+                      long start, double statistics_interval, double delta[],
+                      double std_error[], double stats[2], double published[],
                       double weight[], double acceleration[])
 {
     const int n = model->n;
@@ -210,12 +218,16 @@ long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, long count, do
     if (kind && rri_init(&run->identifier, (RriKind)kind, n, p, columns, torque_scale, h, rho,
                          R) != 0)
         return -1;
+    if (kind) sj_init(&run->statistics, p, sj_interval_steps(statistics_interval, h), SJ_BUDGET);
     for (long k = 0; k < count; ++k) {
         ro_step(&run->observer, model, y + k * n, u + k * n);
         if (kind && k == start) ro_regression_restart(&run->regression);
         ro_regression_step(&run->regression, model, &run->observer, y + k * n, u + k * n,
                            kind && k >= start ? &run->identifier : NULL);
+        if (kind && k >= start) sj_step(&run->statistics);
         ro_outputs(&run->observer);
+        /* the FMU's communication point after the sample (doStep(t_k, h)) */
+        if (kind && k >= start) sj_schedule(&run->statistics, &run->identifier);
         for (int i = 0; i < n; ++i) {
             velocity[k * n + i] = ro_velocity(&run->observer, i);
             prediction[k * n + i] = run->observer.x2_hat[i];
@@ -227,6 +239,12 @@ long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, long count, do
         }
     }
     if (kind) {
+        const StatisticsJob *job = &run->statistics;
+        const int solved = job->completed > 0.0;
+        memcpy(published, sj_freshest_estimate(job, &run->identifier), (size_t)p * sizeof(double));
+        for (int k = 0; k < p; ++k) published[p + k] = solved ? job->std_error[k] : 0.0;
+        published[2 * p] = solved ? job->gamma_trace : p / rho;
+        published[2 * p + 1] = solved ? job->excitation : 0.0;
         if (rri_solve(&run->identifier) != 0) return -3;
         rri_statistics(&run->identifier);
         memcpy(delta, run->identifier.delta, (size_t)p * sizeof(double));

@@ -19,6 +19,7 @@
 #include "implicit_twisting.h"
 #include "information_identifier.h"
 #include "regressor_identifier.h"
+#include "statistics_job.h"
 #include "super_twisting.h"
 
 static int check(int ok, const char *format, ...)
@@ -800,6 +801,132 @@ static int mean_sign_of_a_reversal(void)
     return failures;
 }
 
+/* ---- the solve with statistics spread over internal steps ------------------------- */
+
+static double uniform_random(unsigned long *state) /* in [-1, 1) */
+{
+    *state = *state * 6364136223846793005UL + 1442695040888963407UL;
+    return (double)(*state >> 11) / 4503599627370496.0 - 1.0;
+}
+
+static double relative(double a, double b)
+{
+    const double scale = fmax(fabs(a), fabs(b));
+    return scale > 0.0 ? fabs(a - b) / scale : 0.0;
+}
+
+/* A 7-joint identifier over every column (p = 84) on random data with one weakly
+ * excited direction; a job every 700 samples with a budget of 2000 multiply-adds
+ * per step.  Each completed job must give rri_solve + rri_statistics of a copy of
+ * the identifier taken at its snapshot: Delta_hat, the standard errors and
+ * trace(Gamma) to 1e-12 (the same arithmetic: measured 0), the excitation to 1e-12
+ * of the smallest eigenvalue per remembered time (different starts of the inverse
+ * iteration, each to its convergence). */
+static int statistics_job_equals_full_solve(void)
+{
+    static RegressorIdentifier id, snapshot;
+    static StatisticsJob job;
+    int failures = 0;
+    for (int kind = RRI_LSM; kind <= RRI_MFF; ++kind) {
+        const int rows = 7, p = RRI_PARAMETERS_OF(7);
+        int columns[RRI_MAX_PARAMETERS];
+        for (int k = 0; k < p; ++k) columns[k] = k;
+        const double h = 1e-3;
+        if (rri_init(&id, (RriKind)kind, rows, p, columns, NULL, h, 1e-6, 0.5) != 0) return 1;
+        sj_init(&job, p, 700.0, 2000.0);
+        unsigned long state = 12345;
+        int jobs = 0, sliced = 0;
+        double worst = 0.0, worst_excitation = 0.0, most_iterations = 0.0;
+        double least_iterations = SJ_EIGEN_ITERATIONS;
+        for (int step = 0; step < 6000; ++step) {
+            RbRegressor Y;
+            double z[RRI_MAX_ROWS];
+            memset(&Y, 0, sizeof Y);
+            for (int i = 0; i < rows; ++i) {
+                for (int c = 0; c < p; ++c) Y.row[i][c] = uniform_random(&state);
+                Y.row[i][1] = Y.row[i][0] + 1e-3 * Y.row[i][1]; /* the weak direction */
+                z[i] = 0.1 * uniform_random(&state);
+            }
+            rri_step(&id, z, &Y);
+            const int done = sj_step(&job);
+            sj_schedule(&job, &id); /* a communication point after every step */
+            if (job.since == 0.0) snapshot = id; /* sj_schedule took its snapshot here */
+            if (!done) continue;
+            ++jobs;
+            sliced += job.age > 1.0;
+            if (rri_solve(&snapshot) != 0) return 1;
+            rri_statistics(&snapshot);
+            for (int k = 0; k < p; ++k) {
+                worst = fmax(worst, relative(job.delta[k], snapshot.delta[k]));
+                worst = fmax(worst, relative(job.std_error[k], snapshot.std_error[k]));
+            }
+            worst = fmax(worst, relative(job.gamma_trace, snapshot.gamma_trace));
+            /* the excitation is (eigenvalue - rho) / memory: relative to eigenvalue / memory */
+            const double scale = snapshot.excitation + snapshot.rho / (snapshot.active_time > 0.0
+                                                                        ? snapshot.active_time
+                                                                        : 1.0);
+            worst_excitation = fmax(worst_excitation,
+                                    fabs(job.excitation - snapshot.excitation) / scale);
+            most_iterations = fmax(most_iterations, job.iterations);
+            if (jobs > 1) least_iterations = fmin(least_iterations, job.iterations);
+        }
+        const char *name = kind == RRI_LSM ? "LSM" : "MFF";
+        failures += check(jobs == 9 && sliced == jobs, "%s: %d jobs completed, %d over several "
+                          "steps (expected 9, each sliced)", name, jobs, sliced);
+        failures += check(worst <= 1e-12, "%s: Delta_hat, standard errors, trace(Gamma) of the "
+                          "sliced jobs against the full solve at their snapshots: worst relative "
+                          "difference %.3g (bound 1e-12)", name, worst);
+        failures += check(worst_excitation <= 1e-12, "%s: excitation: worst difference %.3g of "
+                          "the eigenvalue per remembered time (bound 1e-12)", name,
+                          worst_excitation);
+        failures += check(least_iterations < most_iterations, "%s: inverse iterations per job "
+                          "from the warm start %g (the first job %g at most)", name,
+                          least_iterations, most_iterations);
+    }
+    return failures;
+}
+
+/* The running solution (the anchor) solved in shares over the samples after its
+ * snapshot: each installed anchor must be rri_solve of the identifier at the snapshot
+ * RRI_ANCHOR_INTERVAL samples before (the same arithmetic: to 1e-12, measured 0). */
+static int anchor_solve_spread(void)
+{
+    static RegressorIdentifier id, snapshot;
+    int failures = 0;
+    for (int kind = RRI_LSM; kind <= RRI_MFF; ++kind) {
+        const int rows = 7, p = 57;
+        int columns[RRI_MAX_PARAMETERS];
+        for (int k = 0; k < p; ++k) columns[k] = k + 12;
+        if (rri_init(&id, (RriKind)kind, rows, p, columns, NULL, 1e-4, 1e-6, 0.5) != 0) return 1;
+        snapshot = id;
+        unsigned long state = 777;
+        int installs = 0, before_snapshot = 1;
+        double worst = 0.0;
+        for (int step = 0; step < 40 * RRI_ANCHOR_INTERVAL; ++step) {
+            RbRegressor Y;
+            double z[RRI_MAX_ROWS];
+            memset(&Y, 0, sizeof Y);
+            for (int i = 0; i < rows; ++i) {
+                for (int c = 0; c < RRI_PARAMETERS_OF(rows); ++c) Y.row[i][c] = uniform_random(&state);
+                z[i] = uniform_random(&state);
+            }
+            rri_step(&id, z, &Y);
+            if (id.anchor_age != 0) continue;
+            /* a new anchor (of the last snapshot) and the next snapshot, both here */
+            if (rri_solve(&snapshot) != 0) return 1;
+            for (int k = 0; k < p; ++k) worst = fmax(worst, relative(id.anchor[k], snapshot.delta[k]));
+            installs += !before_snapshot;
+            before_snapshot = 0;
+            snapshot = id;
+        }
+        const char *name = kind == RRI_LSM ? "LSM" : "MFF";
+        failures += check(installs == 39 && worst <= 1e-12, "%s: %d anchors installed, each the "
+                          "solve of P and b %d samples before: worst relative difference %.3g "
+                          "(bound 1e-12)", name, installs, RRI_ANCHOR_INTERVAL, worst);
+    }
+    return failures;
+}
+
 int main(int argc, char **argv)
 {
     static const struct {
@@ -818,6 +945,8 @@ int main(int argc, char **argv)
         {"theorem_gains", theorem_gains},
         {"coulomb_level_learned", coulomb_level_learned},
         {"mean_sign_of_a_reversal", mean_sign_of_a_reversal},
+        {"statistics_job_equals_full_solve", statistics_job_equals_full_solve},
+        {"anchor_solve_spread", anchor_solve_spread},
     };
     const size_t n_cases = sizeof cases / sizeof cases[0];
     if (argc < 2) {
