@@ -2,6 +2,7 @@
 
     .venv/bin/python bench/standard_errors.py [--seeds 96] [--plants accurate,rk45-1e-4,euler]
         [--rates 1000] [--noise 1e-5,1e-4,1e-3] [--fmu-dir build/fmus] [--out FILE.md]
+        [--set NAME=VALUE ...]
 
 Issue 10: "a standard error for every identified parameter (from the information
 matrix and the residual variance) ... consistent with the spread of the estimates
@@ -46,9 +47,11 @@ NOMINAL = {"b": 1.1 / J, "c_nominal[1]": 2.0, "c_nominal[2]": 0.1, "c_nominal[3]
            "c_nominal[4]": 0.0, "c_nominal[5]": 0.0, "identifier": 1}
 
 
-def final_estimates(data: plants.Dataset, y: np.ndarray, fmu: Path) -> tuple[np.ndarray, np.ndarray]:
+def final_estimates(data: plants.Dataset, y: np.ndarray, fmu: Path,
+                    overrides: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
     """The final estimates (gravity, viscous, Coulomb, b) and their standard errors."""
-    out = identify(Recording(data.t, y, data.u), fmu, NOMINAL, input_hold="sampled")
+    out = identify(Recording(data.t, y, data.u), fmu, {**NOMINAL, **overrides},
+                   input_hold="sampled")
     estimate = [out[f"theta_hat[1,{k}]"][-1] for k in (1, 2, 3)] + [out["b_hat"][-1]]
     reported = [out[f"theta_std[1,{k}]"][-1] for k in (1, 2, 3)] + [out["b_std"][-1]]
     return np.array(estimate), np.array(reported)
@@ -70,7 +73,10 @@ def main() -> None:
     parser.add_argument("--noise", default="1e-5,1e-4,1e-3")
     parser.add_argument("--fmu-dir", type=Path, default=REPO / "build" / "fmus")
     parser.add_argument("--out", type=Path)
+    parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                        help="an FMU parameter instead of its default (repeatable)")
     args = parser.parse_args()
+    overrides = {name: float(value) for name, value in (a.split("=", 1) for a in args.set)}
     fmu = args.fmu_dir / "SuperTwistingObserver.fmu"
     if not fmu.exists():
         parser.error(f"{fmu} does not exist: build the FMUs first (./build.sh fmus)")
@@ -82,7 +88,7 @@ def main() -> None:
     for rate in (float(r) for r in args.rates.split(",")):
         for kind in args.plants.split(","):
             data = plants.make("A", kind, rate, args.fmu_dir)
-            estimate, reported = final_estimates(data, data.x1, fmu)
+            estimate, reported = final_estimates(data, data.x1, fmu, overrides)
             error = np.abs(estimate - TRUTH) / TRUTH
             cells = [kind, f"{rate / 1000:g} kHz", "0",
                      "reported " + ", ".join(f"{v:.1e}" for v in reported / TRUTH)
@@ -91,7 +97,7 @@ def main() -> None:
             print(lines[-1], flush=True)
             for std in (float(s) for s in args.noise.split(",")):
                 runs = [final_estimates(data, data.x1 + np.random.default_rng(seed).normal(
-                    0.0, std, data.x1.size), fmu) for seed in range(args.seeds)]
+                    0.0, std, data.x1.size), fmu, overrides) for seed in range(args.seeds)]
                 estimates = np.array([e for e, _ in runs])
                 se = np.array([s for _, s in runs]).mean(axis=0)
                 spread = estimates.std(axis=0, ddof=1)

@@ -26,27 +26,15 @@ static inline int cholesky_factor_column(const double *P, double *L, int n, int 
     return 0;
 }
 
-/* cholesky_factor_column for j = 0..n-1, written out (as cholesky_solve is): with
- * the calls, GCC 12 gave the SuperTwistingObserver's steps up to 0.5 % more
- * instructions (bench/step_instructions.sh) for the same arithmetic. */
+/* cholesky_factor_column for j = 0..n-1. */
 static inline int cholesky_factor(const double *P, double *L, int n, int stride)
 {
-    for (int j = 0; j < n; ++j) {
-        double d = P[j * stride + j];
-        for (int k = 0; k < j; ++k) d -= L[j * stride + k] * L[j * stride + k];
-        if (!(d > 0.0) || !isfinite(d)) return -1;
-        L[j * stride + j] = sqrt(d);
-        for (int i = j + 1; i < n; ++i) {
-            double s = P[j * stride + i]; /* P[i][j] of the symmetric matrix */
-            for (int k = 0; k < j; ++k) s -= L[i * stride + k] * L[j * stride + k];
-            L[i * stride + j] = s / L[j * stride + j];
-        }
-    }
+    for (int j = 0; j < n; ++j)
+        if (cholesky_factor_column(P, L, n, stride, j) != 0) return -1;
     return 0;
 }
 
-/* x <- L^-1 x and x <- L^-T x with the factor L of cholesky_factor: the two
- * halves of cholesky_solve. */
+/* x <- L^-1 x and x <- L^-T x with the factor L of cholesky_factor. */
 static inline void cholesky_forward(const double *L, int n, int stride, double x[])
 {
     for (int i = 0; i < n; ++i) {
@@ -63,18 +51,11 @@ static inline void cholesky_backward(const double *L, int n, int stride, double 
     }
 }
 
-/* x <- P^-1 x with the factor L of cholesky_factor: cholesky_forward, then
- * cholesky_backward, written out. */
+/* x <- P^-1 x with the factor L of cholesky_factor. */
 static inline void cholesky_solve(const double *L, int n, int stride, double x[])
 {
-    for (int i = 0; i < n; ++i) {
-        for (int k = 0; k < i; ++k) x[i] -= L[i * stride + k] * x[k];
-        x[i] /= L[i * stride + i];
-    }
-    for (int i = n - 1; i >= 0; --i) {
-        for (int k = i + 1; k < n; ++k) x[i] -= L[k * stride + i] * x[k];
-        x[i] /= L[i * stride + i];
-    }
+    cholesky_forward(L, n, stride, x);
+    cholesky_backward(L, n, stride, x);
 }
 
 #endif

@@ -64,7 +64,8 @@ void info_reset(InformationIdentifier *id)
         id->eigvec[k] = k < id->m ? 1.0 / sqrt((double)id->m) : 0.0;
     }
     if (id->lambda == 1.0)
-        bs_init(&id->blocks, id->rows, id->m, INFO_BATCH_WINDOW, &id->P[0][0], &id->theta[0][0]);
+        bs_init(&id->blocks, id->rows, id->m, INFO_LSM_SCORE_WINDOW, &id->P[0][0],
+                &id->theta[0][0]);
     id->active_time = 0.0;
     id->gamma_trace = id->m / id->rho;
     id->excitation = 0.0;
@@ -277,11 +278,14 @@ static void update_standard_errors(InformationIdentifier *id)
 {
     const int n = dimension(id), m = id->m;
     id->std_age = 0;
-    /* the first INFO_SCORE_DELAY seconds hold the estimate's own transient */
-    if (id->active_time < INFO_SCORE_DELAY) return;
     const int lsm = id->lambda == 1.0;
+    /* MFF: the first INFO_SCORE_DELAY seconds hold the estimate's own transient
+     * (LSM's scores are at the current estimate: block_scores.h) */
+    if (!lsm && id->active_time < INFO_SCORE_DELAY) return;
     if (lsm) {
-        bs_update_power(&id->blocks, id->power_gain);
+        /* over all the data, as the estimate weighs it (a growing mean) */
+        bs_update_power(&id->blocks, 0.0);
+        if (id->blocks.samples == 0.0) return; /* no window filled yet: none (0) */
     } else {
         /* MFF: in proportion to the samples used, so that a rest (no data, no
          * forgetting) leaves the standard errors where the excitation left them */
@@ -309,6 +313,7 @@ static void update_standard_errors(InformationIdentifier *id)
      * 1/(2 |ln R|) for MFF. */
     const double memory = id->lambda < 1.0 ? 0.5 / id->forgetting_rate : id->active_time;
     const double scale = memory < id->active_time ? memory : id->active_time;
+    const double window = lsm ? INFO_LSM_SCORE_WINDOW : INFO_BATCH_WINDOW;
     for (int i = 0; i < id->rows; ++i) {
         double power[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
         if (lsm) {
@@ -321,7 +326,7 @@ static void update_standard_errors(InformationIdentifier *id)
             double variance = 0.0;
             for (int a = 0; a < m; ++a)
                 for (int b = 0; b < m; ++b) variance += gamma[k][a] * power[a][b] * gamma[k][b];
-            id->std_error[i][k] = sqrt(fmax(0.0, 2.0 * INFO_BATCH_WINDOW * scale * variance));
+            id->std_error[i][k] = sqrt(fmax(0.0, 2.0 * window * scale * variance));
         }
     }
 }
