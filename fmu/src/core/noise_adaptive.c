@@ -101,8 +101,15 @@ void adaptive_init(AdaptiveBank *bank, double h)
         bank->gains[bank->count] = steady_state_gains(h, omega);
         bank->gains[bank->count++].publish_gain = -expm1(-2.0 * h * omega / ADAPTIVE_AVERAGING);
     }
-    for (int i = 0; i < STO_MAX_DOF; ++i)
+    for (int f = 0; bank->count > 0 && f <= (bank->count - 1) * ADAPTIVE_FINE; ++f)
+        bank->fine[f] = f % ADAPTIVE_FINE == 0
+                            ? bank->gains[f / ADAPTIVE_FINE]
+                            : steady_state_gains(h, 2.0 * pow(ADAPTIVE_RATIO, (double)f / ADAPTIVE_FINE));
+    for (int i = 0; i < STO_MAX_DOF; ++i) {
         bank->selected[i] = bank->perturbation[i] = ADAPTIVE_SUPER_TWISTING;
+        bank->center[i] = -1;
+        for (int s = 0; s < ADAPTIVE_ZOOM; ++s) bank->zoom_index[i][s] = -1;
+    }
     bank->follow = ADAPTIVE_SUPER_TWISTING;
 }
 
@@ -143,6 +150,45 @@ static inline void weigh(double *mean_square, double *samples, double value, dou
 {
     const double g = *samples * gain < 1.0 ? 1.0 / ++*samples : gain;
     *mean_square += g * (value - *mean_square);
+}
+
+/* A member by its index: the members, then the zoom members. */
+static inline const AdaptiveMember *member_at(const AdaptiveBank *bank, int i, int index)
+{
+    return index < bank->count ? &bank->member[i][index] : &bank->zoom[i][index - bank->count];
+}
+
+static inline const AdaptiveGains *gains_at(const AdaptiveBank *bank, int i, int index)
+{
+    return index < bank->count ? &bank->gains[index]
+                               : &bank->fine[bank->zoom_index[i][index - bank->count]];
+}
+
+/* The zoom members surround member c on the fine grid: the ones already there
+ * keep running, the others start from member c's state and statistics. */
+static void zoom_to(AdaptiveBank *bank, int i, int c)
+{
+    int wanted[ADAPTIVE_ZOOM], kept[ADAPTIVE_ZOOM];
+    AdaptiveMember moved[ADAPTIVE_ZOOM];
+    int w = 0;
+    const int last = (bank->count - 1) * ADAPTIVE_FINE;
+    for (int d = -(ADAPTIVE_FINE - 1); d < 0; ++d) {
+        const int f = c * ADAPTIVE_FINE + d;
+        wanted[w++] = f >= 0 && f <= last ? f : -1;
+    }
+    for (int s = 0; s < ADAPTIVE_ZOOM; ++s) {
+        kept[s] = 0;
+        for (int t = 0; t < ADAPTIVE_ZOOM && wanted[s] >= 0; ++t)
+            if (bank->zoom_index[i][t] == wanted[s]) {
+                moved[s] = bank->zoom[i][t];
+                kept[s] = 1;
+            }
+    }
+    for (int s = 0; s < ADAPTIVE_ZOOM; ++s) {
+        bank->zoom[i][s] = kept[s] ? moved[s] : bank->member[i][c];
+        bank->zoom_index[i][s] = wanted[s];
+    }
+    bank->center[i] = c;
 }
 
 /* What the observers are compared with at a stride's start (see the header). */
@@ -268,10 +314,27 @@ static inline AdaptiveSelection select_members(const AdaptiveBank *bank, int i, 
         if (bank->sta[i].mean_square < ADAPTIVE_EXACT_RATIO * smallest) return super_twisting;
     }
     const AdaptiveStatistics *sta = &bank->sta[i];
-    int best_velocity, best_perturbation;
+    int best_perturbation;
     AdaptiveSelection choice = {selected, source};
-    if (sta->velocity_samples > 0.0)
-        choice.selected = choose(bank, i, selected, ADAPTIVE_RANK_VELOCITY, &best_velocity);
+    if (sta->velocity_samples > 0.0 && bank->center[i] >= 0) {
+        /* the velocity: the member of the smallest one-step innovation mean
+         * square among the centre and its zoom members (the maximum-likelihood
+         * bandwidth for an unknown noise level), against the super-twisting
+         * observer by the secant ranking */
+        int member = bank->center[i];
+        if (member > 0 && members[member - 1].stats.mean_square < members[member].stats.mean_square)
+            member = member - 1;
+        for (int s = 0; s < ADAPTIVE_ZOOM; ++s)
+            if (bank->zoom_index[i][s] >= 0 &&
+                bank->zoom[i][s].stats.mean_square < member_at(bank, i, member)->stats.mean_square)
+                member = bank->count + s;
+        const double candidate = member_at(bank, i, member)->stats.ranking[ADAPTIVE_RANK_VELOCITY];
+        const double st = sta->ranking[ADAPTIVE_RANK_VELOCITY];
+        if (selected == ADAPTIVE_SUPER_TWISTING)
+            choice.selected = candidate < ADAPTIVE_HYSTERESIS * st ? member : selected;
+        else
+            choice.selected = st < ADAPTIVE_HYSTERESIS * candidate ? ADAPTIVE_SUPER_TWISTING : member;
+    }
     if (sta->perturbation_samples > 0.0) {
         choice.source = choose(bank, i, source, ADAPTIVE_RANK_PERTURBATION, &best_perturbation);
         /* a super-twisting observer whose injection saturates often: the
@@ -328,7 +391,36 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                     if (stride_start)
                         track_strides(&m->stats, bank, tick, measured, m->x2_now, m->published);
                 }
+                for (int s = 0; s < ADAPTIVE_ZOOM; ++s) {
+                    if (bank->zoom_index[i][s] < 0) continue;
+                    AdaptiveMember *m = &bank->zoom[i][s];
+                    const double r = member_step(m, &bank->fine[bank->zoom_index[i][s]], y[i], a[i], h, h2);
+                    weigh(&m->stats.mean_square, &m->stats.samples, r * r, gain);
+                    if (stride_start)
+                        track_strides(&m->stats, bank, tick, measured, m->x2_now, m->published);
+                }
                 if (age >= ADAPTIVE_MIN_SAMPLES) {
+                    /* the centre: the member whose velocity matches the
+                     * secants best (see the header) */
+                    const int c = bank->center[i] < 0 ? 0 : bank->center[i];
+                    int best = c;
+                    for (int j = 0; j < bank->count; ++j)
+                        if (members[j].stats.ranking[ADAPTIVE_RANK_VELOCITY] <
+                            members[best].stats.ranking[ADAPTIVE_RANK_VELOCITY])
+                            best = j;
+                    if (bank->sta[i].velocity_samples > 0.0 &&
+                        (bank->center[i] < 0 ||
+                         members[best].stats.ranking[ADAPTIVE_RANK_VELOCITY] <
+                             ADAPTIVE_HYSTERESIS * members[c].stats.ranking[ADAPTIVE_RANK_VELOCITY])) {
+                        const int fine = selected >= bank->count
+                                             ? bank->zoom_index[i][selected - bank->count] : -1;
+                        zoom_to(bank, i, best);
+                        if (selected >= bank->count) {
+                            selected = best;
+                            for (int z = 0; z < ADAPTIVE_ZOOM; ++z)
+                                if (fine >= 0 && bank->zoom_index[i][z] == fine) selected = bank->count + z;
+                        }
+                    }
                     const AdaptiveSelection choice = select_members(bank, i, selected, source);
                     selected = choice.selected;
                     source = choice.source;
@@ -346,9 +438,18 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
             }
             trace->z_identify[i][k] =
                 follow == ADAPTIVE_SUPER_TWISTING ? trace->z_eq[i][k] : members[follow].xi;
+            bank->velocity[i] = trace->velocity[i][k];
             if (selected != ADAPTIVE_SUPER_TWISTING) {
-                const AdaptiveMember *m = &members[selected];
-                const AdaptiveGains *gs = &bank->gains[selected];
+                /* the published velocity: the selected member's; the
+                 * regressors' (the trace): the centre's, the member the
+                 * identifier follows (with the selected one's, a zoom member
+                 * or the centre's neighbour, velocity and xi came from
+                 * different members and b's standard error was 1.55 times
+                 * its spread over noise seeds) */
+                bank->velocity[i] = member_at(bank, i, selected)->x2_now;
+                const int v = bank->center[i] >= 0 ? bank->center[i] : selected;
+                const AdaptiveMember *m = member_at(bank, i, v);
+                const AdaptiveGains *gs = gains_at(bank, i, v);
                 trace->velocity[i][k] = m->x2_now;
                 trace->velocity_sign[i][k] =
                     expected_sign(m->x2_now, gs->velocity_std * sqrt(m->stats.mean_square /
@@ -375,12 +476,12 @@ void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank)
         double mean_square = bank->sta[i].mean_square, variance = STA_INNOVATION_VARIANCE;
         bank->bandwidth[i] = 1.0 / h;
         if (selected != ADAPTIVE_SUPER_TWISTING && o->primed) {
-            const AdaptiveMember *m = &bank->member[i][selected];
+            const AdaptiveMember *m = member_at(bank, i, selected);
             implicit_predict(m->z1, m->mid, m->a_mean, m->a_free + o->point[i], o->coulomb[i],
                              m->xi, 0.0, h, &o->x1_hat[i], &o->x2_hat[i]);
             mean_square = m->stats.mean_square;
-            variance = bank->gains[selected].innovation_variance;
-            bank->bandwidth[i] = bank->gains[selected].omega;
+            variance = gains_at(bank, i, selected)->innovation_variance;
+            bank->bandwidth[i] = gains_at(bank, i, selected)->omega;
         }
         if (bank->perturbation[i] != ADAPTIVE_SUPER_TWISTING && o->primed)
             o->z_eq[i] = bank->member[i][bank->perturbation[i]].xi;
@@ -407,7 +508,11 @@ int adaptive_settled(const AdaptiveBank *bank, int n)
     return 1;
 }
 
-void adaptive_follow_published(AdaptiveBank *bank) { bank->follow = bank->selected[0]; }
+void adaptive_follow_published(AdaptiveBank *bank)
+{
+    /* a zoom member moves with its centre: the identifier follows the centre */
+    bank->follow = bank->selected[0] >= bank->count ? bank->center[0] : bank->selected[0];
+}
 
 int adaptive_valid(const AdaptiveBank *bank, int n)
 {
@@ -415,8 +520,20 @@ int adaptive_valid(const AdaptiveBank *bank, int n)
     if (bank->stride < 1 || bank->stride > ADAPTIVE_MAX_STRIDE || !(bank->span > 0.0))
         return 0;
     if (bank->follow < ADAPTIVE_SUPER_TWISTING || bank->follow >= bank->count) return 0;
+    for (int i = 0; i < n && i < STO_MAX_DOF; ++i) {
+        if (bank->center[i] < -1 || bank->center[i] >= bank->count) return 0;
+        for (int s = 0; s < ADAPTIVE_ZOOM; ++s)
+            if (bank->zoom_index[i][s] < -1 ||
+                bank->zoom_index[i][s] > (bank->count - 1) * ADAPTIVE_FINE)
+                return 0;
+        if (bank->selected[i] >= bank->count &&
+            (bank->center[i] < 0 || bank->selected[i] >= bank->count + ADAPTIVE_ZOOM ||
+             bank->zoom_index[i][bank->selected[i] - bank->count] < 0))
+            return 0;
+    }
     for (int i = 0; i < n && i < STO_MAX_DOF; ++i)
-        if (bank->selected[i] < ADAPTIVE_SUPER_TWISTING || bank->selected[i] >= bank->count ||
+        if (bank->selected[i] < ADAPTIVE_SUPER_TWISTING ||
+            bank->selected[i] >= bank->count + ADAPTIVE_ZOOM ||
             bank->perturbation[i] < ADAPTIVE_SUPER_TWISTING ||
             bank->perturbation[i] >= bank->count)
             return 0;

@@ -23,18 +23,33 @@
  * The ratios are set by a bandwidth omega (q = omega^6 h^2 per step against
  * R = 1), from 2 rad/s up to 0.5/h, a factor ADAPTIVE_RATIO apart.
  *
- * Selection of the published velocity: every stride (ADAPTIVE_SECANT_TIME /
+ * Selection of the published velocity: the member of the smallest one-step
+ * innovation mean square (exponentially weighted, window ADAPTIVE_WINDOW),
+ * which for an unknown noise level is the maximum-likelihood member (multiple-
+ * model adaptive estimation: -0.5 (ln S + r^2 / S) maximized over S as well).
+ * Members 1.8x apart leave the best one 2-11 % above the best-tuned Kalman
+ * filter (model-free robot joints, 17-bit encoders), so ADAPTIVE_ZOOM zoom
+ * members run on a grid ADAPTIVE_FINE times finer around the member of the
+ * smallest innovation mean square (the centre; ADAPTIVE_CENTER_HYSTERESIS):
+ * a new centre starts the zoom members that are not yet there from its own
+ * state and statistics.  The published velocity is the smallest innovation
+ * mean square among the centre and its zoom members.  The velocity ranking
+ * below, which compares velocities with secants of the measurements, decides
+ * between that member and the super-twisting observer only: ranking the
+ * members by it published members 1.8x too fast on model-free robot joints
+ * (the secant's curvature, without a model, favours fast members).
+ *
+ * The velocity ranking: every stride (ADAPTIVE_SECANT_TIME /
  * ADAPTIVE_SLOTS, at least one step), each observer's velocity is compared
  * with the secant of the measurements over the ADAPTIVE_SLOTS strides around
  * it, (y_k - y_(k-2D)) / 2D, corrected by the nominal model's curvature over
  * the same span (its mean velocity minus its velocity at the middle, from the
  * nominal acceleration integrated once and twice): without the correction the
  * secant misses the sample-rate ripple that a switching controller puts on
- * the velocity, which every model-based observer follows, and it ranked the
- * observers that miss the ripple first.  The noise of the secant and the
- * perturbation's curvature are common to all observers, so the smallest
- * exponentially weighted mean square (window ADAPTIVE_WINDOW) ranks their
- * velocity errors; another observer takes over when its mean square is
+ * the velocity, which every model-based observer follows.  The noise of the
+ * secant and the perturbation's curvature are common to all observers, so the
+ * smallest exponentially weighted mean square (window ADAPTIVE_WINDOW) ranks
+ * their velocity errors; the other observer takes over when its mean square is
  * below ADAPTIVE_HYSTERESIS times the published one's.  The span is a time:
  * a horizon of 16 samples at 10 kHz made the velocity error's share of the
  * criterion 1e-3 of the noise's and picked members 6x too fast.
@@ -74,7 +89,8 @@
  * member's closed-loop filter G, so the regressor must pass the same G
  * (adaptive_shadow_step) for xi = Delta (G phi) to hold; the identifier
  * follows one member, fixed when it starts: the one whose velocity is
- * published then (its velocity enters the regressors; following the
+ * published then, or the centre if that is a zoom member (its xi; the
+ * regressors take the centre's velocity, see adaptive_run; following the
  * perturbation's member instead left 10 kHz 16-bit data at 1.8 % for 0.37 %). */
 #ifndef NOISE_ADAPTIVE_H
 #define NOISE_ADAPTIVE_H
@@ -107,6 +123,9 @@
                                      * noise 1e-4: 1.08 % for 0.74 %; the 6.2 Euler replay:
                                      * 17 % for 0.27 %) */
 #define ADAPTIVE_SUPER_TWISTING (-1) /* member index of the super-twisting observer */
+#define ADAPTIVE_FINE 3             /* steps of the zoom members' grid per ADAPTIVE_RATIO */
+#define ADAPTIVE_ZOOM (ADAPTIVE_FINE - 1) /* zoom members below the centre */
+#define ADAPTIVE_MAX_FINE ((ADAPTIVE_MAX_MEMBERS - 1) * ADAPTIVE_FINE + 1)
 
 /* Gains of one linear member. */
 typedef struct {
@@ -158,7 +177,12 @@ typedef struct {
     double velocity_gain;              /* the window's gain per comparison */
     unsigned start_limit;              /* ADAPTIVE_START_TIME in steps */
     AdaptiveGains gains[ADAPTIVE_MAX_MEMBERS];
+    AdaptiveGains fine[ADAPTIVE_MAX_FINE]; /* bandwidths ADAPTIVE_RATIO^(1/ADAPTIVE_FINE) apart:
+                                            * fine[j ADAPTIVE_FINE] = gains[j] */
     AdaptiveMember member[STO_MAX_DOF][ADAPTIVE_MAX_MEMBERS];
+    AdaptiveMember zoom[STO_MAX_DOF][ADAPTIVE_ZOOM]; /* member index count + s */
+    int zoom_index[STO_MAX_DOF][ADAPTIVE_ZOOM];      /* their fine index (-1: idle) */
+    int center[STO_MAX_DOF];             /* the member they surround (-1: none yet) */
     AdaptiveStatistics sta[STO_MAX_DOF]; /* the super-twisting observer's */
     double sta_saturation[STO_MAX_DOF];  /* its rate of saturated steps (window as sta) */
     double sta_v[STO_MAX_DOF];           /* its injection (o->z_eq publishes the selected one's) */
@@ -174,6 +198,7 @@ typedef struct {
     double sta_filtered[STO_MAX_DOF];    /* the super-twisting injection through the tau filter */
     double noise_std[STO_MAX_DOF];       /* estimated measurement noise [rad] */
     double bandwidth[STO_MAX_DOF];       /* omega of the selected member (1/h: super-twisting) */
+    double velocity[STO_MAX_DOF];        /* the published velocity at the last sample */
 } AdaptiveBank;
 
 /* Gains of the members for step h (steady-state Riccati, at initialization). */

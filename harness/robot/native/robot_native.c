@@ -153,7 +153,7 @@ int rn_observe_adaptive(AdaptiveBank *bank, int n, long count, double h, const d
         for (long k = 0; k < count; ++k) {
             const StoAcceleration a = {.held = nominal ? nominal[k * n + i] : 0.0};
             adaptive_run(&o, bank, y + k * n + i, &a, 1, &trace);
-            velocity[k * n + i] = trace.velocity[0][0];
+            velocity[k * n + i] = bank->velocity[0];
             acceleration[k * n + i] = trace.z_filtered[0][0];
             adaptive_outputs(&o, bank);
             noise[k * n + i] = bank->noise_std[0];
