@@ -1,7 +1,7 @@
 """The observer FMU against classical estimators on plant data it did not make itself.
 
-    .venv/bin/python bench/real_measurements.py [--quick] [--out DIR] [--fmu-dir build/fmus]
-                                                [--jobs N]
+    .venv/bin/python bench/real_measurements.py [--quick | --held-out] [--out DIR]
+                                                [--fmu-dir build/fmus] [--jobs N]
 
 Makes the pendulum data (open loop A by four integrators; the paper's closed
 loops 6.1/6.2/6.3 and their Euler replays), corrupts the measured angle (noise,
@@ -15,6 +15,11 @@ the full grid also writes docs/real_measurements.md and docs/real_measurements.p
 a time around the base case (A, accurate, 1 kHz, noise-free, exact b) plus the
 crosses listed in GRID_NOTES.  Runs take their FMUs from a copy made at the start,
 so a rebuild of build/fmus during a run does not mix versions.
+
+--held-out runs the held-out joints instead (bench/realdata/held_out.py: three
+joints of other scales and excitations, 1-10 kHz, sensors partly outside the
+tuning grid) and writes docs/held_out.md and .png: the defaults on data they were
+not tuned on.
 """
 from __future__ import annotations
 
@@ -35,11 +40,11 @@ sys.path.insert(0, str(REPO / "bench"))
 import numpy as np  # noqa: E402
 
 from harness.scenarios import SCENARIOS  # noqa: E402
-from realdata import methods, plants, report, scoring, sensors  # noqa: E402
+from realdata import held_out, methods, plants, report, scoring, sensors  # noqa: E402
 
 SCENARIO_NAMES = ("6.1-sine", "6.2", "6.3")
 RATES = (1000, 10000)
-DATASET_ORDER = ("A",) + SCENARIO_NAMES
+DATASET_ORDER = ("A",) + SCENARIO_NAMES + tuple(held_out.PLANTS)
 GRID_NOTES = [
     "every measurement x {accurate, euler} x {1 kHz, 10 kHz} (A, exact b)",
     "every plant kind x {noise-free, 16-bit encoder} x {1 kHz, 10 kHz} (A, exact b)",
@@ -84,8 +89,16 @@ def quick_grid() -> list[Condition]:
     return sort(rows)
 
 
+def held_out_grid() -> list[Condition]:
+    """Every held-out joint x rate x sensor, with the held-out nominal model."""
+    return sort([(name, "accurate", rate, meas, sensors.HELD_OUT_MODEL.name)
+                 for name in held_out.PLANTS for rate in held_out.RATES
+                 for meas in held_out.MEASUREMENTS])
+
+
 def sort(rows) -> list[Condition]:  # noqa: ANN001
-    meas, models = list(sensors.MEASUREMENTS), list(sensors.MODEL_ERRORS) + ["scenario"]
+    meas = list(sensors.MEASUREMENTS) + list(sensors.HELD_OUT_MEASUREMENTS)
+    models = list(sensors.MODEL_ERRORS) + [sensors.HELD_OUT_MODEL.name, "scenario"]
     return sorted(rows, key=lambda c: (DATASET_ORDER.index(c[0]), plants.PLANT_KINDS.index(c[1]),
                                        c[2], models.index(c[4]), meas.index(c[3])))
 
@@ -101,8 +114,9 @@ def make_data(name: str, kind: str, rates: tuple[int, ...], fmu_dir: Path, data_
     """One trajectory (per rate for Euler), saved for the row workers."""
     start = time.perf_counter()
     meta: dict[str, object] = {}
-    if name == "A" and kind != "euler":
-        base = plants.make("A", kind, 10000, fmu_dir)
+    if name in held_out.PLANTS or (name == "A" and kind != "euler"):
+        base = held_out.make(name) if name in held_out.PLANTS else \
+            plants.make("A", kind, 10000, fmu_dir)
         meta = dict(base.meta)
         for rate in rates:
             base.decimate(10000 // rate).save(data_path(data_dir, name, kind, rate))
@@ -128,12 +142,12 @@ def run_row(cond: Condition, data_dir: Path, fmu: Path) -> dict[str, object]:
     name, kind, rate, meas_name, model = cond
     start = time.perf_counter()
     data = plants.Dataset.load(data_path(data_dir, name, kind, rate))
-    meas = sensors.MEASUREMENTS[meas_name]
+    meas = sensors.measurement(meas_name)
     # The seed depends on data set and measurement, not on plant kind or rate, so the
     # kinds are compared on the same noise sequence where the lengths agree.
     y = sensors.measure(data.x1, meas, sensors.seed_of(name, meas_name))
-    if name == "A":
-        b_nom, c_nom = sensors.nominal(sensors.MODEL_ERRORS[model], data.b, data.c)
+    if name not in SCENARIOS:  # open loop: A or a held-out joint
+        b_nom, c_nom = sensors.nominal(sensors.model_error(model), data.b, data.c)
         transient = 1.0
     else:
         s = SCENARIOS[name]
@@ -195,23 +209,9 @@ def notes(data_meta: list[dict], rows: list[dict]) -> list[str]:
     return out
 
 
-def header(args: argparse.Namespace, grid: list[Condition], fmu_sha: str) -> list[str]:
-    """The document's fixed part: command, conditions, methods, metrics."""
-    cmd = ".venv/bin/python bench/real_measurements.py" + (" --quick" if args.quick else "")
-    if Path(args.fmu_dir).resolve() != (REPO / "build" / "fmus").resolve():
-        cmd += f" --fmu-dir {args.fmu_dir}"
+def grid_conditions() -> list[str]:
+    """The plants, sensors and nominal models of the full (and quick) grid."""
     return [
-        "# Observer FMU vs classical estimators on independently made plant data",
-        "",
-        "<!-- GENERATED by bench/real_measurements.py: do not edit, re-run the script. -->",
-        "",
-        f"Generated by `{cmd}` ({len(grid)} rows; `--jobs` and `--out` do not change the "
-        f"numbers). SuperTwistingObserver.fmu SHA-256 `{fmu_sha[:16]}`: the FMU at "
-        "`build/fmus` when the run started. Every number below is deterministic (fixed "
-        "seeds, fixed grids).",
-        "",
-        "## Conditions",
-        "",
         "* Plant: the paper's pendulum, J x'' = u - (M g L/2) sin x - Vs x' - Ps sign(x') "
         "+ J v - J d x', M = 1.1, g = 9.815, L = 0.9, J = M L^2, Vs = 0.18, Ps = 0.45; "
         "b = 1/J, c = [MgL/(2J), Vs/J, Ps/J] (harness/scenarios.py).",
@@ -238,17 +238,64 @@ def header(args: argparse.Namespace, grid: list[Condition], fmu_sha: str) -> lis
         "B: the scenario's nominal model.",
         f"* Grid: base case A / accurate / 1 kHz / noise-free / exact b, plus: "
         + "; ".join(GRID_NOTES) + ".",
+    ]
+
+
+def held_out_conditions() -> list[str]:
+    """The held-out grid's plants, sensors and nominal model."""
+    joints = [f"`{p.name}`: {p.description}" for p in held_out.PLANTS.values()]
+    return [
+        "* Why: every default of the FMU (gains, filters, the velocity bank, "
+        "tau_identifier) was chosen on the grid of real_measurements.md, one pendulum. "
+        "These joints keep the FMU's model structure, x'' = b u - c1 sin x - c2 x' - "
+        "c3 sign x', and change the scales the defaults could have been fitted to "
+        "(bench/realdata/held_out.py): " + "; ".join(joints) + ".",
+        f"* Plant data: DOP853 rtol = atol = 1e-12 with every reversal and stick located "
+        f"(as A's `accurate`), {held_out.DURATION:g} s from rest at 0, simulated at "
+        f"{held_out.SIMULATION_RATE // 1000} kHz and sampled at "
+        + ", ".join(f"{r // 1000}" for r in held_out.RATES)
+        + " kHz (2 and 5 kHz: rates no default was tuned at).",
+        "* Measurements: " + ", ".join(sensors.measurement(m).label
+                                       for m in held_out.MEASUREMENTS)
+        + " (noise before the quantizer: counts that jitter).",
+        f"* Nominal model: {sensors.HELD_OUT_MODEL.label} (b' = b/1.1, c1' = c1/1.1, "
+        "c2' = c2/2.2, c3' = c3/2.2); the FMU identifies b, c1, c2, c3 (LSM).",
+    ]
+
+
+def header(args: argparse.Namespace, grid: list[Condition], fmu_sha: str) -> list[str]:
+    """The document's fixed part: command, conditions, methods, metrics."""
+    cmd = ".venv/bin/python bench/real_measurements.py" + (
+        " --held-out" if args.held_out else " --quick" if args.quick else "")
+    if Path(args.fmu_dir).resolve() != (REPO / "build" / "fmus").resolve():
+        cmd += f" --fmu-dir {args.fmu_dir}"
+    title = ("# Held-out joints: the observer FMU's defaults on plants they were not tuned on"
+             if args.held_out else
+             "# Observer FMU vs classical estimators on independently made plant data")
+    return [
+        title,
+        "",
+        "<!-- GENERATED by bench/real_measurements.py: do not edit, re-run the script. -->",
+        "",
+        f"Generated by `{cmd}` ({len(grid)} rows; `--jobs` and `--out` do not change the "
+        f"numbers). SuperTwistingObserver.fmu SHA-256 `{fmu_sha[:16]}`: the FMU at "
+        "`build/fmus` when the run started. Every number below is deterministic (fixed "
+        "seeds, fixed grids).",
+        "",
+        "## Conditions",
+        "",
+        *(held_out_conditions() if args.held_out else grid_conditions()),
         "",
         "## Methods (all on the same samples)",
         "",
         "* `fmu-default`: `harness.identify.identify` (h = sample step) with only the problem "
-        "statement: the nominal model (b, c_nominal[1..5]), `identifier` (1 LSM for A and "
-        "6.2, 0 for 6.1, 2 MFF for 6.3; in 6.3 the damping alone, identify_b off) and how u "
-        "was applied (`input_hold`: `sampled` for A's continuous torque, `zoh` for the "
+        "statement: the nominal model (b, c_nominal[1..5]), `identifier` (1 LSM for the open "
+        "loops and 6.2, 0 for 6.1, 2 MFF for 6.3; in 6.3 the damping alone, identify_b off) and how u "
+        "was applied (`input_hold`: `sampled` for the open loops' continuous torque, `zoh` for the "
         "controller's held output); everything else, the sensor included, at the FMU's "
         "defaults.",
         "* `fmu-paper`: the same plus `harness.scenarios.PAPER_METHOD` and the paper's "
-        "gains and filter: for A the 6.2 values (alpha1 8, alpha2 24, tau 0.002, t_id 1), "
+        "gains and filter: for the open loops the 6.2 values (alpha1 8, alpha2 24, tau 0.002, t_id 1), "
         "for B the scenario's whole observer set-up (also t_id, rho, R, identify[k]); rho "
         "raised to 10 h where the scenario's 1e-3 would make the paper's explicit Euler on "
         "Gamma diverge (1 kHz).",
@@ -287,15 +334,21 @@ def main(argv: list[str] | None = None) -> int:
     """Make the data, run the rows in a process pool, write JSON, markdown and figure."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="reduced grid (under 2 minutes)")
-    parser.add_argument("--out", type=Path, default=REPO / "build" / "real_measurements")
+    parser.add_argument("--held-out", action="store_true",
+                        help="the held-out joints' grid (writes docs/held_out.md)")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="default build/real_measurements (build/held_out with --held-out)")
     parser.add_argument("--fmu-dir", type=Path, default=REPO / "build" / "fmus")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--keep-data", action="store_true",
                         help="keep the trajectories in OUT/data (about 200 MB for the full grid)")
     args = parser.parse_args(argv)
+    if args.quick and args.held_out:
+        parser.error("--quick and --held-out are two different grids: give one")
     t_start = time.perf_counter()
-    grid = quick_grid() if args.quick else full_grid()
-    out: Path = args.out
+    grid = held_out_grid() if args.held_out else quick_grid() if args.quick else full_grid()
+    stem = "held_out" if args.held_out else "real_measurements"
+    out: Path = args.out or REPO / "build" / stem
     data_dir, fmu_copy = out / "data", out / "fmus"
     for d in (data_dir, fmu_copy):
         d.mkdir(parents=True, exist_ok=True)
@@ -332,18 +385,23 @@ def main(argv: list[str] | None = None) -> int:
                                         r["measurement"], r["model"])))
     elapsed = time.perf_counter() - t_start
     (out / "results.json").write_text(json.dumps(_json_safe({
-        "grid": "quick" if args.quick else "full", "fmu_sha256": fmu_sha,
+        "grid": "held-out" if args.held_out else "quick" if args.quick else "full",
+        "fmu_sha256": fmu_sha,
         "jobs": args.jobs, "runtime_s": round(elapsed, 1), "data": data_meta, "rows": rows}),
         indent=1))
-    head = header(args, grid, fmu_sha) + [""] + notes(data_meta, rows)
+    head = header(args, grid, fmu_sha)
+    if not args.held_out:  # the notes read data set A's and the loops' data
+        head += [""] + notes(data_meta, rows)
+    figure = ((tuple(held_out.PLANTS), sensors.HELD_OUT_MODEL.name) if args.held_out
+              else (("A",), "b-exact"))
     targets = [out] + ([] if args.quick else [REPO / "docs"])
     for target in targets:
-        report.write_markdown(target / "real_measurements.md", rows, head)
-        report.write_figure(target / "real_measurements.png", rows)
+        report.write_markdown(target / f"{stem}.md", rows, head)
+        report.write_figure(target / f"{stem}.png", rows, *figure)
     if not args.keep_data:  # regenerated every run; no need to keep 200 MB around
         shutil.rmtree(data_dir, ignore_errors=True)
     print(f"{len(rows)} rows in {elapsed:.1f} s; wrote "
-          + ", ".join(str(t / "real_measurements.md") for t in targets)
+          + ", ".join(str(t / f"{stem}.md") for t in targets)
           + f" and {out / 'results.json'}", file=sys.stderr)
     return 0
 

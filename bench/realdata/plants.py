@@ -44,6 +44,7 @@ PLANT_KINDS = ("accurate", "rk45-1e-4", "rk45-1e-6", "euler")
 # (a function of time, None for d = 0); the defaults make data set A.
 Signal = Callable[[np.ndarray | float], np.ndarray]
 RK45_TOLERANCES = {"rk45-1e-4": (1e-4, 1e-8), "rk45-1e-6": (1e-6, 1e-10)}
+STUCK_MAX_STEP = 1e-3  # s: open_loop_accurate's largest step while stuck
 STOP_SPEED = 1e-6  # rad/s: open_loop_rk45's stop into static friction (stop_after)
 
 
@@ -95,9 +96,9 @@ def multisine(t: np.ndarray | float) -> np.ndarray:
 
 
 def _open_loop_acc(x1: np.ndarray, x2: np.ndarray, u: np.ndarray, sign: np.ndarray,
-                   c: tuple[float, ...], d: np.ndarray) -> np.ndarray:
+                   c: tuple[float, ...], d: np.ndarray, b: float = B_TRUE) -> np.ndarray:
     c1, c2, c3 = c[:3]
-    return B_TRUE * u - c1 * np.sin(x1) - c2 * x2 - c3 * sign - d * x2
+    return b * u - c1 * np.sin(x1) - c2 * x2 - c3 * sign - d * x2
 
 
 def _damping_of(damping: Signal | None) -> Callable[[float], float]:
@@ -114,8 +115,8 @@ def _sample_times(rate: float, duration: float) -> np.ndarray:
 
 def open_loop_accurate(rate: float, duration: float = OPEN_LOOP_DURATION, *,
                        torque: Signal = multisine, c: tuple[float, ...] = C_TRUE,
-                       damping: Signal | None = None, breaks: tuple[float, ...] = ()
-                       ) -> Dataset:
+                       damping: Signal | None = None, breaks: tuple[float, ...] = (),
+                       b: float = B_TRUE, name: str = "A") -> Dataset:
     """DOP853 at rtol = atol = 1e-12 with the Coulomb friction handled exactly.
 
     The velocity sign is a mode s in {-1, 0, +1}; a terminal event at x' = 0
@@ -130,7 +131,7 @@ def open_loop_accurate(rate: float, duration: float = OPEN_LOOP_DURATION, *,
     t_samples = _sample_times(rate, duration)
 
     def drive(t: float, x1: float) -> float:  # acceleration without the friction terms
-        return B_TRUE * float(torque(t)) - c1 * math.sin(x1)
+        return b * float(torque(t)) - c1 * math.sin(x1)
 
     def mode_of(t: float, x1: float) -> int:
         f0 = drive(t, x1)
@@ -160,8 +161,11 @@ def open_loop_accurate(rate: float, duration: float = OPEN_LOOP_DURATION, *,
             event.direction = -s
         event.terminal = True
         stop = min([b for b in breaks if t0 < b < end] + [end])
+        # Stuck, nothing moves and the solver's steps grow without bound: cap them so
+        # that the breakaway event cannot fall between two steps (a long stick).
         sol = solve_ivp(rhs, (t0, stop), state, method="DOP853", rtol=1e-12, atol=1e-12,
-                        events=event, dense_output=True)
+                        events=event, dense_output=True,
+                        max_step=STUCK_MAX_STEP if mode == 0 else math.inf)
         t1 = float(sol.t[-1])
         segments.append((t0, t1, sol.sol, mode))
         if sol.status != 1:  # reached a break or the end
@@ -191,9 +195,9 @@ def open_loop_accurate(rate: float, duration: float = OPEN_LOOP_DURATION, *,
             x1[sel], x2[sel], sign[sel] = x[0], (x[1] if m else 0.0), m
     u = torque(t_samples)
     d = _damping_samples(damping, t_samples)
-    acc = np.where(sign == 0, 0.0, _open_loop_acc(x1, x2, u, sign, c, d))
-    return Dataset("A", "accurate", t_samples, x1, x2, acc, u, np.zeros_like(t_samples), d,
-                   c=tuple(c[:3]), meta={"segments": len(segments),
+    acc = np.where(sign == 0, 0.0, _open_loop_acc(x1, x2, u, sign, c, d, b))
+    return Dataset(name, "accurate", t_samples, x1, x2, acc, u, np.zeros_like(t_samples), d,
+                   b=b, c=tuple(c[:3]), meta={"segments": len(segments),
                          "stuck_segments": sum(1 for s in segments if s[3] == 0)})
 
 

@@ -7,7 +7,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from .methods import BASELINE_METHODS, METHODS
-from .sensors import MEASUREMENTS, MODEL_ERRORS
+from .sensors import measurement, model_error
 
 Row = dict  # one entry of results.json "rows"
 
@@ -52,9 +52,9 @@ def fmt(x: float) -> str:
 
 def row_label(row: Row) -> list[str]:
     """The condition columns of a row."""
-    model = "scenario" if row["model"] == "scenario" else MODEL_ERRORS[row["model"]].label
+    model = "scenario" if row["model"] == "scenario" else model_error(row["model"]).label
     return [row["dataset"], row["plant"], f"{row['rate'] // 1000} kHz",
-            MEASUREMENTS[row["measurement"]].label, model]
+            measurement(row["measurement"]).label, model]
 
 
 def short_label(row: Row) -> str:
@@ -178,9 +178,11 @@ def write_markdown(path: Path, rows: Sequence[Row], header: Sequence[str]) -> No
     path.write_text("\n".join(lines) + "\n")
 
 
-def write_figure(path: Path, rows: Sequence[Row]) -> None:
-    """Velocity RMS and worst parameter error against the measurement error level
-    (data set A, accurate plant, exact b): 1 kHz solid, 10 kHz dashed, encoders as markers."""
+def write_figure(path: Path, rows: Sequence[Row], datasets: Sequence[str] = ("A",),
+                 model: str = "b-exact") -> None:
+    """Velocity RMS and worst parameter error against the measurement error level, one
+    row of panels per data set (accurate plant, the given nominal model): 1 kHz solid,
+    10 kHz dashed (other rates are in the tables), encoders as open markers."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -188,33 +190,34 @@ def write_figure(path: Path, rows: Sequence[Row]) -> None:
 
     floor = 3e-8  # where "noise-free" is drawn on the log axis
     colors = dict(zip(METHODS, ["C3", "C1", "C0", "C2", "C4"]))
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.6))
-    for ax, metric, ylabel in ((axes[0], "vel_rms", "velocity RMS error [rad/s]"),
-                               (axes[1], "param_worst", "worst relative error of c1..c3")):
-        for rate, style in ((1000, "-"), (10000, "--")):
-            sel = [r for r in rows if r["dataset"] == "A" and r["plant"] == "accurate"
-                   and r["rate"] == rate and r["model"] == "b-exact"]
-            gauss = sorted((r for r in sel if not MEASUREMENTS[r["measurement"]].bits),
-                           key=lambda r: MEASUREMENTS[r["measurement"]].level)
-            enc = [r for r in sel if MEASUREMENTS[r["measurement"]].bits]
-            for m in METHODS:
-                xs = [max(MEASUREMENTS[r["measurement"]].level, floor) for r in gauss]
-                ys = [value(r, m, metric) for r in gauss]
-                if xs:
-                    ax.plot(xs, ys, style, marker="o", ms=3, color=colors[m],
-                            label=f"{m} {rate // 1000} kHz")
-                for r in enc:
-                    ax.plot(MEASUREMENTS[r["measurement"]].level, value(r, m, metric),
-                            "s" if rate == 1000 else "D", mfc="none", color=colors[m])
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("measurement error std [rad] (noise-free at the left edge; "
-                      "open markers: encoders)", fontsize=8)
-        ax.set_ylabel(ylabel)
-        ax.grid(True, which="both", alpha=0.3)
-    axes[0].set_title("open loop, accurate plant: velocity")
-    axes[1].set_title("open loop, accurate plant, exact b: parameters")
-    axes[0].legend(fontsize=7, ncol=2)
+    fig, axes = plt.subplots(len(datasets), 2, figsize=(12, 4.6 * len(datasets)), squeeze=False)
+    for panels, name in zip(axes, datasets):
+        for ax, metric, ylabel in ((panels[0], "vel_rms", "velocity RMS error [rad/s]"),
+                                   (panels[1], "param_worst", "worst relative error of c1..c3")):
+            for rate, style in ((1000, "-"), (10000, "--")):
+                sel = [r for r in rows if r["dataset"] == name and r["plant"] == "accurate"
+                       and r["rate"] == rate and r["model"] == model]
+                gauss = sorted((r for r in sel if not measurement(r["measurement"]).bits),
+                               key=lambda r: measurement(r["measurement"]).level)
+                enc = [r for r in sel if measurement(r["measurement"]).bits]
+                for m in METHODS:
+                    xs = [max(measurement(r["measurement"]).level, floor) for r in gauss]
+                    ys = [value(r, m, metric) for r in gauss]
+                    if xs:
+                        ax.plot(xs, ys, style, marker="o", ms=3, color=colors[m],
+                                label=f"{m} {rate // 1000} kHz")
+                    for r in enc:
+                        ax.plot(measurement(r["measurement"]).level, value(r, m, metric),
+                                "s" if rate == 1000 else "D", mfc="none", color=colors[m])
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_xlabel("measurement error std [rad] (noise-free at the left edge; "
+                          "open markers: encoders)", fontsize=8)
+            ax.set_ylabel(ylabel)
+            ax.grid(True, which="both", alpha=0.3)
+        panels[0].set_title(f"{name}, open loop, accurate plant: velocity")
+        panels[1].set_title(f"{name}, {model_error(model).label}: parameters")
+        panels[0].legend(fontsize=7, ncol=2)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
