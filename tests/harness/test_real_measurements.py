@@ -148,3 +148,23 @@ def test_defaults_no_worse_than_the_paper_scheme_on_euler_plant_data(observer_fm
         error = out["z_eq_filtered"] - v[: out["t"].size]
         rms[name] = float(np.sqrt(np.mean(error[after] ** 2)))
     assert rms["defaults"] <= rms["paper"], rms
+
+
+def test_the_identified_model_fed_back_sharpens_the_velocity(observer_fmu, swing):
+    """model_feedback (the default): once the LSM has identified the joint, the observer
+    predicts with the identified model instead of the nominal one (b 10 % off, gravity
+    and friction the paper's guesses), so that its members track only what is left.
+    Noise 1e-4 rad: velocity RMS after 5 s 4.4e-4 rad/s against 5.0e-3 without (measured);
+    the estimates come from the same regression, shifted back to the nominal model, and
+    agree within 0.3 of their standard errors (measured)."""
+    t, theta, omega, u = swing
+    y = theta + np.random.default_rng(3).normal(0.0, 1e-4, theta.size)
+    after = t >= 5.0
+    on = _identify(observer_fmu, t, y, u)
+    off = _identify(observer_fmu, t, y, u, model_feedback=False)
+    rms = {name: float(np.sqrt(np.mean((o["x2_hat"] - omega)[after] ** 2)))
+           for name, o in (("on", on), ("off", off))}
+    assert rms["on"] < 0.2 * rms["off"], rms
+    for key, std in [(f"theta_hat[1,{k}]", f"theta_std[1,{k}]") for k in (1, 2, 3)] + [
+            ("b_hat", "b_std")]:
+        assert abs(on[key][-1] - off[key][-1]) < on[std][-1], key

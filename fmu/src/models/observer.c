@@ -13,6 +13,7 @@
 #include "../core/implicit_twisting.h"
 #include "../core/information_identifier.h"
 #include "../core/joint_model.h"
+#include "../core/model_feedback.h"
 #include "../core/noise_adaptive.h"
 #include "../core/small_loops.h"
 #include "../core/super_twisting.h"
@@ -40,6 +41,7 @@ typedef struct {
     int identifier_form, identifier_start, filter_regressor, mff_drift, identify_b;
     double convergence_window;
     double tau_identifier;
+    int model_feedback;
     int max_internal_steps;
     /* calculated parameters */
     double alpha1_used[MAX_N], alpha2_used[MAX_N];
@@ -73,6 +75,14 @@ typedef struct {
     int slot_velocity, slot_velocity_sign; /* joint: where x2, sign(x2) go in phi_now (MAX_L:
                                             * not selected) */
     int slot_input;             /* joint: where u goes in phi_now (MAX_L: not identified) */
+    /* model_feedback: the joint model the observer predicts with, b_model = b + D_b,
+     * c_model = c_nominal - D (D in the identifier's Delta units, model_delta), and the
+     * identifier's injection shifted back to the nominal model, D phi through the
+     * followed member's filter G (model_shadow) and the identifier's filter (model_z) */
+    double b_model, c_model[JOINT_BASIS_SIZE];
+    double model_delta[MAX_L];
+    double model_shadow[3];
+    double model_z;
 } ObserverData;
 
 #define OFF(field) offsetof(ObserverData, field)
@@ -173,6 +183,12 @@ static const ModelVariable VARIABLES[] = {
      PARAM(.offset = OFF(convergence_window), .start = 0.05, .min = 0.0, .max = NAN,
      .min_exclusive = true, .unit = "s",
      .description = "Time constant of the convergence test (rate of sign switching of e)")},
+    {.name = "model_feedback", .vr = 117, .type = TYPE_BOOLEAN,
+     PARAM(.offset = OFF(model_feedback), .start = 1, UNBOUNDED,
+     .description = "Built-in joint, LSM in information form: once identified (from "
+                    "1 s of data on), the observer predicts with the identified b "
+                    "and c, each correction weighted by its significance; z_eq is then the "
+                    "perturbation beyond that model. false: always the nominal b, c_nominal")},
     {.name = "tau_identifier", .vr = 116, .type = TYPE_REAL,
      PARAM(.offset = OFF(tau_identifier), .start = 0.1, .min = 0.0, .max = NAN, .unit = "s",
      .description = "LSM in information form: time constant of the filter on both sides of "
@@ -349,6 +365,39 @@ static ModelStatus complete_gains(ObserverData *d, const ModelLogger *log)
     return status;
 }
 
+/* model_feedback applies: the built-in joint's LSM in information form with the
+ * regression filtered on both sides, under an implicit scheme. */
+static int feedback_on(const ObserverData *d)
+{
+    return d->model_feedback && d->nominal_model == NOMINAL_JOINT &&
+           d->identifier == IDENTIFIER_LSM && d->identifier_form == FORM_INFORMATION &&
+           d->filter_regressor && d->scheme != STO_SCHEME_PAPER;
+}
+
+/* The model the observer predicts with (model_feedback.h): the nominal one until the
+ * LSM has FEEDBACK_START s of data, then the significant part of each identified
+ * correction, kept physical (friction not negative, b within a factor 2 of nominal). */
+static void update_model(ObserverData *d)
+{
+    d->b_model = d->b;
+    memcpy(d->c_model, d->c_nominal, sizeof d->c_model);
+    memset(d->model_delta, 0, sizeof d->model_delta);
+    if (!feedback_on(d) || !d->identifier_active || d->info.active_time < FEEDBACK_START) return;
+    for (int j = 0; j < d->m; ++j) {
+        const int k = d->selected[j];
+        const double delta = d->info.delta[0][j];
+        double D = delta * feedback_weight(delta, d->info.std_error[0][j]);
+        if (k == JOINT_INPUT) { /* Delta = b - bbar */
+            D = fmin(fmax(D, fmin(-0.5 * d->b, d->b)), fmax(-0.5 * d->b, d->b));
+            d->b_model = d->b + D;
+        } else { /* Delta = cbar - c */
+            if (k == JOINT_VELOCITY || k == JOINT_VELOCITY_SIGN) D = fmin(D, d->c_nominal[k]);
+            d->c_model[k] = d->c_nominal[k] - D;
+        }
+        d->model_delta[j] = D;
+    }
+}
+
 static ModelStatus initialize(void *data, double start_time, const ModelLogger *log)
 {
     (void)start_time;
@@ -417,6 +466,9 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     memset(d->phi_now, 0, sizeof d->phi_now);
     memset(d->z_identifier, 0, sizeof d->z_identifier);
     d->identifier_active = 0;
+    update_model(d);
+    memset(d->model_shadow, 0, sizeof d->model_shadow);
+    d->model_z = 0.0;
     d->reset_seen = d->identifier_reset;
     publish_estimates(d);
     return status;
@@ -429,12 +481,13 @@ static uint64_t max_internal_steps(const void *data)
     return (uint64_t)((const ObserverData *)data)->max_internal_steps;
 }
 
-/* Restarts identification from the nominal parameters. */
+/* Restarts identification from the nominal parameters (and the observer's model). */
 static void restart_identifier(ObserverData *d)
 {
     identifier_init(&d->id, (IdentifierKind)d->identifier, d->n, d->m, d->h, d->rho, d->R);
     info_reset(&d->info);
     d->identifier_active = 0;
+    update_model(d);
 }
 
 /* What depends only on the inputs held over the communication step: the
@@ -448,7 +501,7 @@ static void nominal_model(const ObserverData *d, StoAcceleration acceleration[MA
     if (d->nominal_model == NOMINAL_JOINT) {
         joint_position_basis(d->y[0], regressor);
         regressor[JOINT_INPUT] = d->u;
-        acceleration[0] = joint_acceleration(d->b, d->c_nominal, d->u, regressor);
+        acceleration[0] = joint_acceleration(d->b_model, d->c_model, d->u, regressor);
     } else {
         for (int i = 0; i < d->n; ++i) {
             double a = d->F[i];
@@ -510,6 +563,8 @@ static int start_identifier(ObserverData *d, double t)
         memset(d->phi_filtered, 0, sizeof d->phi_filtered);
         memset(d->z_identifier, 0, sizeof d->z_identifier);
         memset(d->shadow, 0, sizeof d->shadow);
+        memset(d->model_shadow, 0, sizeof d->model_shadow);
+        d->model_z = 0.0;
         if (d->scheme == STO_SCHEME_ADAPTIVE) adaptive_follow_published(&d->bank);
     }
     return d->identifier_active;
@@ -540,9 +595,16 @@ KERNEL identify_run(ObserverData *d, const StoTrace *trace, int count, const int
         }
         d->z_identifier[i] = z;
     }
+    const int feedback = feedback_on(d);
     for (int k = 0; k < count; ++k) { /* regressor side */
         double *phi = samples[k].phi;
         take_velocity(d, trace, k);
+        if (feedback) { /* the injection against the nominal model: + D phi, filtered alike */
+            double shift = 0.0;
+            UNROLL for (int j = 0; j < m; ++j) shift += d->model_delta[j] * sample[j];
+            if (G) shift = adaptive_shadow_step(G, d->h, d->model_shadow, shift);
+            samples[k].z[0] += d->model_z += g * (shift - d->model_z);
+        }
         if (G) {
             UNROLL for (int j = 0; j < m; ++j) {
                 const double through_g = adaptive_shadow_step(G, d->h, d->shadow[j], sample[j]);
@@ -638,6 +700,7 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
     if (d->scheme == STO_SCHEME_ADAPTIVE) adaptive_outputs(&d->obs, &d->bank);
     else sto_update_outputs(&d->obs);
     publish_estimates(d);
+    update_model(d);
     for (int i = 0; i < d->n; ++i) {
         if (!isfinite(d->obs.x1_hat[i]) || !isfinite(d->obs.x2_hat[i])) {
             explain_divergence(d, t, i, log);
