@@ -118,17 +118,25 @@ def judge(rows: Sequence[Row]) -> list[dict]:
 
 
 def targets_table(rows: Sequence[Row]) -> list[str]:
-    """The judged targets as a Markdown table, then one line per target naming the
-    methods that meet it."""
+    """The judged targets: a table of targets by methods (worst figure and verdict), a
+    line per target naming the methods that meet it, and where each worst figure is."""
     judged = judge(rows)
-    lines = ["| target | method | worst figure | where | rows | |", "|---|---|---|---|---|---|"]
-    for j in judged:
-        verdict = "reported" if j["met"] is None else ("met" if j["met"] else "**missed**")
-        lines.append(f"| {j['target']} | {j['method']} | {j['figure']} | {j['where']} | "
-                     f"{j['rows']} | {verdict} |")
+    methods = list(dict.fromkeys(j["method"] for j in judged))
+    targets = list(dict.fromkeys(j["target"] for j in judged))
+    cell = {(j["target"], j["method"]): j for j in judged}
+
+    def verdict(j: dict) -> str:
+        return "" if j["met"] is None else (" met" if j["met"] else " **missed**")
+
+    lines = ["| target | " + " | ".join(f"`{m}`" for m in methods) + " |",
+             "|---|" + "---|" * len(methods)]
+    for target in targets:
+        lines.append(f"| {target} | " + " | ".join(
+            f"{cell[target, m]['figure']}{verdict(cell[target, m])}" if (target, m) in cell
+            else "-" for m in methods) + " |")
     lines.append("")
-    for target in dict.fromkeys(j["target"] for j in judged):
-        mine = [j for j in judged if j["target"] == target]
+    for target in targets:
+        mine = [cell[target, m] for m in methods if (target, m) in cell]
         if mine[0]["met"] is None:
             continue
         met = [j["method"] for j in mine if j["met"]]
@@ -136,6 +144,13 @@ def targets_table(rows: Sequence[Row]) -> list[str]:
         lines.append(f"* {target}: met by {', '.join(f'`{m}`' for m in met) or 'none'}"
                      + (f"; missed by {', '.join(f'`{m}`' for m in missed)}" if missed else "")
                      + ".")
+    lines += ["", "Where each worst figure is (robot, rate, encoder; of how many rows):", "",
+              "| target | " + " | ".join(f"`{m}`" for m in methods) + " |",
+              "|---|" + "---|" * len(methods)]
+    for target in targets:
+        lines.append(f"| {target} | " + " | ".join(
+            f"{cell[target, m]['where']} ({cell[target, m]['rows']})" if (target, m) in cell
+            else "-" for m in methods) + " |")
     return lines
 
 
