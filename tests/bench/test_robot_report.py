@@ -59,7 +59,7 @@ def test_velocity_is_compared_joint_by_joint():
     # the largest RMS (1.0) is below the largest Kalman RMS (2.0), but joint 2 is worse
     # than its own Kalman filter
     rows = [row(velocity=(1.0, 0.6), kalman=(2.0, 0.5))]
-    j = judged(rows)["velocity RMS <= the causal Kalman filter's"]
+    j = judged(rows)["velocity RMS <= the causal Kalman filter's, worst joint's ratio"]
     assert j["met"] is False
     assert j["figure"] == "x1.200"
 
