@@ -5,8 +5,8 @@ the logs of bench/robots.py:
 
 The robot, its truth and its 10 s training log (1 kHz, seed 1) are bench/robots.py's;
 the observer's model is the one the `sg` pipeline identifies from the log, with the
-Coulomb shape sat(q'/0.02) (the truth's) unless stated, and fixed gains (the tuned ones
-of docs/robots.md).  Each row identifies the base parameters from 0.2 s on and prints
+Coulomb shape sat(q'/0.02) (the truth's) unless stated, and fixed gains (bench/robots.py's
+tuning at 1e4f058, GAINS below).  Each row identifies the base parameters from 0.2 s on and prints
 the largest friction errors over the joints (viscous, Coulomb) and the torque prediction
 error on the validation log:
 
@@ -35,7 +35,8 @@ from harness.robot.examples import example_urdf  # noqa: E402
 from harness.robot.pipeline import JointLog, identify_robot  # noqa: E402
 from harness.robot.urdf import read_urdf  # noqa: E402
 
-# (alpha1, alpha2) tuned by bench/robots.py (docs/robots.md), noise-free and 17 bit
+# (alpha1, alpha2) tuned by bench/robots.py at 1e4f058, noise-free and 17 bit (kept so that
+# the documented rows stay reproducible; the current tuning: docs/robots_results.md)
 GAINS = {"double_pendulum": ((10.0, 0.95), (0.75, 0.87)), "ur5": ((5.6, 0.71), (0.56, 0.75)),
          "panda": ((4.2, 20.5), (1.0, 1.0))}
 CONTROL = {"double_pendulum": (50.0, 5.0), "ur5": (400.0, 40.0), "panda": (200.0, 20.0)}

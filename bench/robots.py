@@ -1,7 +1,14 @@
 """Serial robots (issue 11): identification from joint logs against the field's baselines.
 
-    .venv/bin/python bench/robots.py [--rates 1000,10000] [--seconds 20] [--methods ...]
-                                     [--out docs/robots.md]
+    .venv/bin/python bench/robots.py [--rates 1000,10000] [--seconds 20] [--robots ...]
+        [--methods ...] [--model-left-out ROBOT@RATE,...] [--out docs/robots_results.md]
+        [--results build/robots/results.json]
+    .venv/bin/python bench/robots.py --from-results build/robots/results.json --out FILE
+
+--out writes the generated results document (bench/robot_report.py: conditions, the
+issue's targets judged from the rows, one table per rate); docs/robots_results.md is
+one (edit the scripts, not the document).  Every row goes to --results as well, after
+each robot and rate, so that the document can be written again without a new run.
 
 Robots: the two-link arm (example-robot-data's double pendulum) with an unknown 0.3 kg
 tip payload (unknown: the payload and the friction), the UR5 and the Panda arm with
@@ -24,6 +31,12 @@ friction errors (max over joints), identification time."""
 from __future__ import annotations
 
 import argparse
+import hashlib
+import json
+import os
+import shlex
+import shutil
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -31,9 +44,11 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / "bench"))
+sys.path.insert(0, str(REPO))
 
+import robot_report  # noqa: E402
 from realdata.baselines import kalman, tune_log10  # noqa: E402
 from robot_observer_methods import MODEL_METHODS, model_observer  # noqa: E402
 from robot_trajectories import quantize, simulate  # noqa: E402
@@ -91,22 +106,23 @@ def prediction_error(robot, pi, validation) -> float:
     return float(np.sqrt(np.mean(error ** 2)) / np.sqrt(np.mean(tau ** 2)))
 
 
-def kalman_velocity_rms(q, qd, h, skip) -> float:
-    worst = 0.0
+def kalman_velocity_rms(q, qd, h, skip) -> list[float]:
+    """The oracle-tuned causal Kalman filter's velocity RMS per joint."""
+    out = []
     for i in range(q.shape[1]):
         def cost(lam, i=i):
             return float(np.sqrt(np.mean((kalman(q[:, i], h, lam)[1][skip:] - qd[skip:, i]) ** 2)))
         _, best = tune_log10(cost, -18, 0, coarse=1.0)  # lambda ~ h^5: down to 1e-18 at 10 kHz
-        worst = max(worst, best)
-    return worst
+        out.append(best)
+    return out
 
 
 METHODS = ("sg", "observer", "SG+LS", *MODEL_METHODS)
-FMU = Path(__file__).resolve().parents[1] / "build" / "fmus" / "RobotObserver.fmu"
+FMU = REPO / "build" / "fmus" / "RobotObserver.fmu"
 
 
 def run_case(name: str, rate: float, seconds: float, seed: int = 1,
-             methods: tuple[str, ...] = METHODS) -> list[dict]:
+             methods: tuple[str, ...] = METHODS, fmu: Path = FMU) -> list[dict]:
     path, locked = example_urdf(name)
     robot = read_urdf(path, locked=locked)
     rng = np.random.default_rng(seed)
@@ -129,7 +145,7 @@ def run_case(name: str, rate: float, seconds: float, seed: int = 1,
         qm = q if bits is None else quantize(q, bits)
         log = JointLog(t, qm, tau)
         kalman_rms = kalman_velocity_rms(qm, qd, h, skip)
-        shared = {"fmu": FMU}  # the model-based methods' identified model and gains
+        shared = {"fmu": fmu}  # the model-based methods' identified model and gains
         for method in methods:
             started = time.perf_counter()
             if method in MODEL_METHODS:
@@ -151,15 +167,21 @@ def run_case(name: str, rate: float, seconds: float, seed: int = 1,
             else:
                 result = identify_robot(robot, log, unknown=unknown, method=method)
                 pi, velocity = result.pi, result.velocity
+                if method == "sg":  # the model the model-based methods observe with
+                    shared["identified"] = pi
             cost = time.perf_counter() - started
             friction_error = np.abs(pi[10 * robot.n:] - truth_pi[10 * robot.n:]) / truth_pi[10 * robot.n:]
             payload_error = (abs(pi[10 * (robot.n - 1)] - link[-1, 0]) / PAYLOAD
                              if name == "double_pendulum" else float("nan"))
+            joints = np.sqrt(np.mean((velocity[skip:-skip] - qd[skip:-skip]) ** 2, axis=0))
             rows.append({
                 "robot": name, "rate": rate, "encoder": "exact" if bits is None else f"{bits} bit",
                 "method": method,
-                "velocity_rms": float(np.sqrt(np.mean((velocity[skip:-skip] - qd[skip:-skip]) ** 2, axis=0)).max()),
-                "kalman_rms": kalman_rms,
+                "velocity_rms": float(joints.max()), "kalman_rms": max(kalman_rms),
+                "velocity_rms_joints": [float(v) for v in joints],
+                "kalman_rms_joints": kalman_rms,
+                "tuned": list(shared["tuned"]) if method in ("model obs (ident.)", "FMU")
+                and "tuned" in shared else None,
                 "prediction": prediction_error(robot, pi, validation),
                 "payload": payload_error,
                 "viscous": float(friction_error[0::2].max()),
@@ -182,7 +204,25 @@ def format_row(r: dict) -> str:
             f"{r['seconds']:.1f} |")
 
 
-def main() -> int:
+def _json_safe(x):  # noqa: ANN001, ANN202 -- NaN (no payload) as null: strict JSON
+    if isinstance(x, float) and not np.isfinite(x):
+        return None
+    if isinstance(x, dict):
+        return {k: _json_safe(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_json_safe(v) for v in x]
+    return x
+
+
+def _commit() -> str:
+    try:
+        return subprocess.run(["git", "describe", "--always", "--dirty", "--abbrev=10"],
+                              cwd=REPO, capture_output=True, text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--rates", default="1000", help="comma-separated sampling rates [Hz]")
     parser.add_argument("--seconds", type=float, default=20.0, help="training log length [s]")
@@ -190,17 +230,59 @@ def main() -> int:
     parser.add_argument("--methods", default=",".join(METHODS),
                         help=f"comma-separated, of {', '.join(METHODS)} (FMU after "
                              f"'model obs (ident.)')")
-    parser.add_argument("--out", default=None, help="write the table (Markdown) here")
-    args = parser.parse_args()
+    parser.add_argument("--model-left-out", default="",
+                        help="comma-separated ROBOT@RATE (e.g. ur5@10000) where the model-based "
+                             "methods (tuned on the truth: slow at 10 kHz) are not run")
+    parser.add_argument("--out", default=None,
+                        help="write the generated results document (Markdown) here, e.g. "
+                             "docs/robots_results.md")
+    parser.add_argument("--results", type=Path, default=REPO / "build" / "robots" / "results.json",
+                        help="every row as JSON, rewritten after each robot and rate")
+    parser.add_argument("--from-results", type=Path, default=None,
+                        help="do not run: write --out from a results JSON of an earlier run")
+    args = parser.parse_args(argv)
+    if args.from_results:
+        run = json.loads(args.from_results.read_text())
+        if args.out:
+            robot_report.write_document(Path(args.out), run)
+        return 0
+    methods = tuple(args.methods.split(","))
+    unknown = set(methods) - set(METHODS)
+    if unknown:
+        parser.error(f"unknown methods {sorted(unknown)}: choose from {METHODS}")
+    left_out = [x for x in args.model_left_out.split(",") if x]
+    # the FMU as it was when the run started: a rebuild of build/fmus during it does not
+    # mix versions
+    args.results.parent.mkdir(parents=True, exist_ok=True)
+    fmu = args.results.parent / FMU.name
+    if "FMU" in methods:
+        if not FMU.exists():
+            print(f"{FMU} is missing: run ./build.sh fmus", file=sys.stderr)
+            return 2
+        shutil.copyfile(FMU, fmu)
+    run = {
+        "command": shlex.join([".venv/bin/python", "bench/robots.py",
+                               *(sys.argv[1:] if argv is None else argv)]),
+        "commit": _commit(), "seconds": args.seconds, "seed": 1,
+        "robots": args.robots.split(","), "rates": [float(r) for r in args.rates.split(",")],
+        "methods": list(methods), "model_left_out": left_out,
+        "fmu_sha256": hashlib.sha256(fmu.read_bytes()).hexdigest() if "FMU" in methods else None,
+        "load_start": os.getloadavg()[0], "rows": [], "finished": False}
     print(HEADER)
     started = time.perf_counter()
-    rows = []
-    for name in args.robots.split(","):
-        for rate in map(float, args.rates.split(",")):
-            rows += run_case(name, rate, args.seconds, methods=tuple(args.methods.split(",")))
-    print(f"total run time {time.perf_counter() - started:.0f} s")
+    for name in run["robots"]:
+        for rate in run["rates"]:
+            chosen = tuple(m for m in methods
+                           if m not in MODEL_METHODS or f"{name}@{rate:g}" not in left_out)
+            run["rows"] += run_case(name, rate, args.seconds, methods=chosen, fmu=fmu)
+            run["runtime_s"] = round(time.perf_counter() - started, 1)
+            run["load_end"] = os.getloadavg()[0]
+            args.results.write_text(json.dumps(_json_safe(run), indent=1))
+    run["finished"] = True
+    args.results.write_text(json.dumps(_json_safe(run), indent=1))
+    print(f"total run time {time.perf_counter() - started:.0f} s; rows in {args.results}")
     if args.out:
-        Path(args.out).write_text(HEADER + "\n" + "\n".join(map(format_row, rows)) + "\n")
+        robot_report.write_document(Path(args.out), json.loads(args.results.read_text()))
     return 0
 
 
