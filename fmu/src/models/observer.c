@@ -186,7 +186,7 @@ static const ModelVariable VARIABLES[] = {
     {.name = "model_feedback", .vr = 117, .type = TYPE_BOOLEAN,
      PARAM(.offset = OFF(model_feedback), .start = 1, UNBOUNDED,
      .description = "Built-in joint, LSM in information form: once identified (from "
-                    "1 s of data on), the observer predicts with the identified b "
+                    "1 s of data on, entering over 1 s), the observer predicts with the identified b "
                     "and c, each correction weighted by its significance; z_eq is then the "
                     "perturbation beyond that model. false: always the nominal b, c_nominal")},
     {.name = "tau_identifier", .vr = 116, .type = TYPE_REAL,
@@ -374,19 +374,14 @@ static int feedback_on(const ObserverData *d)
            d->filter_regressor && d->scheme != STO_SCHEME_PAPER;
 }
 
-/* The model the observer predicts with (model_feedback.h): the nominal one until the
- * LSM has FEEDBACK_START s of data, then the significant part of each identified
- * correction, kept physical (friction not negative, b within a factor 2 of nominal). */
-static void update_model(ObserverData *d)
+/* The significant part of each identified correction (model_feedback.h), kept
+ * physical: friction not negative, b within a factor 2 of the nominal. */
+static void take_identified_model(ObserverData *d)
 {
-    d->b_model = d->b;
-    memcpy(d->c_model, d->c_nominal, sizeof d->c_model);
-    memset(d->model_delta, 0, sizeof d->model_delta);
-    if (!feedback_on(d) || !d->identifier_active || d->info.active_time < FEEDBACK_START) return;
     for (int j = 0; j < d->m; ++j) {
         const int k = d->selected[j];
         const double delta = d->info.delta[0][j];
-        double D = delta * feedback_weight(delta, d->info.std_error[0][j]);
+        double D = delta * feedback_weight(delta, d->info.std_error[0][j], d->info.active_time);
         if (k == JOINT_INPUT) { /* Delta = b - bbar */
             D = fmin(fmax(D, fmin(-0.5 * d->b, d->b)), fmax(-0.5 * d->b, d->b));
             d->b_model = d->b + D;
@@ -396,6 +391,24 @@ static void update_model(ObserverData *d)
         }
         d->model_delta[j] = D;
     }
+}
+
+/* The model the observer predicts with: the nominal one until the LSM has
+ * FEEDBACK_START s of data, then the identified one (entering over FEEDBACK_RAMP). */
+static void update_model(ObserverData *d)
+{
+    const double coulomb_before = d->c_model[JOINT_VELOCITY_SIGN];
+    d->b_model = d->b;
+    memcpy(d->c_model, d->c_nominal, sizeof d->c_model);
+    memset(d->model_delta, 0, sizeof d->model_delta);
+    if (feedback_on(d) && d->identifier_active) take_identified_model(d);
+    /* The implicit corrector learns the Coulomb level the model misses
+     * (implicit_twisting.h): keep the total level, model plus learned, where it
+     * was instead of relearning it over the next reversals. */
+    const double coulomb = d->c_model[JOINT_VELOCITY_SIGN];
+    if (coulomb != coulomb_before)
+        d->obs.coulomb_learned[0] =
+            fmax(d->obs.coulomb_learned[0] + coulomb_before - coulomb, -coulomb);
 }
 
 static ModelStatus initialize(void *data, double start_time, const ModelLogger *log)
@@ -466,6 +479,7 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     memset(d->phi_now, 0, sizeof d->phi_now);
     memset(d->z_identifier, 0, sizeof d->z_identifier);
     d->identifier_active = 0;
+    memcpy(d->c_model, d->c_nominal, sizeof d->c_model);
     update_model(d);
     memset(d->model_shadow, 0, sizeof d->model_shadow);
     d->model_z = 0.0;
