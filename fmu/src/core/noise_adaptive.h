@@ -190,14 +190,18 @@ typedef struct {
     int started[STO_MAX_DOF];            /* the members run (the observer has converged) */
     unsigned waited[STO_MAX_DOF];        /* steps before they started */
     unsigned age[STO_MAX_DOF];           /* steps since they started */
-    int selected[STO_MAX_DOF];           /* whose velocity is published: a member index or
-                                          * ADAPTIVE_SUPER_TWISTING */
+    int selected[STO_MAX_DOF];           /* whose velocity is chosen (select_members): a
+                                          * member index or ADAPTIVE_SUPER_TWISTING */
+    int published[STO_MAX_DOF];          /* whose velocity is published at the last sample:
+                                          * `selected`, or while the super-twisting injection
+                                          * saturates, the member of the smallest one-step
+                                          * mean square (stand_in) */
     int perturbation[STO_MAX_DOF];       /* whose injection is published (select_members) */
     int follow;                          /* the member the identifier follows */
     double z_filtered[STO_MAX_DOF];      /* the published perturbation */
     double sta_filtered[STO_MAX_DOF];    /* the super-twisting injection through the tau filter */
     double noise_std[STO_MAX_DOF];       /* estimated measurement noise [rad] */
-    double bandwidth[STO_MAX_DOF];       /* omega of the selected member (1/h: super-twisting) */
+    double bandwidth[STO_MAX_DOF];       /* omega of the published member (1/h: super-twisting) */
     double velocity[STO_MAX_DOF];        /* the published velocity at the last sample */
 } AdaptiveBank;
 
