@@ -4,11 +4,17 @@
     .venv/bin/python bench/identifier_filter.py [--taus 0.002,0.03,0.05,0.1,0.2]
         [--rows A,6.2] [--results build/real_measurements] [--fmu-dir build/fmus] [--jobs 2]
 
+    # the held-out joints (bench/realdata/held_out.py):
+    .venv/bin/python bench/real_measurements.py --held-out --keep-data --out build/held_out
+    .venv/bin/python bench/identifier_filter.py --rows C-fast,C-heavy,C-chirp \
+        --results build/held_out
+
 Runs fmu-default (bench/realdata/methods.py) on the rows of bench/real_measurements.py's
-grid whose identifier is LSM (data set A and the 6.2 loop), once per value of
-tau_identifier, on the trajectories that run kept, and prints per row the worst
-relative parameter error at the end next to the best baseline's (Savitzky-Golay,
-Kalman or RTS + least squares, from that run's results.json) and the paper's method's.
+grid whose identifier is LSM (data set A and the 6.2 loop, or the held-out joints),
+once per value of tau_identifier, on the trajectories that run kept, and prints per
+row the worst relative parameter error at the end next to the best baseline's
+(Savitzky-Golay, Kalman or RTS + least squares, from that run's results.json) and the
+paper's method's.
 A "*" marks a value worse than the best baseline.  Prints only (no docs).
 """
 from __future__ import annotations
@@ -65,7 +71,7 @@ def main() -> None:
     reference = {(r["dataset"], r["plant"], r["rate"], r["measurement"], r["model"]): r
                  for r in json.loads(results.read_text())["rows"]}
     names = args.rows.split(",")
-    grid = [c for c in rm.full_grid() if c[0] in names]
+    grid = [c for c in rm.full_grid() + rm.held_out_grid() if c[0] in names]
     taus = [float(t) for t in args.taus.split(",")]
     fmu = args.fmu_dir / "SuperTwistingObserver.fmu"
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
