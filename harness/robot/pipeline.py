@@ -4,9 +4,11 @@
 
 DATA.csv has a header and columns t, q1..qn (rad, or m for prismatic joints), u1..un
 (N.m or N); other names map with --column q1=shoulder_pos etc.  Steps:
-1. velocities: Savitzky-Golay (zero-phase, the default; with accelerations and the
-   torques filtered alike) or a causal, model-free observer per joint, the observer
-   FMU's default estimator through the C core (observer_velocities);
+1. velocities: Savitzky-Golay (zero-phase, the default: the regression's signals over
+   a fixed window, accelerations and torques filtered alike; the velocities written over
+   a window each joint chooses, harness.robot.smoothing) or a causal, model-free
+   observer per joint, the observer FMU's default estimator through the C core
+   (observer_velocities);
 2. the base regressor of the URDF's model (C core): at the smoothed signals (sg) or in
    momentum form through a causal filter, with no acceleration (observer,
    harness.robot.filtered_regression); torque-space weighted least squares with
@@ -29,6 +31,7 @@ from .base_parameters import BaseParameters, base_parameters
 from .filtered_regression import filtered_regression, low_pass
 from .consistency import consistent_parameters, write_identified_urdf
 from .least_squares import Fit, torque_least_squares
+from .smoothing import adaptive_velocities
 from .urdf import Robot
 
 
@@ -129,6 +132,7 @@ class Identification:
     pi: np.ndarray                # consistent standard parameters (12 n)
     velocity: np.ndarray          # (N, n)
     used: np.ndarray              # indices of the samples used in the regression
+    velocity_window: np.ndarray | None = None  # per joint [s] ("sg": the velocity's window)
 
 
 def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: str = "sg",
@@ -155,12 +159,12 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     base = base_parameters(body, types, robot.joint_names, unknown)
     if method == "sg":
         q, qd, qdd, u = savitzky_golay(log, window)
-        velocity = qd
+        velocity, velocity_window = adaptive_velocities(log.q, log.step)
         Y, torque = body.regressor(q[used], qd[used], qdd[used]), u[used]
         margin, slow_margin, memory = window, 0.0, window
     else:
         bound = 1.5 * np.abs(savitzky_golay(log, max(window, 0.05))[2]).max(axis=0) + 1e-3
-        velocity = observer_velocities(log, bound)
+        velocity, velocity_window = observer_velocities(log, bound), None
         Y, torque = filtered_regression(body, log.q, velocity, log.u, log.step, tau, used)
         qd = low_pass(velocity, log.step, tau)
         margin = slow_margin = max(window, 4 * tau)
@@ -174,7 +178,7 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     check_friction_rows(mask, qd[used], robot.joint_names, min_speed)
     fit = torque_least_squares(base.regressor(Y), z, batch=correlation, mask=mask)
     pi = consistent_parameters(robot, base, fit.beta, fit.std_error)
-    return Identification(base, fit, pi, velocity, used)
+    return Identification(base, fit, pi, velocity, used, velocity_window)
 
 
 def friction_rows(velocity: np.ndarray, h: float, margin: float,
@@ -281,6 +285,8 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
         "condition_number": result.fit.condition,
         "base_parameters": result.base.count,
         "samples_used": int(len(result.used)),
+        **({} if result.velocity_window is None else
+           {"velocity_window_s": dict(zip(names, result.velocity_window.tolist()))}),
     }, indent=2) + "\n")
     plot = out / "velocities.png"
     import matplotlib

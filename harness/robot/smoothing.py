@@ -1,0 +1,69 @@
+"""Zero-phase velocities for the offline pipeline: Savitzky-Golay derivatives whose
+window each joint chooses from its own data (Lepski's rule).
+
+The regression keeps its fixed window (pipeline.savitzky_golay, 0.05 s), which the
+parameters were validated with; the velocities the pipeline writes come from here.  A
+fixed 0.05 s window left exact samples 9-1200 times the oracle-tuned causal Kalman
+filter's velocity RMS (its polynomial cannot follow a multi-sine over 50 ms) and was
+too short for 17-bit encoders at 10 kHz; per joint, growing the window while the
+estimate stays within the noise of every shorter one gave 0.17-0.57 times the Kalman
+filter's on the robot bench's logs (docs/robots.md).
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.signal import savgol_coeffs, savgol_filter
+
+ORDER = 4      # polynomial order of the fits
+GROWTH = 1.15  # between candidate windows
+KAPPA = 2.0    # a longer window is kept while it differs from each shorter one by less
+#               than KAPPA times that one's noise (1 failed on 17-bit encoders at 10 kHz,
+#               whose rounding is not white over 7 samples; 4 chose windows too long)
+LONGEST = 0.3  # [s]
+
+
+def noise_std(x: np.ndarray) -> float:
+    """The measurement noise of one joint's positions: the median absolute fourth
+    difference (for white noise of std s its variance is 70 s^2; a smooth trajectory
+    adds only h^4 q'''' to it, and the median ignores the kinks of a velocity reversal)."""
+    fourth = np.diff(x, 4)
+    return float(np.median(np.abs(fourth)) / 0.6745 / np.sqrt(70.0))
+
+
+def candidate_windows(h: float, samples: int) -> list[int]:
+    """Odd window lengths from ORDER + 3 samples up, GROWTH apart, at most LONGEST and a
+    third of the log."""
+    longest = min(LONGEST / h, samples / 3)
+    windows, length = [], ORDER + 3
+    while length <= longest:
+        windows.append(length if length % 2 else length + 1)
+        length = int(np.ceil(length * GROWTH)) + 1
+    return sorted(set(windows)) or [ORDER + 3]
+
+
+def joint_velocity(x: np.ndarray, h: float) -> tuple[np.ndarray, float]:
+    """One joint's velocity and the window chosen [s].  Lepski's rule: the longest
+    candidate whose velocity is within KAPPA standard deviations (of white noise of the
+    estimated level) of every shorter candidate's, compared away from the log's ends."""
+    windows = candidate_windows(h, x.size)
+    margin = windows[-1] // 2 + 1
+    inside = slice(margin, x.size - margin)
+    sigma = max(noise_std(x), 1e-15 * (1.0 + float(np.max(np.abs(x)))))
+    kept: list[tuple[np.ndarray, float]] = []  # each shorter velocity and its noise std
+    for length in windows:
+        velocity = savgol_filter(x, length, ORDER, deriv=1, delta=h)
+        if any(np.sqrt(np.mean((velocity[inside] - shorter[inside]) ** 2)) > KAPPA * std
+               for shorter, std in kept):
+            break
+        coefficients = savgol_coeffs(length, ORDER, deriv=1, delta=h)
+        kept.append((velocity, sigma * float(np.sqrt(np.sum(coefficients ** 2)))))
+        chosen = length
+    return kept[-1][0], chosen * h
+
+
+def adaptive_velocities(q: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """Every joint's zero-phase velocity (N, n) and the window each chose [s] (n,)."""
+    if q.shape[0] < 3 * (ORDER + 3):
+        raise ValueError(f"the log ({q.shape[0]} samples) is too short for the velocities")
+    columns = [joint_velocity(q[:, i], h) for i in range(q.shape[1])]
+    return np.column_stack([c[0] for c in columns]), np.array([c[1] for c in columns])
