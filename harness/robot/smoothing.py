@@ -50,6 +50,7 @@ def joint_velocity(x: np.ndarray, h: float) -> tuple[np.ndarray, float]:
     inside = slice(margin, x.size - margin)
     sigma = max(noise_std(x), 1e-15 * (1.0 + float(np.max(np.abs(x)))))
     kept: list[tuple[np.ndarray, float]] = []  # each shorter velocity and its noise std
+    chosen = windows[0]
     for length in windows:
         velocity = savgol_filter(x, length, ORDER, deriv=1, delta=h)
         if any(np.sqrt(np.mean((velocity[inside] - shorter[inside]) ** 2)) > KAPPA * std
