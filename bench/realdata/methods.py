@@ -90,8 +90,9 @@ def fmu_parameters(case: Case, method: str) -> dict[str, float | int | bool]:
                        if k.startswith("identify[")})
         params["identify_b"] = False
     if method == "fmu-paper":
-        # A and the held-out joints: the 6.2 values; B: the scenario's whole observer set-up (the paper's method
-        # as the harness reproduces it: PAPER_METHOD, gains, tau, t_id, rho, R, identify[k]).
+        # A and the held-out joints: the 6.2 values; B: the scenario's whole observer
+        # set-up (the paper's method as the harness reproduces it: PAPER_METHOD, gains,
+        # tau, t_id, rho, R, identify[k]).
         extra = PAPER_62 if case.open_loop else {k: v for k, v in SCENARIOS[name].observer.items()
                                               if k != "b" and not k.startswith("c_nominal")}
         params.update({**PAPER_METHOD, **extra})

@@ -298,6 +298,16 @@ static inline int choose(const AdaptiveBank *bank, int i, int current, int rank,
     return (member < sta ? member : sta) < ADAPTIVE_HYSTERESIS * now ? candidate : current;
 }
 
+/* The member of the smallest one-step innovation mean square (count > 0). */
+static inline int quietest_member(const AdaptiveBank *bank, int i)
+{
+    const AdaptiveMember *members = bank->member[i];
+    int best = 0;
+    for (int j = 1; j < bank->count; ++j)
+        if (members[j].stats.mean_square < members[best].stats.mean_square) best = j;
+    return best;
+}
+
 static inline AdaptiveSelection select_members(const AdaptiveBank *bank, int i, int selected,
                                                int source)
 {
@@ -308,9 +318,7 @@ static inline AdaptiveSelection select_members(const AdaptiveBank *bank, int i, 
     if (!saturating) {
         /* exact data: the deadbeat super-twisting corrector predicts the next
          * sample far better than any linear member and is kept */
-        double smallest = members[0].stats.mean_square;
-        for (int j = 1; j < bank->count; ++j)
-            if (members[j].stats.mean_square < smallest) smallest = members[j].stats.mean_square;
+        const double smallest = members[quietest_member(bank, i)].stats.mean_square;
         if (bank->sta[i].mean_square < ADAPTIVE_EXACT_RATIO * smallest) return super_twisting;
     }
     const AdaptiveStatistics *sta = &bank->sta[i];
@@ -356,11 +364,7 @@ static inline int stand_in(const AdaptiveBank *bank, int i, int selected, int sa
 {
     if (selected != ADAPTIVE_SUPER_TWISTING || !saturated || !bank->started[i] || bank->count == 0)
         return selected;
-    const AdaptiveMember *members = bank->member[i];
-    int best = 0;
-    for (int j = 1; j < bank->count; ++j)
-        if (members[j].stats.mean_square < members[best].stats.mean_square) best = j;
-    return best;
+    return quietest_member(bank, i);
 }
 
 void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[],

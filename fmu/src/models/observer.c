@@ -617,7 +617,8 @@ KERNEL identify_run(ObserverData *d, const StoTrace *trace, int count, const int
             double shift = 0.0;
             UNROLL for (int j = 0; j < m; ++j) shift += d->model_delta[j] * sample[j];
             if (G) shift = adaptive_shadow_step(G, d->h, d->model_shadow, shift);
-            samples[k].z[0] += d->model_z += g * (shift - d->model_z);
+            d->model_z += g * (shift - d->model_z);
+            samples[k].z[0] += d->model_z;
         }
         if (G) {
             UNROLL for (int j = 0; j < m; ++j) {
