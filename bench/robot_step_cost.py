@@ -8,15 +8,15 @@ FMU's whole internal step.
                                               [--fmu [--statistics-interval S]
                                                [--sample-period h] [--keep DIR]]
 
-Compiles bench/robot_step.c with the core at -O2 (the FMU's flags) and prints the
+Runs bench/robot_step.c as CMake built it (./build.sh fmus: the FMUs' flags) and prints the
 wall time per step (the median of --runs runs) and, with --callgrind, the instructions.
---against builds the same files of a git revision too (e.g. the commit before a change;
-the checkout's driver with the revision's core) and interleaves the two builds' runs, so
+--against builds a git revision's fmu/src too, with this checkout's CMake recipe and
+driver (e.g. the commit before a change) and interleaves the two builds' runs, so
 that both see the same load.  --identifier mff: MFF (R = 0.1, the FMU's default) instead
 of LSM, in both (--fmu: the FMU's parameter identifier = 2).
 
---fmu compiles bench/robot_fmu_step.c with the RobotObserver's sources (the
-<SourceFiles> of fmu/robot/modelDescription.xml; FMI headers from the installed fmpy),
+--fmu runs bench/robot_fmu_step.c built with the RobotObserver's sources (CMake's
+robot_fmu_step target),
 sets the parameters that `python -m harness robot-fmu-parameters URDF --step h`
 writes (h = --sample-period, default 1e-4 s; every base parameter and the friction
 identified, LSM; t_id moved to 0.02 s so that the warm-up is short) by value
@@ -35,11 +35,13 @@ driver (the model description's source list is this checkout's)."""
 from __future__ import annotations
 
 import argparse
+import io
 import os
 import re
 import shutil
 import subprocess
 import sys
+import tarfile
 import tempfile
 import xml.etree.ElementTree as ElementTree
 from pathlib import Path
@@ -55,9 +57,6 @@ from harness.robot.base_parameters import base_parameters  # noqa: E402
 from harness.robot.examples import example_urdf  # noqa: E402
 from harness.robot.fmu import read_ssv  # noqa: E402
 from harness.robot.urdf import read_urdf  # noqa: E402
-
-CFLAGS = ["-std=c11", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2", "-D_POSIX_C_SOURCE=199309L"]
-
 
 def model_file(name: str, path: Path) -> int:
     urdf, locked = example_urdf(name)
@@ -75,59 +74,45 @@ def model_file(name: str, path: Path) -> int:
     return base.count
 
 
-SOURCES = ("bench/robot_step.c", "fmu/src/core/rigid_body.c", "fmu/src/core/regressor_identifier.c",
-           "fmu/src/core/statistics_job.c")  # statistics_job.c: since dd0ff2f
-HEADERS = ("fmu/src/core/rigid_body.h", "fmu/src/core/regressor_identifier.h",
-           "fmu/src/core/cholesky.h",   # since 1e4f058
-           "fmu/src/core/statistics_job.h",  # since dd0ff2f
-           "fmu/src/core/leave_out.h")  # since MFF's leave-out rule in the regressor form
-STEP_DRIVER = "bench/robot_step.c"
 FMU_DESCRIPTION = REPO / "fmu/robot/modelDescription.xml"
-FMU_DRIVER = "bench/robot_fmu_step.c"
 FMU_H = 1e-4        # [s] the sampling period: 10 kHz
 FMU_T_ID = 0.02     # [s] the identifier starts here ...
 FMU_WARMUP = 500    # ... before these doSteps of H = h end (0.05 s)
 FMU_STATISTICS_INTERVAL = 0.1  # [s] the FMU's default statistics_interval
 
 
-def fmu_sources() -> tuple[tuple[str, ...], tuple[str, ...]]:
-    """The RobotObserver driver's sources (its model description's) and every header."""
-    root = ElementTree.parse(FMU_DESCRIPTION).getroot()
-    files = root.iterfind("CoSimulation/SourceFiles/File")
-    sources = (FMU_DRIVER, *(f"fmu/src/{f.get('name')}" for f in files))
-    headers = tuple(str(h.relative_to(REPO)) for h in sorted((REPO / "fmu/src").rglob("*.h")))
-    return sources, headers
-
-
-def fmi_include() -> str:
-    """The FMI 2 headers that the installed fmpy ships."""
-    import fmpy
-    return str(Path(fmpy.__file__).parent / "c-code")
-
-
 def build(binary: Path, revision: str | None, fmu: bool = False) -> None:
-    """The step driver with the core of the checkout, or of a git revision."""
-    sources, headers = fmu_sources() if fmu else (SOURCES, HEADERS)
-    root = REPO
-    if revision is not None:
-        root = binary.parent / f"src-{revision}"
-        # the checkout's driver, so that revisions before it can be measured
-        driver_name = FMU_DRIVER if fmu else STEP_DRIVER
-        driver = root / driver_name
-        driver.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(REPO / driver_name, driver)
-        for name in [s for s in sources if s != driver_name] + list(headers):
-            shown = subprocess.run(["git", "-C", str(REPO), "show", f"{revision}:{name}"],
-                                   capture_output=True)
-            if shown.returncode != 0:
-                continue  # a file the revision did not have yet (statistics_job.c: dd0ff2f)
+    """The step driver of the checkout's CMake build (./build.sh fmus), or the same
+    driver built by this checkout's CMake recipe over a git revision's fmu/src."""
+    target = "robot_fmu_step" if fmu else "robot_step"
+    if revision is None:
+        built = REPO / "build" / "cmake" / "bin" / target
+        if not built.exists():
+            raise SystemExit(f"{built} is missing: run ./build.sh fmus")
+        shutil.copyfile(built, binary)
+        binary.chmod(0o755)
+        return
+    root = binary.parent / f"src-{revision}"
+    root.mkdir(parents=True, exist_ok=True)
+    archive = subprocess.run(["git", "-C", str(REPO), "archive", revision, "fmu/src"],
+                             capture_output=True, check=True).stdout
+    with tarfile.open(fileobj=io.BytesIO(archive)) as tar:
+        tar.extractall(root, filter="data")
+    # this checkout's recipe and drivers, so that revisions before them can be measured
+    for name in ("CMakeLists.txt", "cmake", "bench/step_driver.c", "bench/robot_step.c",
+                 "bench/robot_fmu_step.c", "tools/abuse/closed_loop.c"):
+        if (REPO / name).is_dir():
+            shutil.copytree(REPO / name, root / name, dirs_exist_ok=True)
+        else:
             (root / name).parent.mkdir(parents=True, exist_ok=True)
-            (root / name).write_bytes(shown.stdout)
-    includes = ([f"-I{fmi_include()}", f"-I{root / 'fmu/src/instance'}"] if fmu
-                else [f"-I{root / 'fmu/src/core'}"])
-    subprocess.run(["gcc", *CFLAGS, *includes, "-o", str(binary),
-                    *(str(root / name) for name in sources if (root / name).exists()), "-lm"],
-                   check=True)
+            shutil.copyfile(REPO / name, root / name)
+    tree = binary.parent / f"build-{revision}"
+    subprocess.run(["cmake", "-S", str(root), "-B", str(tree), "-G", "Ninja",
+                    f"-DSTO_PYTHON={sys.executable}", "-DSTO_FMUS=OFF", "-DSTO_NATIVE=OFF",
+                    "-DSTO_TESTS=OFF", "-DSTO_IMPORTER=OFF"], check=True, capture_output=True)
+    subprocess.run(["cmake", "--build", str(tree), "--target", target], check=True)
+    shutil.copyfile(tree / "bin" / target, binary)
+    binary.chmod(0o755)
 
 
 def instructions(binary: Path, model: Path, tmp: str, steps: int = 2000,

@@ -4,9 +4,8 @@
 #
 #   bench/step_instructions.sh [STEPS]        (default 10000)
 #
-# Builds bench/step_driver.c with the observer's sources (fmi2/fmi2_functions.c, instance/instance.c,
-# models/observer.c, core/*.c; -O2 -g, FMI headers from the installed fmpy)
-# into build/bench/, then for each configuration runs
+# Runs bench/step_driver.c as CMake builds it with the observer's objects (the
+# step_driver target of ./build.sh fmus: the FMUs' -O2, plus -g), for each configuration
 #     valgrind --tool=callgrind --toggle-collect=fmi2DoStep step_driver CONFIG SCHEME STEPS
 # i.e. counts the instructions executed inside the one fmi2DoStep (STEPS
 # internal steps, plus one communication point) and divides by STEPS.  A
@@ -16,25 +15,18 @@
 # Callgrind outputs stay in build/bench/callgrind.out.CONFIG-sSCHEME[-H=h]; inspect one with
 #     callgrind_annotate --inclusive=yes build/bench/callgrind.out.joint-lsm-s1
 #     callgrind_annotate --auto=yes build/bench/callgrind.out.joint-lsm-s1   (per source line)
-# Environment: CC (default gcc), CFLAGS_EXTRA (added after -O2 -g, e.g. "-O3 -flto";
-# valgrind 3.19 cannot run AVX-512 code, so -march=native fails on such machines).
+# Other flags: configure a CMake tree of your own (e.g. -DCMAKE_C_FLAGS="-O3 -flto") and
+# set STEP_DRIVER to its bin/step_driver (valgrind 3.19 cannot run AVX-512 code, so
+# -march=native fails on such machines).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 STEPS=${1:-10000}
-CC=${CC:-gcc}
-PY=.venv/bin/python
 OUT=build/bench
-SRC=fmu/src
+STEP_DRIVER=${STEP_DRIVER:-build/cmake/bin/step_driver}
 command -v valgrind >/dev/null || { echo "step_instructions.sh: valgrind is not installed" >&2; exit 1; }
-[ -x "$PY" ] || { echo "step_instructions.sh: no $PY: run ./build.sh fmus first" >&2; exit 1; }
-
-FMI_INCLUDE=$("$PY" -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))')
+[ -x "$STEP_DRIVER" ] || { echo "step_instructions.sh: no $STEP_DRIVER: run ./build.sh fmus first" >&2; exit 1; }
 mkdir -p "$OUT"
-# shellcheck disable=SC2086
-"$CC" -std=c11 -Wall -Wextra -O2 -g ${CFLAGS_EXTRA:-} -I "$FMI_INCLUDE" -I "$SRC/instance" \
-    -o "$OUT/step_driver" bench/step_driver.c "$SRC/fmi2/fmi2_functions.c" \
-    "$SRC/instance/instance.c" "$SRC/models/observer.c" "$SRC"/core/*.c -lm
 
 # config | scheme | description
 CONFIGS=(
@@ -58,7 +50,7 @@ CONFIGS=(
 count() { # config scheme steps calls outfile
     local out
     out=$(valgrind --tool=callgrind --toggle-collect=fmi2DoStep --callgrind-out-file="$5" \
-        "$OUT/step_driver" "$1" "$2" "$3" "$4" 2>"$5.log") || {
+        "$STEP_DRIVER" "$1" "$2" "$3" "$4" 2>"$5.log") || {
         echo "step_instructions.sh: $1 scheme $2 failed:" >&2; cat "$5.log" >&2; exit 1; }
     local total
     total=$(awk '/^(summary|totals):/ {print $2; exit}' "$5")

@@ -1,29 +1,19 @@
 """The C rigid-body core (fmu/src/core/rigid_body.c) for the harness, through ctypes.
 
-The shared library is compiled on first use from the core sources and
-native/robot_native.c (batch entry points) with the project's C flags, and cached
-like the native master loop (harness.native.compile_library).  The core sources are
-the checkout's fmu/src/core; an installed package has its copy in core/ (made by
-./build.sh, package_python).
+The batch entry points (native/robot_native.c) live in the package's native library
+(`harness.native_library`), built with the package from the same core objects as the
+RobotObserver FMU.
 """
 from __future__ import annotations
 
 import ctypes
 from dataclasses import dataclass
 from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 
-from ..native import compile_library
+from ..native_library import load_library
 
-HERE = Path(__file__).resolve().parent
-CHECKOUT_CORE = HERE.parents[1] / "fmu" / "src" / "core"
-# the checkout's sources win, so that an edit is compiled without rebuilding the package
-CORE = CHECKOUT_CORE if CHECKOUT_CORE.is_dir() else HERE / "core"
-CORE_SOURCES = ("rigid_body.c", "regressor_identifier.c", "statistics_job.c", "robot_observer.c",
-                "super_twisting.c", "implicit_twisting.c", "noise_adaptive.c", "gains.c")
-WRAPPER = HERE / "native" / "robot_native.c"
 # the online regression's rule of the joint equations left out (robot_observer.h's
 # RO_MIN_SPEED and RO_REVERSAL_MARGIN): the FMU's defaults
 MIN_SPEED = 0.05        # [rad/s or m/s]
@@ -35,9 +25,8 @@ _int_p = np.ctypeslib.ndpointer(dtype=np.int32, flags="C_CONTIGUOUS")
 
 @lru_cache(maxsize=1)
 def load() -> ctypes.CDLL:
-    """Compile (once) and load the rigid-body library."""
-    dll = ctypes.CDLL(str(compile_library(
-        "robot_native", [WRAPPER, *(CORE / s for s in CORE_SOURCES)], CORE)))
+    """The rigid-body entry points of the native library, typed."""
+    dll = load_library()
     dll.rn_model_size.restype = ctypes.c_size_t
     dll.rn_max_joints.restype = ctypes.c_int
     dll.rn_load.restype = ctypes.c_int

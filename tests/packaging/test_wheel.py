@@ -20,7 +20,7 @@ WHEELS = sorted((REPO / "build" / "wheel").glob("sto_harness-*.whl"))
 
 @pytest.fixture(scope="module")
 def wheel() -> Path:
-    assert WHEELS, "no wheel in build/wheel: ./build.sh makes it (package_python)"
+    assert WHEELS, "no wheel in build/wheel: ./build.sh wheel (or test) makes it"
     return WHEELS[-1]
 
 
@@ -46,13 +46,11 @@ def _clean_env() -> dict[str, str]:
     return env
 
 
-def test_the_wheel_ships_the_fmus_types_and_native_loop(wheel):
+def test_the_wheel_ships_the_fmus_types_and_native_library(wheel):
     names = zipfile.ZipFile(wheel).namelist()
     for name in ("harness/data/SuperTwistingObserver.fmu", "harness/data/Pendulum.fmu",
-                 "harness/data/TwistingController.fmu", "harness/py.typed",
-                 "harness/native/master_loop.c", "harness/robot/native/robot_native.c",
-                 "harness/robot/core/rigid_body.c", "harness/robot/core/rigid_body.h",
-                 "harness/robot/core/small_loops.h"):
+                 "harness/data/TwistingController.fmu", "harness/data/RobotObserver.fmu",
+                 "harness/py.typed", "harness/lib/libsto_native.so"):
         assert name in names
 
 
@@ -96,20 +94,18 @@ def test_the_installed_command_runs_from_another_folder(installed, tmp_path):
     assert Path(where.stdout.strip()).is_relative_to(installed)
 
 
-def test_the_installed_package_compiles_its_robot_core(installed, tmp_path):
+def test_the_installed_package_loads_its_native_library(installed, tmp_path):
     """The observer path of identify --robot (harness.robot.native) from the installed
-    package alone: the C core comes from the package's core/ folder, compiled into a
-    fresh cache."""
-    script = ("import numpy as np, harness.robot.native as rn\n"
+    package alone: the library pip built at install time, no compiler at import."""
+    script = ("import numpy as np, harness.robot.native as rn, harness.native_library as nl\n"
               "t = np.arange(3000) * 1e-3\n"
               "v = rn.observe_adaptive(np.sin(2 * t)[:, None], 1e-3, 5.0).velocity\n"
-              "print(rn.CORE)\n"
+              "print(nl.library_path())\n"
               "print(np.max(np.abs(v[1000:, 0] - 2 * np.cos(2 * t[1000:]))))\n")
-    env = {**_clean_env(), "STO_HARNESS_CACHE": str(tmp_path / "cache")}
+    env = {**_clean_env(), "PATH": "/nonexistent", "CC": "/nonexistent/cc"}
     result = subprocess.run([str(installed / "bin" / "python"), "-c", script], cwd=tmp_path,
                             capture_output=True, text=True, env=env)
     assert result.returncode == 0, result.stderr
-    core, error = result.stdout.split()
-    assert Path(core).is_relative_to(installed) and Path(core).name == "core"
+    library, error = result.stdout.split()
+    assert Path(library).is_relative_to(installed)
     assert float(error) < 1e-5  # measured 2.7e-6 (velocity of sin 2t, after 1 s)
-    assert list((tmp_path / "cache").glob("robot_native-*.so"))

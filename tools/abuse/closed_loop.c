@@ -107,28 +107,32 @@ static void *symbol(Fmu *f, const char *name)
     return p;
 }
 
+/* A symbol as the member's function pointer type (ISO C has no cast from void *). */
+#define LOAD(f, member, name) \
+    do { void *p_ = symbol(f, name); memcpy(&(f)->member, &p_, sizeof (f)->member); } while (0)
+
 static void load(Fmu *f)
 {
     f->dll = dlopen(f->library, RTLD_NOW | RTLD_LOCAL);
     if (!f->dll) die("dlopen %s: %s", f->library, dlerror());
-    f->instantiate = symbol(f, "fmi2Instantiate");
-    f->free_instance = symbol(f, "fmi2FreeInstance");
-    f->setup = symbol(f, "fmi2SetupExperiment");
-    f->enter = symbol(f, "fmi2EnterInitializationMode");
-    f->exit_init = symbol(f, "fmi2ExitInitializationMode");
-    f->terminate = symbol(f, "fmi2Terminate");
-    f->reset = symbol(f, "fmi2Reset");
-    f->get_real = symbol(f, "fmi2GetReal");
-    f->set_real = symbol(f, "fmi2SetReal");
-    f->set_integer = symbol(f, "fmi2SetInteger");
-    f->set_boolean = symbol(f, "fmi2SetBoolean");
-    f->do_step = symbol(f, "fmi2DoStep");
-    f->get_state = symbol(f, "fmi2GetFMUstate");
-    f->set_state = symbol(f, "fmi2SetFMUstate");
-    f->free_state = symbol(f, "fmi2FreeFMUstate");
-    f->serialized_size = symbol(f, "fmi2SerializedFMUstateSize");
-    f->serialize = symbol(f, "fmi2SerializeFMUstate");
-    f->deserialize = symbol(f, "fmi2DeSerializeFMUstate");
+    LOAD(f, instantiate, "fmi2Instantiate");
+    LOAD(f, free_instance, "fmi2FreeInstance");
+    LOAD(f, setup, "fmi2SetupExperiment");
+    LOAD(f, enter, "fmi2EnterInitializationMode");
+    LOAD(f, exit_init, "fmi2ExitInitializationMode");
+    LOAD(f, terminate, "fmi2Terminate");
+    LOAD(f, reset, "fmi2Reset");
+    LOAD(f, get_real, "fmi2GetReal");
+    LOAD(f, set_real, "fmi2SetReal");
+    LOAD(f, set_integer, "fmi2SetInteger");
+    LOAD(f, set_boolean, "fmi2SetBoolean");
+    LOAD(f, do_step, "fmi2DoStep");
+    LOAD(f, get_state, "fmi2GetFMUstate");
+    LOAD(f, set_state, "fmi2SetFMUstate");
+    LOAD(f, free_state, "fmi2FreeFMUstate");
+    LOAD(f, serialized_size, "fmi2SerializedFMUstateSize");
+    LOAD(f, serialize, "fmi2SerializeFMUstate");
+    LOAD(f, deserialize, "fmi2DeSerializeFMUstate");
 }
 
 static void read_plan(const char *path)

@@ -8,9 +8,9 @@
 #   FUZZ_FORGED=0 ...                    leave out the forged-checksum states
 #
 # Targets: fuzz_deserialize (fmi2DeSerializeFMUstate of arbitrary bytes) and
-# fuzz_calls (random FMI call sequences); each is linked statically with
-# the FMI 2 API file, the instance core and the model's sources as build.sh ships them.  A crash leaves
-# its input in build/fuzz/artifacts/ and fails the script.
+# fuzz_calls (random FMI call sequences); each is linked statically with the FMI 2
+# API file, the model and the same core objects as the FMUs (CMake preset `fuzz`).
+# A crash leaves its input in build/fuzz/artifacts/ and fails the script.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 REPO=$PWD
@@ -43,24 +43,22 @@ if ! probe_fuzzer; then
     probe_fuzzer || die "clang with -fsanitize=fuzzer is not available (apt-get install -y clang libclang-rt-14-dev)"
 fi
 
-log "building the FMUs (build.sh fmus)"
+log "the Python environment and FMUs (build.sh fmus)"
 ./build.sh fmus >/dev/null
-FMI_INCLUDE=$("$PY" -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))')
-DEFINES=()
-[ "${FUZZ_FORGED:-1}" = 1 ] || DEFINES+=(-DFUZZ_NO_FORGED)
+export PATH=$REPO/.venv/bin:$PATH  # the pinned cmake and ninja
+FORGED=ON
+[ "${FUZZ_FORGED:-1}" = 1 ] || FORGED=OFF
+log "building the fuzz targets (cmake preset fuzz)"
+cmake --preset fuzz -DCMAKE_C_COMPILER="$CLANG" -DSTO_FUZZ_FORGED=$FORGED >/dev/null
+cmake --build --preset fuzz
 
 mkdir -p "$OUT/artifacts"
 summary=()
 failed=0
 for target in "${TARGETS[@]}"; do
     for id in "${MODELS[@]}"; do
-        src=$REPO/build/$id/sources
-        [ -d "$src" ] || die "$src missing"
-        mapfile -t sources < <(find "$src" -name '*.c' | sort)
-        binary=$OUT/$target-$id
-        "$CLANG" -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all \
-            -fno-omit-frame-pointer "${DEFINES[@]}" -I "$FMI_INCLUDE" -I "$src/instance" \
-            -o "$binary" "tools/abuse/$target.c" "${sources[@]}" -lm
+        binary=$REPO/build/cmake-fuzz/bin/$target-$id
+        [ -x "$binary" ] || die "$binary was not built"
         corpus=$OUT/corpus/$target/$id
         rm -rf "$corpus" && mkdir -p "$corpus"
         seeds=tools/abuse/corpus/$target

@@ -19,7 +19,7 @@
 
 #define MD MODEL_DESCRIPTOR
 
-static void fuzz_fail(const char *format, ...)
+static inline void fuzz_fail(const char *format, ...)
 {
     va_list args;
     va_start(args, format);
@@ -35,7 +35,7 @@ static void fuzz_fail(const char *format, ...)
 static char last_message[1200];
 static long messages_logged;
 
-static void fuzz_logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status,
+static inline void fuzz_logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status,
                         fmi2String category, fmi2String message, ...)
 {
     (void)env, (void)status;
@@ -50,18 +50,18 @@ static void fuzz_logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2S
     if (getenv("FUZZ_VERBOSE")) fprintf(stderr, "[%s] %s\n", instance, last_message);
 }
 
-static void *counting_calloc(size_t n, size_t size);
-static void counting_free(void *p);
+static inline void *counting_calloc(size_t n, size_t size);
+static inline void counting_free(void *p);
 static long live_blocks;
 
-static void *counting_calloc(size_t n, size_t size)
+static inline void *counting_calloc(size_t n, size_t size)
 {
     void *p = calloc(n, size);
     if (p) ++live_blocks;
     return p;
 }
 
-static void counting_free(void *p)
+static inline void counting_free(void *p)
 {
     if (p) --live_blocks;
     free(p);
@@ -70,7 +70,7 @@ static void counting_free(void *p)
 static const fmi2CallbackFunctions FUZZ_CALLBACKS = {fuzz_logger, counting_calloc, counting_free,
                                                      NULL, NULL};
 
-static fmi2Component fuzz_instantiate(const fmi2CallbackFunctions *callbacks)
+static inline fmi2Component fuzz_instantiate(const fmi2CallbackFunctions *callbacks)
 {
     return fmi2Instantiate("fuzz", fmi2CoSimulation, MD.guid, NULL, callbacks, fmi2False,
                            fmi2False);
@@ -82,7 +82,7 @@ static fmi2ValueReference vrs_of_type[3][512];
 static size_t n_vrs_of_type[3];
 static fmi2ValueReference vr_h; /* the internal step parameter "h" */
 
-static void index_variables(void)
+static inline void index_variables(void)
 {
     for (size_t v = 0; v < MD.n_variables; ++v) {
         const ModelVariable *var = &MD.variables[v];
@@ -94,7 +94,7 @@ static void index_variables(void)
 }
 
 /* A normal life after fmi2Reset must succeed, whatever came before. */
-static void assert_normal_life(fmi2Component c, const char *after)
+static inline void assert_normal_life(fmi2Component c, const char *after)
 {
     fmi2Status s;
     if ((s = fmi2Reset(c)) != fmi2OK) fuzz_fail("fmi2Reset after %s: %d (%s)", after, s, last_message);
@@ -109,7 +109,7 @@ static void assert_normal_life(fmi2Component c, const char *after)
 
 /* Reads every variable; an OK read must give finite Reals unless the FMU is in
  * the Error state (where getters show what went wrong). */
-static void read_everything(fmi2Component c)
+static inline void read_everything(fmi2Component c)
 {
     static double reals[512];
     static int ints[512];
@@ -122,7 +122,7 @@ static void read_everything(fmi2Component c)
  * unknown: doSteps of more than FUZZ_MAX_STEPS are legal but merely slow, and
  * are skipped so that each input runs in milliseconds. */
 #define FUZZ_MAX_STEPS 2e5
-static int step_is_affordable(fmi2Component c, double H)
+static inline int step_is_affordable(fmi2Component c, double H)
 {
     double h = 0.0;
     if (!(H > 0.0) || !isfinite(H)) return 1; /* rejected at once */
@@ -135,7 +135,7 @@ static int step_is_affordable(fmi2Component c, double H)
 #define STATE_HEADER_SIZE 40
 #define STATE_CHECKSUM_OFFSET 32
 
-static uint64_t fnv1a(const uint8_t *p, size_t n)
+static inline uint64_t fnv1a(const uint8_t *p, size_t n)
 {
     uint64_t h = 14695981039346656037ull;
     for (size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
@@ -143,7 +143,7 @@ static uint64_t fnv1a(const uint8_t *p, size_t n)
 }
 
 /* A checksum that matches the (changed) payload: what anyone can compute. */
-static void forge_checksum(uint8_t *state, size_t size)
+static inline void forge_checksum(uint8_t *state, size_t size)
 {
     if (size < STATE_HEADER_SIZE) return;
     const uint64_t sum = fnv1a(state + STATE_HEADER_SIZE, size - STATE_HEADER_SIZE);
@@ -157,14 +157,14 @@ typedef struct {
     size_t n;
 } Input;
 
-static uint8_t take_byte(Input *in)
+static inline uint8_t take_byte(Input *in)
 {
     if (!in->n) return 0;
     --in->n;
     return *in->p++;
 }
 
-static uint32_t take_u32(Input *in)
+static inline uint32_t take_u32(Input *in)
 {
     uint32_t v = 0;
     for (int i = 0; i < 4; ++i) v = v << 8 | take_byte(in);
@@ -176,7 +176,7 @@ static const double INTERESTING[] = {0.0, -0.0, 1e-4, 1e-3, 1e-5, 2.5e-5, 0.5, 1
                                      NAN, INFINITY, -INFINITY, 3.0, 0.1, 1e-12, 4.0, 8.0};
 #define N_INTERESTING (sizeof INTERESTING / sizeof INTERESTING[0])
 
-static double take_double(Input *in)
+static inline double take_double(Input *in)
 {
     const uint8_t selector = take_byte(in);
     if (selector < 2 * N_INTERESTING) return INTERESTING[selector % N_INTERESTING];

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# valgrind memcheck over a full closed-loop scenario of the three FMUs (the
-# shipped binaries that build.sh built), driven by tools/abuse/closed_loop.c
-# through the plain FMI 2.0 C API: no memory errors and no definite or
-# indirect leaks are allowed.
+# valgrind memcheck over a full closed-loop scenario of the FMUs (the shipped
+# binaries that build.sh built), driven by tools/abuse/closed_loop.c (CMake's
+# closed_loop target) through the plain FMI 2.0 C API: no memory errors and no
+# definite or indirect leaks are allowed.
 #
 #   tools/abuse/memcheck.sh [SCENARIO [SECONDS]]     (default: 6.2, its full 40 s)
 set -euo pipefail
@@ -21,9 +21,7 @@ fi
 
 ./build.sh fmus >/dev/null
 mkdir -p "$OUT"
-FMI_INCLUDE=$("$PY" -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))')
-gcc -std=c11 -Wall -Wextra -Werror -O1 -g -I "$FMI_INCLUDE" -o "$OUT/closed_loop" \
-    tools/abuse/closed_loop.c -ldl -lm
+CLOSED_LOOP=build/cmake/bin/closed_loop
 "$PY" tools/abuse/plan.py "$SCENARIO" build build/fmus > "$OUT/plan.txt"
 SECONDS_=${2:-$("$PY" -c "from harness.scenarios import SCENARIOS; print(SCENARIOS['$SCENARIO'].stop_time)")}
 
@@ -32,7 +30,7 @@ status=0
 valgrind --tool=memcheck --error-exitcode=99 --leak-check=full \
     --show-leak-kinds=definite,indirect --errors-for-leak-kinds=definite,indirect \
     --track-origins=yes --log-file="$OUT/valgrind.log" \
-    "$OUT/closed_loop" "$OUT/plan.txt" "$SECONDS_" || status=$?
+    "$CLOSED_LOOP" "$OUT/plan.txt" "$SECONDS_" || status=$?
 cat "$OUT/valgrind.log" | grep -E "ERROR SUMMARY|definitely lost|indirectly lost|possibly lost|still reachable|in use at exit" || true
 echo "memcheck.sh: scenario $SCENARIO, $SECONDS_ s of model time, $(( $(date +%s) - start )) s under valgrind"
 [ "$status" -eq 0 ] || die "valgrind reported errors or leaks (exit status $status): see $OUT/valgrind.log"

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Distribution FMUs (`./build.sh dist`): the FMUs that `./build.sh fmus` made (with
 # their sources, reference results and x86_64 Linux binary), plus binaries
-# cross-compiled from the same shipped sources for
+# cross-compiled by the same CMake build (one preset and toolchain file a platform,
+# cmake/toolchains/) for
 #
 #   FMI 3 tuple     FMI 2 folder   compiler
 #   x86_64-linux    linux64        gcc (the native build)
@@ -22,22 +23,27 @@ PY=$PWD/.venv/bin/python
 BUILD=build
 OUT=$BUILD/dist
 MODELS=(SuperTwistingObserver Pendulum TwistingController RobotObserver)
-CFLAGS=(-std=c11 -Wall -Wextra -Wpedantic -Werror -O2 -fvisibility=hidden)
 
 log() { printf '\033[1m== %s\033[0m\n' "$*"; }
 die() { echo "build_dist.sh: $*" >&2; exit 1; }
 
 eval "$(bash tools/dist/install_toolchains.sh)"
-export ZIG_GLOBAL_CACHE_DIR ZIG_LOCAL_CACHE_DIR
-FMI_INCLUDE=$("$PY" -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))')
+export ZIG ZIG_GLOBAL_CACHE_DIR ZIG_LOCAL_CACHE_DIR
+export PATH=$PWD/.venv/bin:$PATH  # the pinned cmake and ninja
 
-# FMI 3 tuple | FMI 2 folder (- for none) | compiler and its target flags | extension
+# FMI 3 tuple (= the CMake preset) | FMI 2 folder (- for none) | extension
 PLATFORMS=(
-    "aarch64-linux|-|aarch64-linux-gnu-gcc -fPIC|so"
-    "x86_64-windows|win64|x86_64-w64-mingw32-gcc -static-libgcc|dll"
-    "x86_64-darwin|darwin64|$ZIG cc -target x86_64-macos -fPIC|dylib"
-    "aarch64-darwin|-|$ZIG cc -target aarch64-macos -fPIC|dylib"
+    "aarch64-linux|-|so"
+    "x86_64-windows|win64|dll"
+    "x86_64-darwin|darwin64|dylib"
+    "aarch64-darwin|-|dylib"
 )
+for entry in "${PLATFORMS[@]}"; do
+    tuple=${entry%%|*}
+    log "cross build $tuple (cmake preset $tuple)"
+    cmake --preset "$tuple" -DSTO_PYTHON="$PY" >/dev/null
+    cmake --build --preset "$tuple"
+done
 
 # The symbols a binary exports, one a line (ELF, PE or Mach-O by extension).
 exported_symbols() { # binary extension
@@ -65,22 +71,21 @@ check_binary() { # binary extension fmi_version
 }
 
 build_dist_fmu() { # fmi_version id
-    local fmi=$1 id=$2 layout native fmu entry tuple folder compiler ext platform
+    local fmi=$1 id=$2 layout native fmu entry tuple folder ext platform
     if [ "$fmi" = 2 ]; then layout=$BUILD/$id native=$BUILD/fmus/$id.fmu
     else layout=$BUILD/fmi3/$id native=$BUILD/fmi3/$id.fmu; fi
     [ -f "$native" ] && [ -d "$layout/sources" ] || die "$native missing: run ./build.sh fmus"
     fmu=$OUT/fmi$fmi/$id.fmu
     local stage=$OUT/fmi$fmi/$id
     rm -rf "$stage" && mkdir -p "$stage"
-    mapfile -t sources < <(cd "$layout/sources" && find . -name '*.c' | sort)
     for entry in "${PLATFORMS[@]}"; do
-        IFS='|' read -r tuple folder compiler ext <<< "$entry"
+        IFS='|' read -r tuple folder ext <<< "$entry"
         platform=$([ "$fmi" = 2 ] && echo "$folder" || echo "$tuple")
         [ "$platform" != - ] || continue
+        local built=$BUILD/dist/$tuple/$id
+        [ "$fmi" = 2 ] || built=$BUILD/dist/$tuple/fmi3/$id
         mkdir -p "$stage/binaries/$platform"
-        # shellcheck disable=SC2086  # the compiler entry carries its target flags
-        (cd "$layout/sources" && $compiler "${CFLAGS[@]}" -shared -isystem "$FMI_INCLUDE" \
-            -o "$OLDPWD/$stage/binaries/$platform/$id.$ext" "${sources[@]}" -lm)
+        cp "$built/binaries/$platform/$id.$ext" "$stage/binaries/$platform/"
     done
     cp "$native" "$fmu"
     "$PY" - "$fmu" "$stage" <<'EOF'

@@ -18,33 +18,33 @@ PY=$PWD/.venv/bin/python
 DIST=build/dist
 OUT=build/dist/check
 MODELS=(SuperTwistingObserver Pendulum TwistingController RobotObserver)
-CFLAGS=(-std=c11 -Wall -Wextra -Wpedantic -Werror -O2)
 
 log() { printf '\033[1m== %s\033[0m\n' "$*"; }
 die() { echo "check_platforms.sh: $*" >&2; exit 1; }
 
 eval "$(bash tools/dist/install_toolchains.sh)"
 export WINEPREFIX WINEDEBUG=-all
-FMI_INCLUDE=$("$PY" -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))')
 rm -rf "$OUT" && mkdir -p "$OUT"
 
-log "building the importer for each platform"
-gcc "${CFLAGS[@]}" -isystem "$FMI_INCLUDE" -o "$OUT/run_reference" tools/dist/run_reference.c -ldl -lm
-aarch64-linux-gnu-gcc "${CFLAGS[@]}" -isystem "$FMI_INCLUDE" -o "$OUT/run_reference.aarch64" \
-    tools/dist/run_reference.c -ldl -lm
-x86_64-w64-mingw32-gcc "${CFLAGS[@]}" -static-libgcc -isystem "$FMI_INCLUDE" \
-    -o "$OUT/run_reference.exe" tools/dist/run_reference.c
+# The importer of each platform, built by the same CMake build as the FMUs (build.sh
+# and build_dist.sh's presets: the run_reference target).
+NATIVE_IMPORTER=build/cmake/bin/run_reference
+AARCH64_IMPORTER=build/cmake-aarch64-linux/bin/run_reference
+WINDOWS_IMPORTER=build/cmake-x86_64-windows/bin/run_reference.exe
+for importer in "$NATIVE_IMPORTER" "$AARCH64_IMPORTER" "$WINDOWS_IMPORTER"; do
+    [ -x "$importer" ] || die "$importer missing: run ./build.sh dist"
+done
 
 # Wine wants Windows paths: the Z: drive is the host's root.
 windows_path() { echo "Z:$(realpath "$1" | tr / '\\')"; }
 
 # FMI version | runner | platform folder | binary extension | importer
 RUNS=(
-    "2|native|linux64|so|$OUT/run_reference"
-    "2|wine|win64|dll|$OUT/run_reference.exe"
-    "3|native|x86_64-linux|so|$OUT/run_reference"
-    "3|qemu|aarch64-linux|so|$OUT/run_reference.aarch64"
-    "3|wine|x86_64-windows|dll|$OUT/run_reference.exe"
+    "2|native|linux64|so|$NATIVE_IMPORTER"
+    "2|wine|win64|dll|$WINDOWS_IMPORTER"
+    "3|native|x86_64-linux|so|$NATIVE_IMPORTER"
+    "3|qemu|aarch64-linux|so|$AARCH64_IMPORTER"
+    "3|wine|x86_64-windows|dll|$WINDOWS_IMPORTER"
 )
 failed=0
 summary=()

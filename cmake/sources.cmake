@@ -1,0 +1,40 @@
+# The one source list of every C consumer: the FMUs (each FMI version and platform),
+# the C tests, the bench drivers, the fuzz targets and the Python package's native
+# library.  Paths are relative to fmu/src.
+
+# The algorithms: plain C over plain structs, no FMI types.  Each group is what a
+# model's FMU ships in sources/ (the core library holds their union).
+set(STO_CORE_OBSERVER
+    core/super_twisting.c core/implicit_twisting.c core/noise_adaptive.c core/identifier.c
+    core/information_identifier.c core/block_scores.c core/gains.c)
+set(STO_CORE_ROBOT
+    core/robot_observer.c core/rigid_body.c core/regressor_identifier.c core/statistics_job.c
+    core/gains.c)
+set(STO_CORE_SOURCES ${STO_CORE_OBSERVER} ${STO_CORE_ROBOT})
+list(REMOVE_DUPLICATES STO_CORE_SOURCES)
+
+# The model-independent instance core under every FMI version.
+set(STO_INSTANCE_SOURCES instance/instance.c)
+# Headers every FMU ships beside its sources (fmpy compile rebuilds from them).
+set(STO_SHIPPED_HEADERS instance/instance.h instance/model_interface.h)
+
+# The FMUs: model identifier, its model file, its core group and the folder of its
+# committed modelDescription.xml (FMI 2; FMI 3 in <folder>/fmi3/), relative to the
+# repository.
+set(STO_MODELS SuperTwistingObserver Pendulum TwistingController RobotObserver)
+set(STO_SuperTwistingObserver_MODEL models/observer.c)
+set(STO_SuperTwistingObserver_CORE ${STO_CORE_OBSERVER})
+set(STO_SuperTwistingObserver_XML_DIR fmu)
+set(STO_Pendulum_MODEL models/pendulum.c)
+set(STO_Pendulum_CORE "")
+set(STO_Pendulum_XML_DIR fmu/bench/Pendulum)
+set(STO_TwistingController_MODEL models/twisting_controller.c)
+set(STO_TwistingController_CORE "")
+set(STO_TwistingController_XML_DIR fmu/bench/TwistingController)
+set(STO_RobotObserver_MODEL models/robot_observer.c)
+set(STO_RobotObserver_CORE ${STO_CORE_ROBOT})
+set(STO_RobotObserver_XML_DIR fmu/robot)
+
+# The Python package's native library (ctypes): the master loop and the robot batch
+# entry points over the same core.
+set(STO_NATIVE_SOURCES harness/native/master_loop.c harness/robot/native/robot_native.c)

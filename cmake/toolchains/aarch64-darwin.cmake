@@ -1,0 +1,10 @@
+# aarch64 macOS with zig cc (PyPI ziglang, installed by tools/dist/install_toolchains.sh).
+set(CMAKE_SYSTEM_NAME Darwin)
+set(CMAKE_SYSTEM_PROCESSOR aarch64)
+set(CMAKE_C_COMPILER "${CMAKE_CURRENT_LIST_DIR}/zig-cc")
+set(CMAKE_C_COMPILER_TARGET aarch64-macos)
+set(CMAKE_AR "${CMAKE_CURRENT_LIST_DIR}/zig-ar")
+set(CMAKE_RANLIB "${CMAKE_CURRENT_LIST_DIR}/zig-ranlib")
+set(CMAKE_C_FLAGS_INIT "-target aarch64-macos")
+set(STO_FMI2_PLATFORM "")
+set(STO_FMI3_PLATFORM aarch64-darwin)

@@ -1,0 +1,10 @@
+# x86_64 macOS with zig cc (PyPI ziglang, installed by tools/dist/install_toolchains.sh).
+set(CMAKE_SYSTEM_NAME Darwin)
+set(CMAKE_SYSTEM_PROCESSOR x86_64)
+set(CMAKE_C_COMPILER "${CMAKE_CURRENT_LIST_DIR}/zig-cc")
+set(CMAKE_C_COMPILER_TARGET x86_64-macos)
+set(CMAKE_AR "${CMAKE_CURRENT_LIST_DIR}/zig-ar")
+set(CMAKE_RANLIB "${CMAKE_CURRENT_LIST_DIR}/zig-ranlib")
+set(CMAKE_C_FLAGS_INIT "-target x86_64-macos")
+set(STO_FMI2_PLATFORM "darwin64")
+set(STO_FMI3_PLATFORM x86_64-darwin)
