@@ -8,8 +8,8 @@ set(STO_CORE_OBSERVER
     core/super_twisting.c core/implicit_twisting.c core/noise_adaptive.c core/identifier.c
     core/information_identifier.c core/block_scores.c core/gains.c)
 set(STO_CORE_ROBOT
-    core/robot_observer.c core/rigid_body.c core/regressor_identifier.c core/statistics_job.c
-    core/gains.c)
+    core/robot_pipeline.c core/robot_observer.c core/rigid_body.c core/regressor_identifier.c
+    core/statistics_job.c core/gains.c)
 set(STO_CORE_SOURCES ${STO_CORE_OBSERVER} ${STO_CORE_ROBOT})
 list(REMOVE_DUPLICATES STO_CORE_SOURCES)
 

@@ -23,6 +23,7 @@
 #include "../core/regressor_identifier.h"
 #include "../core/rigid_body.h"
 #include "../core/robot_observer.h"
+#include "../core/robot_pipeline.h"
 #include "../core/statistics_job.h"
 #include "../instance/model_interface.h"
 
@@ -397,25 +398,22 @@ static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
             d->identifier_active = 0;
         }
     }
-    for (; k < k_end; ++k) {
-        ro_step(&d->obs, &d->model, d->q, d->u);
-        if (d->identifier && !d->identifier_active && start_time + (double)k * d->h >= d->t_id) {
-            d->identifier_active = 1;
-            ro_regression_restart(&d->regression);
-        }
-        if (d->identifier)
-            ro_regression_step(&d->regression, &d->model, &d->obs, d->q, d->u,
-                               d->identifier_active ? &d->id : NULL);
-        if (d->identifier_active) sj_step(&d->statistics);
-    }
+    /* the identifier joins at the first internal step at or after t_id */
+    long join = d->identifier_active ? RP_ALREADY : RP_NEVER;
+    for (uint64_t j = k; d->identifier && join == RP_NEVER && j < k_end; ++j)
+        if (start_time + (double)j * d->h >= d->t_id) join = (long)(j - k);
+    const RobotPipeline pipeline = {&d->obs, d->identifier ? &d->regression : NULL, &d->id,
+                                     &d->statistics};
+    rp_run(&pipeline, &d->model, d->q, d->u, 0, (long)(k_end - k), join);
+    if (join >= 0) d->identifier_active = 1;
 }
 
 static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
 {
     RobotData *d = data;
-    ro_outputs(&d->obs);
+    const RobotPipeline pipeline = {&d->obs, NULL, &d->id, &d->statistics};
+    rp_communicate(&pipeline, d->identifier_active);
     publish_estimates(d);
-    if (d->identifier_active) sj_schedule(&d->statistics, &d->id); /* the next solve's */
     if (d->obs.model_failures > d->failures_seen) {
         d->failures_seen = d->obs.model_failures;
         log->log(log->context, MODEL_ERROR,

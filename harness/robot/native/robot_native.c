@@ -9,6 +9,7 @@
 #include "noise_adaptive.h"
 #include "regressor_identifier.h"
 #include "robot_observer.h"
+#include "robot_pipeline.h"
 #include "rigid_body.h"
 #include "statistics_job.h"
 #include "super_twisting.h"
@@ -219,15 +220,14 @@ long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, long count, do
                          R) != 0)
         return -1;
     if (kind) sj_init(&run->statistics, p, sj_interval_steps(statistics_interval, h), SJ_BUDGET);
+    const RobotPipeline pipeline = {&run->observer, &run->regression, &run->identifier,
+                                     &run->statistics};
     for (long k = 0; k < count; ++k) {
-        ro_step(&run->observer, model, y + k * n, u + k * n);
-        if (kind && k == start) ro_regression_restart(&run->regression);
-        ro_regression_step(&run->regression, model, &run->observer, y + k * n, u + k * n,
-                           kind && k >= start ? &run->identifier : NULL);
-        if (kind && k >= start) sj_step(&run->statistics);
-        ro_outputs(&run->observer);
+        const int identifying = kind && k >= start;
+        rp_run(&pipeline, model, y + k * n, u + k * n, 0, 1,
+               !kind ? RP_NEVER : k == start ? 0 : identifying ? RP_ALREADY : RP_NEVER);
         /* the FMU's communication point after the sample (doStep(t_k, h)) */
-        if (kind && k >= start) sj_schedule(&run->statistics, &run->identifier);
+        rp_communicate(&pipeline, identifying);
         for (int i = 0; i < n; ++i) {
             velocity[k * n + i] = ro_velocity(&run->observer, i);
             prediction[k * n + i] = run->observer.x2_hat[i];
