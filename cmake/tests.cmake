@@ -7,3 +7,6 @@ foreach(line IN LISTS case_lines)
     string(REGEX REPLACE "^ *\\{\"([a-z_0-9]+)\".*" "\\1" case "${line}")
     add_test(NAME core.${case} COMMAND test_core ${case})
 endforeach()
+# The case table is read at configure time: a new case reconfigures.
+set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS
+             "${CMAKE_SOURCE_DIR}/tests/fmu/core/test_core.c")

@@ -1,88 +1,33 @@
-/* SuperTwistingObserver: the observer FMU's variables and step.
- *
- * Wires the plain-C algorithms (core/) to the FMI layer: the nominal model
- * (built-in joint or external F and phi inputs), the super-twisting observer
- * with its equivalent output injection, and the LSM/MFF identifier.
+/* SuperTwistingObserver: the observer FMU's variables and hooks over the
+ * observer/identifier pipeline (core/observer_pipeline.h), with the checks and
+ * messages the FMI layer gives a user.
  * Value references are stable and documented in docs/observer.md. */
 #include <math.h>
 #include <stddef.h>
 #include <string.h>
 
 #include "../core/gains.h"
-#include "../core/identifier.h"
-#include "../core/implicit_twisting.h"
-#include "../core/information_identifier.h"
-#include "../core/joint_model.h"
-#include "../core/model_feedback.h"
-#include "../core/noise_adaptive.h"
-#include "../core/small_loops.h"
-#include "../core/super_twisting.h"
+#include "../core/observer_pipeline.h"
 #include "../instance/model_interface.h"
 
-#define MAX_N STO_MAX_DOF
-#define MAX_L ID_MAX_REGRESSORS
-
-enum { NOMINAL_JOINT = 1, NOMINAL_EXTERNAL = 2 };
-enum { FORM_PAPER = 1, FORM_INFORMATION = 2 };
-enum { START_AT_T_ID = 0, START_WHEN_CONVERGED = 1 };
+#define MAX_N OP_MAX_N
+#define MAX_L OP_MAX_L
 
 typedef struct {
-    /* parameters */
-    double h;
-    int n, nominal_model, scheme, identifier, l;
+    ObserverPipeline pipe;  /* its configuration holds most parameters */
+    /* parameters of the gains and the start */
     double alpha1[MAX_N], alpha2[MAX_N], f_plus[MAX_N], p[MAX_N];
-    double tau;
-    double b, c_nominal[JOINT_BASIS_SIZE];
-    double theta_nominal[MAX_N][MAX_L];
-    double t_id, rho, R;
-    int identify[MAX_L];
     int start_from_measurement;
     double x1_hat_start[MAX_N], x2_hat_start[MAX_N];
-    int identifier_form, identifier_start, filter_regressor, mff_drift, identify_b;
-    double convergence_window;
-    double tau_identifier;
-    int model_feedback;
     int max_internal_steps;
     /* calculated parameters */
     double alpha1_used[MAX_N], alpha2_used[MAX_N];
     /* inputs */
-    double y[MAX_N], u, F[MAX_N], phi[MAX_L];
+    ObserverInputs in;
     int identifier_reset;
     /* outputs not read straight from the algorithm state */
-    double theta_hat[MAX_N][MAX_L];
-    double gamma_trace, excitation, b_hat, b_std;
-    double theta_std[MAX_N][MAX_L];
-    int identifier_active, converged;
-    /* derived at initialization */
-    int m;                  /* number of identified regressors */
-    int selected[MAX_L];    /* their indices in the full regressor */
-    /* algorithm state */
-    SuperTwistingObserver obs;
-    AdaptiveBank bank;          /* scheme 3: the linear observers beside obs */
-    double shadow[MAX_L][3];    /* scheme 3: the selected regressors through the followed
-                                 * member's filter G (adaptive_shadow_step) */
-    Identifier id;              /* identifier_form = 1 (the paper's explicit Euler) */
-    InformationIdentifier info; /* identifier_form = 2 */
-    double identifier_gain;     /* per step, of the filter on both sides of z = Delta phi */
-    double phi_filtered[MAX_L]; /* selected regressors through the z_eq filter */
-    double z_identifier[MAX_N]; /* z_eq through the same filter, started with phi_filtered */
-    double phi_previous[MAX_L]; /* selected regressors of the previous sample (implicit scheme) */
-    double velocity_before[2];  /* the joint's velocity two samples and one sample back */
-    double input_before;        /* the joint's input two samples back */
-    int reset_seen;             /* identifier_reset value at the last step */
-    /* the selected regressors held over a communication step (hold_inputs) */
-    double phi_now[MAX_L + 1];  /* selected regressors at this sample; [MAX_L] is a scratch slot */
-    int slot_velocity, slot_velocity_sign; /* joint: where x2, sign(x2) go in phi_now (MAX_L:
-                                            * not selected) */
-    int slot_input;             /* joint: where u goes in phi_now (MAX_L: not identified) */
-    /* model_feedback: the joint model the observer predicts with, b_model = b + D_b,
-     * c_model = c_nominal - D (D in the identifier's Delta units, model_delta), and the
-     * identifier's injection shifted back to the nominal model, D phi through the
-     * followed member's filter G (model_shadow) and the identifier's filter (model_z) */
-    double b_model, c_model[JOINT_BASIS_SIZE];
-    double model_delta[MAX_L];
-    double model_shadow[3];
-    double model_z;
+    ObserverEstimates out;
+    int reset_seen; /* identifier_reset value at the last step */
 } ObserverData;
 
 #define OFF(field) offsetof(ObserverData, field)
@@ -96,25 +41,25 @@ static const double P_START[MAX_N] = {0.5, 0.5, 0.5, 0.5};
 static const double F_PLUS_START[MAX_N] = {10.0, 10.0, 10.0, 10.0};
 
 static const ModelVariable VARIABLES[] = {
-    {.name = "h", .vr = 1, .type = TYPE_REAL, PARAM(.offset = OFF(h), .start = 1e-4, .min = 0.0,
+    {.name = "h", .vr = 1, .type = TYPE_REAL, PARAM(.offset = OFF(pipe.h), .start = 1e-4, .min = 0.0,
      .max = 1.0, .min_exclusive = true, .unit = "s",
      .description = "Fixed internal step of the observer and identifier")},
-    {.name = "n", .vr = 2, .type = TYPE_INTEGER, PARAM(.offset = OFF(n), .start = 1, .min = 1,
+    {.name = "n", .vr = 2, .type = TYPE_INTEGER, PARAM(.offset = OFF(pipe.n), .start = 1, .min = 1,
      .max = MAX_N, .description = "Degrees of freedom observed (active rows of the vectors)")},
-    {.name = "nominal_model", .vr = 3, .type = TYPE_INTEGER, PARAM(.offset = OFF(nominal_model),
-     .start = NOMINAL_JOINT, .min = 1, .max = 2,
+    {.name = "nominal_model", .vr = 3, .type = TYPE_INTEGER, PARAM(.offset = OFF(pipe.nominal_model),
+     .start = OP_NOMINAL_JOINT, .min = 1, .max = 2,
      .description = "1: built-in joint x'' = b u - sum c_k psi_k (n = 1); 2: external, "
                     "nominal acceleration F and regressor phi come as inputs")},
-    {.name = "scheme", .vr = 4, .type = TYPE_INTEGER, PARAM(.offset = OFF(scheme),
+    {.name = "scheme", .vr = 4, .type = TYPE_INTEGER, PARAM(.offset = OFF(pipe.scheme),
      .start = STO_SCHEME_ADAPTIVE, .min = 1, .max = 3,
      .description = "Discretization: 1 explicit Euler as in the paper; 2 sampling-consistent "
                     "implicit (no chattering, no filter needed); 3 the implicit observer beside "
                     "linear observers for noisy measurements, the best predictor published")},
-    {.name = "identifier", .vr = 5, .type = TYPE_INTEGER, PARAM(.offset = OFF(identifier),
+    {.name = "identifier", .vr = 5, .type = TYPE_INTEGER, PARAM(.offset = OFF(pipe.identifier),
      .start = IDENTIFIER_OFF, .min = 0, .max = 2,
      .description = "Parameter identifier: 0 off, 1 least squares (18)-(19), 2 matrix "
                     "forgetting factor (36)-(37)")},
-    {.name = "l", .vr = 6, .type = TYPE_INTEGER, PARAM(.offset = OFF(l), .start = 3, .min = 1,
+    {.name = "l", .vr = 6, .type = TYPE_INTEGER, PARAM(.offset = OFF(pipe.l), .start = 3, .min = 1,
      .max = MAX_L, .description = "Number of regressors phi of the external model")},
     {.name = "alpha1", .vr = 10, .rows = MAX_N, .type = TYPE_REAL, PARAM(.offset = OFF(alpha1),
      .start = 0.0, .min = 0.0, .max = NAN, .unit = "rad/s2",
@@ -128,28 +73,28 @@ static const ModelVariable VARIABLES[] = {
     {.name = "p", .vr = 22, .rows = MAX_N, .type = TYPE_REAL, PARAM(.offset = OFF(p),
      .starts = P_START, .min = 0.0, .max = 1.0, .min_exclusive = true, .max_exclusive = true,
      .description = "Constant p of condition (6), 0 < p < 1")},
-    {.name = "tau", .vr = 26, .type = TYPE_REAL, PARAM(.offset = OFF(tau), .start = 0.002,
+    {.name = "tau", .vr = 26, .type = TYPE_REAL, PARAM(.offset = OFF(pipe.tau), .start = 0.002,
      .min = 0.0, .max = NAN, .unit = "s",
      .description = "Time constant of the equivalent output injection filter; 0: no filter")},
-    {.name = "b", .vr = 27, .type = TYPE_REAL, PARAM(.offset = OFF(b), .start = 1.0 / PAPER_J,
+    {.name = "b", .vr = 27, .type = TYPE_REAL, PARAM(.offset = OFF(pipe.b), .start = 1.0 / PAPER_J,
      UNBOUNDED, .description = "Built-in joint: input gain b (1/J) [1/(kg.m2)]")},
     {.name = "c_nominal", .vr = 28, .rows = JOINT_BASIS_SIZE, .type = TYPE_REAL,
-     PARAM(.offset = OFF(c_nominal), .starts = C_NOMINAL_START, UNBOUNDED,
+     PARAM(.offset = OFF(pipe.c_nominal), .starts = C_NOMINAL_START, UNBOUNDED,
      .description = "Built-in joint: nominal coefficients of [sin x1, x2, sign(x2), x1, 1]")},
     {.name = "theta_nominal", .vr = 40, .rows = MAX_N, .cols = MAX_L, .type = TYPE_REAL,
-     PARAM(.offset = OFF(theta_nominal), .start = 0.0, UNBOUNDED,
+     PARAM(.offset = OFF(pipe.theta_nominal), .start = 0.0, UNBOUNDED,
      .description = "External model: nominal parameters thetabar of (12), acceleration "
                     "F + thetabar phi")},
-    {.name = "t_id", .vr = 80, .type = TYPE_REAL, PARAM(.offset = OFF(t_id), .start = 0.0,
+    {.name = "t_id", .vr = 80, .type = TYPE_REAL, PARAM(.offset = OFF(pipe.t_id), .start = 0.0,
      UNBOUNDED, .unit = "s", .description = "Earliest time at which the identifier starts")},
-    {.name = "rho", .vr = 81, .type = TYPE_REAL, PARAM(.offset = OFF(rho), .start = 1e-3,
+    {.name = "rho", .vr = 81, .type = TYPE_REAL, PARAM(.offset = OFF(pipe.rho), .start = 1e-3,
      .min = 0.0, .max = NAN, .min_exclusive = true,
      .description = "Regularization: Gamma(0) = I/rho")},
-    {.name = "R", .vr = 82, .type = TYPE_REAL, PARAM(.offset = OFF(R), .start = 0.1, .min = 0.0,
+    {.name = "R", .vr = 82, .type = TYPE_REAL, PARAM(.offset = OFF(pipe.R), .start = 0.1, .min = 0.0,
      .max = 1.0, .min_exclusive = true, .max_exclusive = true,
      .description = "MFF forgetting factor per second (R I, weight R^(t - s))")},
     {.name = "identify", .vr = 83, .rows = MAX_L, .type = TYPE_BOOLEAN,
-     PARAM(.offset = OFF(identify), .starts = IDENTIFY_START, UNBOUNDED,
+     PARAM(.offset = OFF(pipe.identify), .starts = IDENTIFY_START, UNBOUNDED,
      .description = "Which regressors are identified; the others keep their nominal value")},
     {.name = "start_from_measurement", .vr = 91, .type = TYPE_BOOLEAN,
      PARAM(.offset = OFF(start_from_measurement), .start = 1, UNBOUNDED,
@@ -161,36 +106,36 @@ static const ModelVariable VARIABLES[] = {
      PARAM(.offset = OFF(x2_hat_start), .start = 0.0, UNBOUNDED, .unit = "rad/s",
      .description = "Initial velocity estimate")},
     {.name = "identifier_form", .vr = 110, .type = TYPE_INTEGER,
-     PARAM(.offset = OFF(identifier_form), .start = FORM_INFORMATION, .min = 1, .max = 2,
+     PARAM(.offset = OFF(pipe.identifier_form), .start = OP_FORM_INFORMATION, .min = 1, .max = 2,
      .description = "1: explicit Euler on Gamma as in the paper; 2: information form with "
                     "stabilized forgetting (Gamma <= I/rho, stable for any h)")},
     {.name = "identifier_start", .vr = 111, .type = TYPE_INTEGER,
-     PARAM(.offset = OFF(identifier_start), .start = START_WHEN_CONVERGED, .min = 0, .max = 1,
+     PARAM(.offset = OFF(pipe.identifier_start), .start = OP_START_WHEN_CONVERGED, .min = 0, .max = 1,
      .description = "0: start at t_id; 1: start once the observer has converged and t >= t_id")},
     {.name = "filter_regressor", .vr = 112, .type = TYPE_BOOLEAN,
-     PARAM(.offset = OFF(filter_regressor), .start = 1, UNBOUNDED,
+     PARAM(.offset = OFF(pipe.filter_regressor), .start = 1, UNBOUNDED,
      .description = "Pass the regressor through the same filter as z_eq (removes the O(tau) "
                     "bias of filtering one side only)")},
     {.name = "mff_drift", .vr = 114, .type = TYPE_BOOLEAN,
-     PARAM(.offset = OFF(mff_drift), .start = 1, UNBOUNDED,
+     PARAM(.offset = OFF(pipe.mff_drift), .start = 1, UNBOUNDED,
      .description = "MFF in information form: model each parameter as locally linear in "
                     "time, which removes the lag of forgetting (needs 2 m <= 8)")},
     {.name = "identify_b", .vr = 115, .type = TYPE_BOOLEAN,
-     PARAM(.offset = OFF(identify_b), .start = 1, UNBOUNDED,
+     PARAM(.offset = OFF(pipe.identify_b), .start = 1, UNBOUNDED,
      .description = "Built-in joint: identify the input gain b (u is a regressor); the "
                     "estimate is the output b_hat")},
     {.name = "convergence_window", .vr = 113, .type = TYPE_REAL,
-     PARAM(.offset = OFF(convergence_window), .start = 0.05, .min = 0.0, .max = NAN,
+     PARAM(.offset = OFF(pipe.convergence_window), .start = 0.05, .min = 0.0, .max = NAN,
      .min_exclusive = true, .unit = "s",
      .description = "Time constant of the convergence test (rate of sign switching of e)")},
     {.name = "model_feedback", .vr = 117, .type = TYPE_BOOLEAN,
-     PARAM(.offset = OFF(model_feedback), .start = 1, UNBOUNDED,
+     PARAM(.offset = OFF(pipe.model_feedback), .start = 1, UNBOUNDED,
      .description = "Built-in joint, LSM in information form: once identified (from "
                     "1 s of data on, entering over 1 s), the observer predicts with the identified b "
                     "and c, each correction weighted by its significance; z_eq is then the "
                     "perturbation beyond that model. false: always the nominal b, c_nominal")},
     {.name = "tau_identifier", .vr = 116, .type = TYPE_REAL,
-     PARAM(.offset = OFF(tau_identifier), .start = 0.1, .min = 0.0, .max = NAN, .unit = "s",
+     PARAM(.offset = OFF(pipe.tau_identifier), .start = 0.1, .min = 0.0, .max = NAN, .unit = "s",
      .description = "LSM in information form: time constant of the filter on both sides of "
                     "the regression (z and the regressor), which keeps velocity noise and a "
                     "plant's discretization mismatch out of constant parameters; MFF and the "
@@ -201,123 +146,72 @@ static const ModelVariable VARIABLES[] = {
     {.name = "alpha2_used", .vr = 104, .rows = MAX_N, .type = TYPE_REAL,
      CALC(.offset = OFF(alpha2_used), .description = "alpha2 in use (given, or from Theorem 3.1)")},
     {.name = "y", .vr = 200, .rows = MAX_N, .type = TYPE_REAL,
-     INPUT(.offset = OFF(y), .unit = "rad", .description = "Measured position x1")},
+     INPUT(.offset = OFF(in.y), .unit = "rad", .description = "Measured position x1")},
     {.name = "u", .vr = 204, .type = TYPE_REAL,
-     INPUT(.offset = OFF(u), .start = 1.0, .unit = "N.m",
+     INPUT(.offset = OFF(in.u), .start = 1.0, .unit = "N.m",
      .description = "Built-in joint: actuator torque (start 1 N.m: with y held at 0 the "
                     "default experiment shows the injection cancelling b u)")},
     {.name = "F", .vr = 208, .rows = MAX_N, .type = TYPE_REAL,
-     INPUT(.offset = OFF(F), .unit = "rad/s2",
+     INPUT(.offset = OFF(in.F), .unit = "rad/s2",
      .description = "External model: nominal acceleration F(t, y, x2_hat, u)")},
     {.name = "phi", .vr = 212, .rows = MAX_L, .type = TYPE_REAL,
-     INPUT(.offset = OFF(phi), .description = "External model: regressor phi(t, y, x2_hat, u)")},
+     INPUT(.offset = OFF(in.phi), .description = "External model: regressor phi(t, y, x2_hat, u)")},
     {.name = "identifier_reset", .vr = 220, .type = TYPE_BOOLEAN,
      .causality = CAUSALITY_INPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
      .offset = OFF(identifier_reset),
      .description = "A rising edge restarts identification from the nominal parameters"},
     {.name = "x1_hat", .vr = 300, .rows = MAX_N, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(obs.x1_hat), .unit = "rad", .description = "Position estimate")},
+     OUTPUT(.offset = OFF(pipe.obs.x1_hat), .unit = "rad", .description = "Position estimate")},
     {.name = "x2_hat", .vr = 304, .rows = MAX_N, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(obs.x2_hat), .unit = "rad/s", .description = "Velocity estimate")},
+     OUTPUT(.offset = OFF(pipe.obs.x2_hat), .unit = "rad/s", .description = "Velocity estimate")},
     {.name = "z_eq", .vr = 308, .rows = MAX_N, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(obs.z_eq), .unit = "rad/s2",
+     OUTPUT(.offset = OFF(pipe.obs.z_eq), .unit = "rad/s2",
      .description = "Equivalent output injection alpha1 sign(e), eq. (7), unfiltered")},
     {.name = "z_eq_filtered", .vr = 312, .rows = MAX_N, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(obs.z_filtered), .unit = "rad/s2",
+     OUTPUT(.offset = OFF(pipe.obs.z_filtered), .unit = "rad/s2",
      .description = "Filtered injection: the identified perturbation, eq. (10)")},
     {.name = "theta_hat", .vr = 320, .rows = MAX_N, .cols = MAX_L, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(theta_hat),
+     OUTPUT(.offset = OFF(out.theta_hat),
      .description = "Parameter estimates: built-in joint: theta_hat[1,k] estimates c_k; "
                     "external: theta in xi = theta phi")},
     {.name = "gamma_trace", .vr = 360, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(gamma_trace), .description = "Trace of the identifier's Gamma")},
+     OUTPUT(.offset = OFF(out.gamma_trace), .description = "Trace of the identifier's Gamma")},
     {.name = "identifier_active", .vr = 361, .type = TYPE_BOOLEAN,
      .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
-     .offset = OFF(identifier_active), .description = "The identifier is integrating"},
+     .offset = OFF(out.identifier_active), .description = "The identifier is integrating"},
     {.name = "converged", .vr = 362, .type = TYPE_BOOLEAN,
      .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
-     .offset = OFF(converged),
+     .offset = OFF(out.converged),
      .description = "The observer is in its sliding mode by the switching-rate test"},
     {.name = "excitation", .vr = 363, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(excitation),
+     OUTPUT(.offset = OFF(out.excitation),
      .description = "Smallest eigenvalue of the identifier's information per unit time "
                     "(identifier_form 2); near 0: theta_hat is not being learned")},
     {.name = "b_hat", .vr = 364, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(b_hat),
+     OUTPUT(.offset = OFF(out.b_hat),
      .description = "Built-in joint: estimate of the input gain b [1/(kg.m2)] (b while not "
                     "identified)")},
     {.name = "theta_std", .vr = 380, .rows = MAX_N, .cols = MAX_L, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(theta_std),
+     OUTPUT(.offset = OFF(out.theta_std),
      .description = "Standard error of theta_hat (identifier_form 2; 0 where not identified): "
                     "from the information matrix and the residuals' low-frequency power")},
     {.name = "b_std", .vr = 412, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(b_std), .description = "Standard error of b_hat (identifier_form 2)")},
+     OUTPUT(.offset = OFF(out.b_std), .description = "Standard error of b_hat (identifier_form 2)")},
     {.name = "noise_std", .vr = 370, .rows = MAX_N, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(bank.noise_std), .unit = "rad",
+     OUTPUT(.offset = OFF(pipe.bank.noise_std), .unit = "rad",
      .description = "Scheme 3: estimated standard deviation of the measurement noise "
                     "(quantization included) from the published observer's innovations")},
     {.name = "observer_bandwidth", .vr = 374, .rows = MAX_N, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(bank.bandwidth), .unit = "rad/s",
+     OUTPUT(.offset = OFF(pipe.bank.bandwidth), .unit = "rad/s",
      .description = "Scheme 3: bandwidth of the published observer (1/h: the super-twisting "
                     "observer)")},
     MAX_INTERNAL_STEPS_VARIABLE(OFF(max_internal_steps)),
 };
 
-/* theta_hat from the identified corrections.  Built-in joint: the injection
- * is z = xi = -(c - cbar) psi, so Delta = cbar - c and c_hat = cbar - Delta_hat
- * (the paper's 6.2 Delta = [-a1 + a1bar, ...]).  External: theta_hat = thetabar + Delta_hat. */
-static const double (*identified_delta(const ObserverData *d))[MAX_L]
-{
-    return d->identifier_form == FORM_PAPER ? (const double (*)[MAX_L])d->id.delta
-                                            : (const double (*)[MAX_L])d->info.delta;
-}
-
-static void publish_estimates(ObserverData *d)
-{
-    if (d->identifier != IDENTIFIER_OFF && d->identifier_form == FORM_INFORMATION)
-        info_solve(&d->info); /* keeps the previous estimate if it cannot solve */
-    const double (*delta)[MAX_L] = identified_delta(d);
-    const int with_std = d->identifier != IDENTIFIER_OFF && d->identifier_form == FORM_INFORMATION;
-    memset(d->theta_std, 0, sizeof d->theta_std);
-    d->b_std = 0.0;
-    if (d->nominal_model == NOMINAL_JOINT) {
-        for (int k = 0; k < JOINT_BASIS_SIZE; ++k) d->theta_hat[0][k] = d->c_nominal[k];
-        d->b_hat = d->b;
-        for (int j = 0; j < d->m; ++j) {
-            const int k = d->selected[j];
-            const double std = with_std ? d->info.std_error[0][j] : 0.0;
-            /* u enters as + (b - bbar) u: Delta = b - bbar there */
-            if (k == JOINT_INPUT) {
-                d->b_hat = d->b + delta[0][j];
-                d->b_std = std;
-            } else {
-                d->theta_hat[0][k] = d->c_nominal[k] - delta[0][j];
-                d->theta_std[0][k] = std;
-            }
-        }
-    } else {
-        for (int i = 0; i < d->n; ++i) {
-            for (int k = 0; k < d->l; ++k) d->theta_hat[i][k] = d->theta_nominal[i][k];
-            for (int j = 0; j < d->m; ++j) {
-                d->theta_hat[i][d->selected[j]] += delta[i][j];
-                if (with_std) d->theta_std[i][d->selected[j]] = d->info.std_error[i][j];
-            }
-        }
-    }
-    if (d->identifier_form == FORM_PAPER) {
-        d->gamma_trace = identifier_gamma_trace(&d->id);
-        d->excitation = 0.0;
-    } else {
-        d->gamma_trace = d->info.gamma_trace;
-        d->excitation = d->info.excitation;
-    }
-    d->converged = sto_converged(&d->obs);
-}
-
 static ModelStatus complete_gains(ObserverData *d, const ModelLogger *log)
 {
     ModelStatus status = MODEL_OK;
-    for (int i = 0; i < d->n; ++i) {
+    for (int i = 0; i < d->pipe.n; ++i) {
         double a1 = d->alpha1[i], a2 = d->alpha2[i];
         const double f = d->f_plus[i], p = d->p[i];
         if (gains_complete(f, p, &a1, &a2) != 0) {
@@ -365,82 +259,22 @@ static ModelStatus complete_gains(ObserverData *d, const ModelLogger *log)
     return status;
 }
 
-/* model_feedback applies: the built-in joint's LSM in information form with the
- * regression filtered on both sides, under an implicit scheme. */
-static int feedback_on(const ObserverData *d)
-{
-    return d->model_feedback && d->nominal_model == NOMINAL_JOINT &&
-           d->identifier == IDENTIFIER_LSM && d->identifier_form == FORM_INFORMATION &&
-           d->filter_regressor && d->scheme != STO_SCHEME_PAPER;
-}
-
-/* The significant part of each identified correction (model_feedback.h), kept
- * physical: friction not negative, b within a factor 2 of the nominal. */
-static void take_identified_model(ObserverData *d)
-{
-    for (int j = 0; j < d->m; ++j) {
-        const int k = d->selected[j];
-        const double delta = d->info.delta[0][j];
-        double D = delta * feedback_weight(delta, d->info.std_error[0][j], d->info.active_time);
-        if (k == JOINT_INPUT) { /* Delta = b - bbar */
-            D = fmin(fmax(D, fmin(-0.5 * d->b, d->b)), fmax(-0.5 * d->b, d->b));
-            d->b_model = d->b + D;
-        } else { /* Delta = cbar - c */
-            if (k == JOINT_VELOCITY || k == JOINT_VELOCITY_SIGN) D = fmin(D, d->c_nominal[k]);
-            d->c_model[k] = d->c_nominal[k] - D;
-        }
-        d->model_delta[j] = D;
-    }
-}
-
-/* The model the observer predicts with: the nominal one until the LSM has
- * FEEDBACK_START s of data, then the identified one (entering over FEEDBACK_RAMP). */
-static void update_model(ObserverData *d)
-{
-    const double coulomb_before = d->c_model[JOINT_VELOCITY_SIGN];
-    d->b_model = d->b;
-    memcpy(d->c_model, d->c_nominal, sizeof d->c_model);
-    memset(d->model_delta, 0, sizeof d->model_delta);
-    if (feedback_on(d) && d->identifier_active) take_identified_model(d);
-    /* The implicit corrector learns the Coulomb level the model misses
-     * (implicit_twisting.h): keep the total level, model plus learned, where it
-     * was instead of relearning it over the next reversals. */
-    const double coulomb = d->c_model[JOINT_VELOCITY_SIGN];
-    if (coulomb != coulomb_before)
-        d->obs.coulomb_learned[0] =
-            fmax(d->obs.coulomb_learned[0] + coulomb_before - coulomb, -coulomb);
-}
-
 static ModelStatus initialize(void *data, double start_time, const ModelLogger *log)
 {
     (void)start_time;
     ObserverData *d = data;
-    if (d->nominal_model == NOMINAL_JOINT && d->n != 1) {
+    ObserverPipeline *p = &d->pipe;
+    if (p->nominal_model == OP_NOMINAL_JOINT && p->n != 1) {
         log->log(log->context, MODEL_ERROR,
                  "n = %d: the built-in joint model (nominal_model = 1) has one degree of freedom; "
-                 "use nominal_model = 2 for n > 1", d->n);
+                 "use nominal_model = 2 for n > 1", p->n);
         return MODEL_ERROR;
     }
-    const int regressors = d->nominal_model == NOMINAL_JOINT ? JOINT_BASIS_SIZE : d->l;
-    d->m = 0;
-    d->b_hat = d->b;
-    d->slot_velocity = d->slot_velocity_sign = MAX_L;
-    for (int k = 0; k < regressors; ++k) {
-        if (!d->identify[k]) continue;
-        if (d->nominal_model == NOMINAL_JOINT && k == JOINT_VELOCITY) d->slot_velocity = d->m;
-        if (d->nominal_model == NOMINAL_JOINT && k == JOINT_VELOCITY_SIGN)
-            d->slot_velocity_sign = d->m;
-        d->selected[d->m++] = k;
-    }
-    d->slot_input = MAX_L;
-    if (d->nominal_model == NOMINAL_JOINT && d->identify_b) {
-        d->slot_input = d->m;
-        d->selected[d->m++] = JOINT_INPUT;
-    }
-    if (d->identifier != IDENTIFIER_OFF && d->m == 0) {
+    d->out.b_hat = p->b;
+    if (op_select(p) == 0 && p->identifier != IDENTIFIER_OFF) {
         log->log(log->context, MODEL_ERROR,
                  "identifier = %d but no regressor is selected (identify[1..%d] are all false)",
-                 d->identifier, regressors);
+                 p->identifier, p->nominal_model == OP_NOMINAL_JOINT ? JOINT_BASIS_SIZE : p->l);
         return MODEL_ERROR;
     }
     ModelStatus status = complete_gains(d, log);
@@ -448,234 +282,32 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
 
     double x1_hat0[MAX_N];
     for (int i = 0; i < MAX_N; ++i)
-        x1_hat0[i] = d->start_from_measurement ? d->y[i] : d->x1_hat_start[i];
-    sto_init(&d->obs, d->n, d->h, d->alpha1_used, d->alpha2_used, d->tau, x1_hat0, d->x2_hat_start);
-    sto_configure(&d->obs, (StoScheme)d->scheme, d->convergence_window);
-    adaptive_init(&d->bank, d->h);
-    memset(d->shadow, 0, sizeof d->shadow);
-    identifier_init(&d->id, (IdentifierKind)d->identifier, d->n, d->m, d->h, d->rho, d->R);
-    if (d->identifier == IDENTIFIER_MFF && d->identifier_form == FORM_INFORMATION && d->mff_drift &&
-        2 * d->m > ID_MAX_REGRESSORS) {
+        x1_hat0[i] = d->start_from_measurement ? d->in.y[i] : d->x1_hat_start[i];
+    if (op_init(p, d->alpha1_used, d->alpha2_used, x1_hat0, d->x2_hat_start, &d->in, &d->out)) {
         log->log(log->context, MODEL_ERROR,
                  "mff_drift needs 2 m <= %d identified regressors, %d are selected (the "
                  "built-in joint's u counts when identify_b is true); select fewer or set "
-                 "mff_drift = false", ID_MAX_REGRESSORS, d->m);
+                 "mff_drift = false", ID_MAX_REGRESSORS, p->m);
         return MODEL_ERROR;
     }
-    info_init(&d->info, (IdentifierKind)d->identifier, d->n, d->m, d->h, d->rho, d->R,
-              d->mff_drift);
-    /* Constant parameters need no tracking: measured on bench/real_measurements.py's
-     * open-loop rows (docs/improvements.md), a 0.1 s filter instead of tau's 2 ms took
-     * explicit-Euler plant data from 28 % to 12 % and a 12-bit encoder at 10 kHz from
-     * 26 % to 1.7 %. */
-    const int lsm = d->identifier == IDENTIFIER_LSM && d->identifier_form == FORM_INFORMATION;
-    d->identifier_gain = !lsm                    ? d->obs.filter_gain
-                         : d->tau_identifier > 0 ? -expm1(-d->h / d->tau_identifier)
-                                                 : 1.0;
-    memset(d->phi_filtered, 0, sizeof d->phi_filtered);
-    memset(d->phi_previous, 0, sizeof d->phi_previous);
-    memset(d->velocity_before, 0, sizeof d->velocity_before);
-    d->input_before = d->u;
-    memset(d->phi_now, 0, sizeof d->phi_now);
-    memset(d->z_identifier, 0, sizeof d->z_identifier);
-    d->identifier_active = 0;
-    memcpy(d->c_model, d->c_nominal, sizeof d->c_model);
-    update_model(d);
-    memset(d->model_shadow, 0, sizeof d->model_shadow);
-    d->model_z = 0.0;
     d->reset_seen = d->identifier_reset;
-    publish_estimates(d);
     return status;
 }
 
-static double internal_step(const void *data) { return ((const ObserverData *)data)->h; }
+static double internal_step(const void *data) { return ((const ObserverData *)data)->pipe.h; }
 
 static uint64_t max_internal_steps(const void *data)
 {
     return (uint64_t)((const ObserverData *)data)->max_internal_steps;
 }
 
-/* Restarts identification from the nominal parameters (and the observer's model). */
-static void restart_identifier(ObserverData *d)
-{
-    identifier_init(&d->id, (IdentifierKind)d->identifier, d->n, d->m, d->h, d->rho, d->R);
-    info_reset(&d->info);
-    d->identifier_active = 0;
-    update_model(d);
-}
-
-/* What depends only on the inputs held over the communication step: the
- * nominal acceleration (the joint: affine in the velocity, its position part
- * with the sin evaluated here) and the selected regressors (the joint: all
- * but the velocity ones, which come from the observer's trace). */
-static void nominal_model(const ObserverData *d, StoAcceleration acceleration[MAX_N],
-                          double regressor[MAX_L])
-{
-    memset(regressor, 0, MAX_L * sizeof *regressor);
-    if (d->nominal_model == NOMINAL_JOINT) {
-        joint_position_basis(d->y[0], regressor);
-        regressor[JOINT_INPUT] = d->u;
-        acceleration[0] = joint_acceleration(d->b_model, d->c_model, d->u, regressor);
-    } else {
-        for (int i = 0; i < d->n; ++i) {
-            double a = d->F[i];
-            for (int k = 0; k < d->l; ++k) a += d->theta_nominal[i][k] * d->phi[k];
-            acceleration[i] = (StoAcceleration){.held = a, .point = 0.0, .viscous = 0.0,
-                                                .coulomb = 0.0};
-        }
-        memcpy(regressor, d->phi, MAX_L * sizeof *regressor);
-    }
-}
-
-static void hold_inputs(ObserverData *d, StoAcceleration acceleration[MAX_N])
-{
-    double regressor[MAX_L];
-    nominal_model(d, acceleration, regressor);
-    if (d->identifier != IDENTIFIER_OFF)
-        for (int j = 0; j < d->m; ++j) d->phi_now[j] = regressor[d->selected[j]];
-}
-
-/* The regressor of step k of a trace: the joint's velocity entries.  The
- * implicit schemes take the previous sample's regressor, to match the
- * injection, a second difference over the two intervals around that sample:
- * - its Coulomb entry becomes the mean sign around it (implicit_mean_sign)
- *   once the velocity after it is known, where the sign is hard (a smoothed
- *   expected sign of a linear member is left as it is);
- * - its input entry becomes the mean of the inputs held over the two
- *   intervals, as the nominal acceleration takes them: the input held after
- *   the sample alone leads the injection by half a sample, which leaked
- *   (b - bbar) h/2 u' into the other estimates (1 kHz, noise-free, J -10 %
- *   and +10 %: the viscous estimate 2.9 % and 0.02 % off, now 1.4 % and 1.2 %). */
-static void take_velocity(ObserverData *d, const StoTrace *trace, int k)
-{
-    const double v = trace->velocity[0][k];
-    d->phi_now[d->slot_velocity] = v;
-    d->phi_now[d->slot_velocity_sign] = trace->velocity_sign[0][k];
-    if (d->scheme == STO_SCHEME_PAPER) return;
-    const int slot = d->slot_velocity_sign;
-    if (slot < MAX_L && fabs(d->phi_previous[slot]) == 1.0)
-        d->phi_previous[slot] = implicit_mean_sign(d->velocity_before[0], d->velocity_before[1], v);
-    d->velocity_before[0] = d->velocity_before[1];
-    d->velocity_before[1] = v;
-    if (d->slot_input < MAX_L) {
-        const double input = d->phi_previous[d->slot_input];
-        d->phi_previous[d->slot_input] = 0.5 * (d->input_before + input);
-        d->input_before = input;
-    }
-}
-
-/* Whether the identifier starts at this sample (time t); restarts its filters if so. */
-static int start_identifier(ObserverData *d, double t)
-{
-    d->identifier_active = t >= d->t_id &&
-                           (d->identifier_start == START_AT_T_ID ||
-                            (sto_converged(&d->obs) &&
-                             (d->scheme != STO_SCHEME_ADAPTIVE || adaptive_settled(&d->bank, d->n))));
-    if (d->identifier_active) {
-        /* Both filters start from zero together: z = Delta phi then holds for
-         * the filtered pair exactly, with no trace of the observer's transient. */
-        memset(d->phi_filtered, 0, sizeof d->phi_filtered);
-        memset(d->z_identifier, 0, sizeof d->z_identifier);
-        memset(d->shadow, 0, sizeof d->shadow);
-        memset(d->model_shadow, 0, sizeof d->model_shadow);
-        d->model_z = 0.0;
-        if (d->scheme == STO_SCHEME_ADAPTIVE) adaptive_follow_published(&d->bank);
-    }
-    return d->identifier_active;
-}
-
-/* The identifier over the `count` steps just observed (m constant: small_loops.h). */
-KERNEL identify_run(ObserverData *d, const StoTrace *trace, int count, const int m)
-{
-    /* The implicit scheme's injection belongs to the previous sample (its
-     * corrector runs one sample behind), so its regressor is taken one sample
-     * back as well. */
-    const double *sample = d->scheme == STO_SCHEME_PAPER ? d->phi_now : d->phi_previous;
-    const double g = d->identifier_gain;
-    /* Scheme 3 following a linear member: its injection is the perturbation
-     * through the member's filter G, so the regressor passes G as well. */
-    const int adaptive = d->scheme == STO_SCHEME_ADAPTIVE;
-    const AdaptiveGains *G = adaptive && d->bank.follow != ADAPTIVE_SUPER_TWISTING
-                                 ? &d->bank.gains[d->bank.follow]
-                                 : NULL;
-    const double(*z_source)[STO_RUN_MAX] = adaptive ? trace->z_identify : trace->z_eq;
-    IdSample samples[STO_RUN_MAX];
-    for (int i = 0; i < d->n; ++i) { /* z side: DOF by DOF, each over the run */
-        double z = d->z_identifier[i];
-        if (d->filter_regressor) { /* the same filter on both sides of z = Delta phi */
-            for (int k = 0; k < count; ++k) samples[k].z[i] = z += g * (z_source[i][k] - z);
-        } else {
-            for (int k = 0; k < count; ++k) samples[k].z[i] = trace->z_filtered[i][k];
-        }
-        d->z_identifier[i] = z;
-    }
-    const int feedback = feedback_on(d);
-    for (int k = 0; k < count; ++k) { /* regressor side */
-        double *phi = samples[k].phi;
-        take_velocity(d, trace, k);
-        if (feedback) { /* the injection against the nominal model: + D phi, filtered alike */
-            double shift = 0.0;
-            UNROLL for (int j = 0; j < m; ++j) shift += d->model_delta[j] * sample[j];
-            if (G) shift = adaptive_shadow_step(G, d->h, d->model_shadow, shift);
-            d->model_z += g * (shift - d->model_z);
-            samples[k].z[0] += d->model_z;
-        }
-        if (G) {
-            UNROLL for (int j = 0; j < m; ++j) {
-                const double through_g = adaptive_shadow_step(G, d->h, d->shadow[j], sample[j]);
-                phi[j] = d->filter_regressor
-                             ? (d->phi_filtered[j] += g * (through_g - d->phi_filtered[j]))
-                             : through_g;
-                d->phi_previous[j] = d->phi_now[j];
-            }
-        } else if (d->filter_regressor) {
-            UNROLL for (int j = 0; j < m; ++j) {
-                phi[j] = d->phi_filtered[j] += g * (sample[j] - d->phi_filtered[j]);
-                d->phi_previous[j] = d->phi_now[j];
-            }
-        } else {
-            UNROLL for (int j = 0; j < m; ++j) {
-                phi[j] = sample[j];
-                d->phi_previous[j] = d->phi_now[j];
-            }
-        }
-    }
-    if (d->identifier_form == FORM_PAPER) identifier_run(&d->id, samples, count);
-    else info_run(&d->info, samples, count);
-}
-
 static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
 {
     ObserverData *d = data;
-    StoAcceleration acceleration[MAX_N];
-    hold_inputs(d, acceleration);
-    const int identifying = d->identifier != IDENTIFIER_OFF;
-    if (identifying && d->identifier_reset != d->reset_seen) {
-        d->reset_seen = d->identifier_reset;
-        if (d->identifier_reset) restart_identifier(d);
-    }
-    StoTrace trace;
-    while (k < k_end) {
-        /* Runs of up to STO_RUN_MAX steps; single steps while the identifier
-         * waits to start, as its start condition is checked after each. */
-        const uint64_t left = k_end - k;
-        const int count = identifying && !d->identifier_active ? 1
-                          : left < STO_RUN_MAX             ? (int)left
-                                                           : STO_RUN_MAX;
-        if (d->scheme == STO_SCHEME_ADAPTIVE)
-            adaptive_run(&d->obs, &d->bank, d->y, acceleration, count, &trace);
-        else
-            sto_run(&d->obs, d->y, acceleration, count, &trace);
-        if (identifying) {
-            if (d->identifier_active || start_identifier(d, start_time + (double)k * d->h)) {
-                WITH_CONSTANT_M(d->m, identify_run, d, &trace, count);
-            } else { /* the delay line still moves */
-                take_velocity(d, &trace, 0);
-                memcpy(d->phi_previous, d->phi_now, sizeof d->phi_previous);
-            }
-        }
-        k += count;
-    }
+    const int edge = d->identifier_reset != d->reset_seen;
+    if (d->pipe.identifier != IDENTIFIER_OFF && edge) d->reset_seen = d->identifier_reset;
+    op_run(&d->pipe, &d->in, start_time, k, k_end,
+           d->pipe.identifier != IDENTIFIER_OFF && edge && d->identifier_reset);
 }
 
 /* Why DOF i's estimate is not finite: a nominal acceleration that overflows
@@ -683,49 +315,47 @@ static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
  * discretization (h, gains). */
 static void explain_divergence(const ObserverData *d, double t, int i, const ModelLogger *log)
 {
+    const ObserverPipeline *p = &d->pipe;
     StoAcceleration acceleration[MAX_N];
     double regressor[MAX_L];
-    nominal_model(d, acceleration, regressor);
+    op_nominal_model(p, &d->in, acceleration, regressor);
     const StoAcceleration a = acceleration[i];
     if (!(fabs(a.held + a.point) < 1e300) || !isfinite(a.viscous) || !isfinite(a.coulomb)) {
-        if (d->nominal_model == NOMINAL_JOINT)
+        if (p->nominal_model == OP_NOMINAL_JOINT)
             log->log(log->context, MODEL_ERROR,
                      "observer: the nominal acceleration b u - c psi(y) = %g at t = %g is out of "
                      "floating-point range (b = %g, u = %g, y[1] = %g): the input or the nominal "
-                     "parameters are too large", a.held + a.point, t, d->b, d->u, d->y[0]);
+                     "parameters are too large", a.held + a.point, t, p->b, d->in.u, d->in.y[0]);
         else
             log->log(log->context, MODEL_ERROR,
                      "observer: the nominal acceleration F[%d] + theta_nominal phi = %g at t = %g "
                      "is out of floating-point range (F[%d] = %g): the inputs F, phi or "
-                     "theta_nominal are too large", i + 1, a.held, t, i + 1, d->F[i]);
-    } else if (!(fabs(d->y[i]) < 1e300)) {
+                     "theta_nominal are too large", i + 1, a.held, t, i + 1, d->in.F[i]);
+    } else if (!(fabs(d->in.y[i]) < 1e300)) {
         log->log(log->context, MODEL_ERROR,
                  "observer: the measurement y[%d] = %g at t = %g is too large to observe",
-                 i + 1, d->y[i], t);
+                 i + 1, d->in.y[i], t);
     } else {
         log->log(log->context, MODEL_ERROR,
                  "observer diverged at t = %g: x1_hat[%d] = %g, x2_hat[%d] = %g (reduce h or "
-                 "the gains)", t, i + 1, d->obs.x1_hat[i], i + 1, d->obs.x2_hat[i]);
+                 "the gains)", t, i + 1, p->obs.x1_hat[i], i + 1, p->obs.x2_hat[i]);
     }
 }
 
 static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
 {
     ObserverData *d = data;
-    if (d->scheme == STO_SCHEME_ADAPTIVE) adaptive_outputs(&d->obs, &d->bank);
-    else sto_update_outputs(&d->obs);
-    publish_estimates(d);
-    update_model(d);
-    for (int i = 0; i < d->n; ++i) {
-        if (!isfinite(d->obs.x1_hat[i]) || !isfinite(d->obs.x2_hat[i])) {
+    op_communicate(&d->pipe, &d->out);
+    for (int i = 0; i < d->pipe.n; ++i) {
+        if (!isfinite(d->pipe.obs.x1_hat[i]) || !isfinite(d->pipe.obs.x2_hat[i])) {
             explain_divergence(d, t, i, log);
             return MODEL_ERROR;
         }
     }
-    if (!isfinite(d->gamma_trace)) {
+    if (!isfinite(d->out.gamma_trace)) {
         log->log(log->context, MODEL_ERROR,
                  "identifier diverged at t = %g: trace(Gamma) = %g (explicit Euler needs "
-                 "h |Gamma| |phi|^2 < 2; increase rho or reduce h)", t, d->gamma_trace);
+                 "h |Gamma| |phi|^2 < 2; increase rho or reduce h)", t, d->out.gamma_trace);
         return MODEL_ERROR;
     }
     return MODEL_OK;
@@ -736,20 +366,11 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
 static ModelStatus check_restored(const void *data, const ModelLogger *log)
 {
     const ObserverData *d = data;
-    const int regressors = d->nominal_model == NOMINAL_JOINT ? JOINT_BASIS_SIZE + 1 : d->l;
-    int ok = d->obs.n >= 0 && d->obs.n <= MAX_N && d->m >= 0 && d->m <= regressors &&
-             d->id.rows >= 0 && d->id.rows <= ID_MAX_ROWS && d->id.m >= 0 &&
-             d->id.m <= ID_MAX_REGRESSORS && d->info.rows >= 0 && d->info.rows <= ID_MAX_ROWS &&
-             d->info.m >= 0 && d->info.m <= ID_MAX_REGRESSORS &&
-             (!d->info.drift || d->info.m <= ID_MAX_REGRESSORS / 2) &&
-             (d->obs.n == 0 || d->obs.n == d->n) && adaptive_valid(&d->bank, d->n);
-    ok = ok && d->slot_velocity >= 0 && d->slot_velocity <= MAX_L && d->slot_velocity_sign >= 0 &&
-         d->slot_velocity_sign <= MAX_L;
-    for (int j = 0; ok && j < d->m; ++j) ok = d->selected[j] >= 0 && d->selected[j] < regressors;
-    if (!ok) {
+    if (!op_state_valid(&d->pipe)) {
         log->log(log->context, MODEL_ERROR,
                  "deserialized FMU state: the observer's internal counts are inconsistent "
-                 "(n = %d, observer n = %d, m = %d); state refused", d->n, d->obs.n, d->m);
+                 "(n = %d, observer n = %d, m = %d); state refused", d->pipe.n, d->pipe.obs.n,
+                 d->pipe.m);
         return MODEL_ERROR;
     }
     return MODEL_OK;
