@@ -5,7 +5,7 @@
 # The algorithms: plain C over plain structs, no FMI types.  Each group is what a
 # model's FMU ships in sources/ (the core library holds their union).
 set(STO_CORE_OBSERVER
-    core/observer_pipeline.c core/super_twisting.c core/implicit_twisting.c core/noise_adaptive.c core/identifier.c
+    core/observer_pipeline.c core/observer_scheme.c core/super_twisting.c core/implicit_twisting.c core/noise_adaptive.c core/identifier.c
     core/information_identifier.c core/block_scores.c core/gains.c)
 set(STO_CORE_ROBOT
     core/robot_pipeline.c core/robot_observer.c core/rigid_body.c core/regressor_identifier.c

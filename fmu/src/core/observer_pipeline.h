@@ -16,7 +16,7 @@
 #include "information_identifier.h"
 #include "joint_model.h"
 #include "noise_adaptive.h"
-#include "super_twisting.h"
+#include "observer_scheme.h"
 
 #define OP_MAX_N STO_MAX_DOF
 #define OP_MAX_L ID_MAX_REGRESSORS

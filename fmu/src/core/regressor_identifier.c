@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "cholesky.h"
-#include "statistics_job.h"
+#include "information_statistics.h"
 
 static void anchor_snapshot(RegressorIdentifier *id);
 
@@ -269,17 +269,17 @@ void rri_statistics(RegressorIdentifier *id)
         g[k] = 1.0;
         solve(id, g);
         trace += g[k];
-        const double variance = sj_sandwich(&id->score_power[0][0], p, g);
+        const double variance = stats_sandwich(&id->score_power[0][0], p, RRI_MAX_PARAMETERS, g);
         id->std_error[k] = sqrt(variance > 0.0 ? variance : 0.0);
     }
     id->gamma_trace = trace;
     /* smallest eigenvalue of P by inverse iteration, per unit of remembered time */
     double v[RRI_MAX_PARAMETERS], norm = 0.0;
     for (int k = 0; k < p; ++k) v[k] = 1.0 / sqrt((double)p);
-    for (int iteration = 0; iteration < SJ_EIGEN_ITERATIONS; ++iteration) {
+    for (int iteration = 0; iteration < STATS_EIGEN_ITERATIONS; ++iteration) {
         const double previous = norm;
-        norm = sj_inverse_iteration(&id->factor[0][0], p, v);
-        if (sj_eigen_converged(norm, previous)) break;
+        norm = stats_inverse_iteration(&id->factor[0][0], p, RRI_MAX_PARAMETERS, v);
+        if (stats_eigen_converged(norm, previous)) break;
     }
-    id->excitation = sj_excitation(norm, id->rho, id->lambda, id->h, id->active_time);
+    id->excitation = stats_excitation(norm, id->rho, id->lambda, id->h, id->active_time);
 }

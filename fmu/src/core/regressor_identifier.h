@@ -142,8 +142,8 @@ static inline int rri_anchor_age(const RegressorIdentifier *id)
  * (p^3 multiply-adds: at a slower rate than the estimate, or spread over
  * internal steps by statistics_job.h in the same arithmetic).  The inverse
  * iteration for the smallest eigenvalue starts from the uniform vector and
- * stops at convergence (statistics_job.h's SJ_EIGEN_TOLERANCE), after
- * SJ_EIGEN_ITERATIONS iterations at most. */
+ * stops at convergence (information_statistics.h's STATS_EIGEN_TOLERANCE), after
+ * STATS_EIGEN_ITERATIONS iterations at most. */
 void rri_statistics(RegressorIdentifier *id);
 
 #endif

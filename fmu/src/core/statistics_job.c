@@ -5,36 +5,6 @@
 
 #include "cholesky.h"
 
-double sj_sandwich(const double *S, int p, const double g[])
-{
-    double variance = 0.0;
-    for (int j = 0; j < p; ++j) {
-        const double *S_j = S + j * RRI_MAX_PARAMETERS;
-        double row = S_j[j] * g[j];
-        for (int i = j + 1; i < p; ++i) row += 2.0 * S_j[i] * g[i];
-        variance += g[j] * row;
-    }
-    return variance;
-}
-
-double sj_inverse_iteration(const double *L, int p, double v[])
-{
-    cholesky_solve(L, p, RRI_MAX_PARAMETERS, v);
-    double norm = 0.0;
-    for (int k = 0; k < p; ++k) norm += v[k] * v[k];
-    norm = sqrt(norm);
-    for (int k = 0; k < p; ++k) v[k] /= norm;
-    return norm;
-}
-
-double sj_excitation(double norm, double rho, double lambda, double h, double active_time)
-{
-    const double rate = lambda < 1.0 ? -log(lambda) / h : 0.0;
-    const double memory = rate > 0.0 ? -expm1(-rate * active_time) / rate : active_time;
-    const double excitation = memory > 0.0 ? (1.0 / norm - rho) / memory : 0.0;
-    return excitation > 0.0 ? excitation : 0.0;
-}
-
 static void uniform(double v[], int p)
 {
     for (int k = 0; k < p; ++k) v[k] = 1.0 / sqrt((double)p);
@@ -104,7 +74,7 @@ static void complete(StatisticsJob *job, int iterations)
     memcpy(job->delta, job->work_delta, (size_t)p * sizeof(double));
     memcpy(job->std_error, job->work_std, (size_t)p * sizeof(double));
     job->gamma_trace = job->work_trace;
-    job->excitation = sj_excitation(job->norm, job->rho, job->lambda, job->h, job->active_time);
+    job->excitation = stats_excitation(job->norm, job->rho, job->lambda, job->h, job->active_time);
     job->iterations = iterations;
     job->age = job->since;
     job->completed += 1.0;
@@ -137,7 +107,7 @@ static int unit(StatisticsJob *job)
         job->stage = SJ_SANDWICH;
         return 0;
     case SJ_SANDWICH: {
-        const double variance = sj_sandwich(&job->score_power[0][0], p, job->column);
+        const double variance = stats_sandwich(&job->score_power[0][0], p, RRI_MAX_PARAMETERS, job->column);
         job->work_std[job->index] = sqrt(variance > 0.0 ? variance : 0.0);
         job->stage = ++job->index == p ? SJ_EIGEN : SJ_GAMMA;
         if (job->stage == SJ_EIGEN) job->index = 0;
@@ -145,8 +115,8 @@ static int unit(StatisticsJob *job)
     }
     case SJ_EIGEN: {
         const double previous = job->norm;
-        job->norm = sj_inverse_iteration(L, p, job->eigenvector);
-        if (++job->index >= SJ_EIGEN_ITERATIONS || sj_eigen_converged(job->norm, previous)) {
+        job->norm = stats_inverse_iteration(L, p, RRI_MAX_PARAMETERS, job->eigenvector);
+        if (++job->index >= STATS_EIGEN_ITERATIONS || stats_eigen_converged(job->norm, previous)) {
             if (!isfinite(job->norm)) uniform(job->eigenvector, p); /* no warm start from it */
             complete(job, job->index);
             return 1;

@@ -13,7 +13,7 @@
  * results are those of the full solve at the snapshot.  The inverse iteration
  * for the smallest eigenvalue of P starts from the previous job's eigenvector
  * (warm start) and stops when its estimate changes by less than
- * SJ_EIGEN_TOLERANCE (relative; at most SJ_EIGEN_ITERATIONS iterations), as
+ * STATS_EIGEN_TOLERANCE (relative; at most STATS_EIGEN_ITERATIONS iterations), as
  * rri_statistics' does from its own start: the excitations agree to that
  * tolerance, the other results exactly.
  * Plain C, no allocation; the offline path (harness/robot/native) runs the same
@@ -23,10 +23,9 @@
 
 #include <math.h>
 
+#include "information_statistics.h"
 #include "regressor_identifier.h"
 
-#define SJ_EIGEN_ITERATIONS 30    /* inverse iterations at most */
-#define SJ_EIGEN_TOLERANCE 1e-13  /* stop at this relative change of the eigenvalue */
 #define SJ_BUDGET 4096.0          /* multiply-adds per internal step (a unit at least) */
 
 typedef enum {
@@ -95,26 +94,5 @@ void sj_start(StatisticsJob *job, const RegressorIdentifier *id);
  * Returns 1 if the job completed (its results published), 0 otherwise; a P that
  * is not positive definite drops the job (0). */
 int sj_advance(StatisticsJob *job, double budget);
-
-/* The arithmetic that rri_statistics shares with the job. */
-
-/* The sandwich variance g^T S g, S (row stride RRI_MAX_PARAMETERS) from its
- * upper triangle. */
-double sj_sandwich(const double *S, int p, const double g[]);
-
-/* One inverse iteration with the Cholesky factor L of P (row stride
- * RRI_MAX_PARAMETERS): v <- P^-1 v, then v
- * normalized; returns the norm of P^-1 v (-> 1 / the smallest eigenvalue). */
-double sj_inverse_iteration(const double *L, int p, double v[]);
-
-/* The iteration has converged: the norm changed by at most SJ_EIGEN_TOLERANCE. */
-static inline int sj_eigen_converged(double norm, double previous)
-{
-    return previous > 0.0 && !(fabs(norm - previous) > SJ_EIGEN_TOLERANCE * norm);
-}
-
-/* The excitation from the inverse iteration's norm: the smallest eigenvalue of
- * the information beyond rho, per unit of remembered time (0 if none). */
-double sj_excitation(double norm, double rho, double lambda, double h, double active_time);
 
 #endif

@@ -3,8 +3,6 @@
 #include <math.h>
 #include <string.h>
 
-#include "implicit_twisting.h"
-
 void sto_init(SuperTwistingObserver *o, int n, double h, const double alpha1[],
               const double alpha2[], double tau, const double x1_hat0[], const double x2_hat0[])
 {
@@ -43,22 +41,8 @@ int sto_converged(const SuperTwistingObserver *o)
     return 1;
 }
 
-/* The paper's explicit Euler on (12), each DOF over the run. */
-static void sto_run_paper(SuperTwistingObserver *o, const double y[], const StoAcceleration a[],
-                          int count, StoTrace *trace);
-
-void sto_run(SuperTwistingObserver *o, const double y[], const StoAcceleration a[], int count,
-             StoTrace *trace)
-{
-    if (count < 1 || count > STO_RUN_MAX) return;
-    StoTrace unused;
-    if (!trace) trace = &unused;
-    if (o->scheme != STO_SCHEME_PAPER) implicit_run(o, y, a, count, trace);
-    else sto_run_paper(o, y, a, count, trace);
-}
-
-static void sto_run_paper(SuperTwistingObserver *o, const double y[], const StoAcceleration a[],
-                          int count, StoTrace *trace)
+void sto_run_paper(SuperTwistingObserver *o, const double y[], const StoAcceleration a[],
+                   int count, StoTrace *trace)
 {
     const double h = o->h, g = o->filter_gain, rate_gain = o->rate_gain;
     for (int i = 0; i < o->n; ++i) {
@@ -86,9 +70,4 @@ static void sto_run_paper(SuperTwistingObserver *o, const double y[], const StoA
         o->switching_rate[i] = rate;
         o->previous_sign[i] = previous_sign;
     }
-}
-
-void sto_update_outputs(SuperTwistingObserver *o)
-{
-    if (o->scheme != STO_SCHEME_PAPER) implicit_outputs(o);
 }

@@ -96,17 +96,11 @@ typedef struct {
     double z_identify[STO_MAX_DOF][STO_RUN_MAX];
 } StoTrace;
 
-/* Runs `count` (1..STO_RUN_MAX) steps of the selected scheme with the
- * measurement y held; trace (may be NULL) receives every step.  With y and
- * the acceleration held the DOFs are independent over the run, so each DOF
- * runs all its steps in turn with its state in registers.  Before x1_hat and
- * x2_hat are read, call sto_update_outputs. */
-void sto_run(SuperTwistingObserver *o, const double y[], const StoAcceleration a[], int count,
-             StoTrace *trace);
-
-/* x1_hat, x2_hat for the end of the last step (the implicit scheme computes
- * its prediction only when asked). */
-void sto_update_outputs(SuperTwistingObserver *o);
+/* Runs `count` (1..STO_RUN_MAX) steps of the paper's explicit Euler on (12)
+ * with the measurement y held, each DOF over the run; trace receives every
+ * step.  The scheme switch (sto_run) is observer_scheme.h's. */
+void sto_run_paper(SuperTwistingObserver *o, const double y[], const StoAcceleration a[],
+                   int count, StoTrace *trace);
 
 /* All DOFs converged by the switching-rate test. */
 int sto_converged(const SuperTwistingObserver *o);

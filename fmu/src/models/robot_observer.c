@@ -451,7 +451,7 @@ static ModelStatus check_restored(const void *data, const ModelLogger *log)
     ok = ok && job->p >= 0 && job->p <= (d->id.p > 0 ? d->id.p : 1) &&
          job->stage >= SJ_IDLE && job->stage <= SJ_EIGEN &&
          (job->stage == SJ_IDLE || job->stage == SJ_ESTIMATE ||
-          (job->index >= 0 && job->index < (job->stage == SJ_EIGEN ? SJ_EIGEN_ITERATIONS
+          (job->index >= 0 && job->index < (job->stage == SJ_EIGEN ? STATS_EIGEN_ITERATIONS
                                                                    : job->p)));
     for (int i = 0; ok && d->obs.n && i < d->n; ++i)
         ok = d->model.type[i] == RB_REVOLUTE || d->model.type[i] == RB_PRISMATIC;

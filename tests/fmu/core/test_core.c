@@ -20,6 +20,7 @@
 #include "implicit_twisting.h"
 #include "information_identifier.h"
 #include "observer_pipeline.h"
+#include "observer_scheme.h"
 #include "regressor_identifier.h"
 #include "statistics_job.h"
 #include "super_twisting.h"
@@ -840,7 +841,7 @@ static int statistics_job_equals_full_solve(void)
         unsigned long state = 12345;
         int jobs = 0, sliced = 0;
         double worst = 0.0, worst_excitation = 0.0, most_iterations = 0.0;
-        double least_iterations = SJ_EIGEN_ITERATIONS;
+        double least_iterations = STATS_EIGEN_ITERATIONS;
         for (int step = 0; step < 6000; ++step) {
             RbRegressor Y;
             double z[RRI_MAX_ROWS];
