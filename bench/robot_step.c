@@ -1,75 +1,99 @@
-/* Cost of one internal step of the robot identifier: the regressor, the nominal
- * torques (Y pi), the weighted regressor and residual through the regression's
- * first-order filter (as robot_observer.c's ro_regression_step) and the LSM (or
- * MFF, R = 0.1) step over the base columns (bench/robot_step_cost.py).
+/* Cost of one sample of the robot pipeline (core/robot_pipeline.c: the
+ * model-based observer, the regression of its estimates, the LSM or MFF step
+ * over the base columns and the statistics' share), the same function the
+ * RobotObserver FMU and the batch runs call (bench/robot_step_cost.py).
  * Usage: robot_step MODEL.txt STEPS [lsm|mff]; MODEL.txt: n, then per joint a line
  * "type ax ay az x y z roll pitch yaw m mx my mz Ixx Ixy Iyy Ixz Iyz Izz fv fc",
- * then p and the p base columns.  Prints nanoseconds per step. */
+ * then p and the p base columns.  The trajectory is a sine per joint at 10 kHz,
+ * its torques from the model's inverse dynamics (computed before the clock
+ * starts), the settings the FMU's defaults (tau 0.01 s, f_plus 10, rho 1e-6, MFF
+ * R = 0.1).  Prints nanoseconds per sample. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
-#include "regressor_identifier.h"
-#include "rigid_body.h"
+#include "gains.h"
+#include "robot_pipeline.h"
+
+static int read_model(const char *path, RigidBodyModel *model, int *p, int columns[])
+{
+    FILE *f = fopen(path, "r");
+    if (!f) return -1;
+    int n = 0, type[RB_MAX_JOINTS], ok = fscanf(f, "%d", &n) == 1 && n >= 1 && n <= RB_MAX_JOINTS;
+    double axis[3 * RB_MAX_JOINTS], xyz[3 * RB_MAX_JOINTS], rpy[3 * RB_MAX_JOINTS];
+    double link[10 * RB_MAX_JOINTS], friction[2 * RB_MAX_JOINTS];
+    const double gravity[3] = {0.0, 0.0, -9.81};
+    for (int i = 0; ok && i < n; ++i) {
+        int read = fscanf(f, "%d", &type[i]);
+        for (int k = 0; k < 3; ++k) read += fscanf(f, "%lf", &axis[3 * i + k]);
+        for (int k = 0; k < 3; ++k) read += fscanf(f, "%lf", &xyz[3 * i + k]);
+        for (int k = 0; k < 3; ++k) read += fscanf(f, "%lf", &rpy[3 * i + k]);
+        for (int k = 0; k < 10; ++k) read += fscanf(f, "%lf", &link[10 * i + k]);
+        for (int k = 0; k < 2; ++k) read += fscanf(f, "%lf", &friction[2 * i + k]);
+        ok = read == 22;
+    }
+    ok = ok && fscanf(f, "%d", p) == 1 && *p >= 1 && *p <= RB_MAX_PARAMETERS;
+    for (int k = 0; ok && k < *p; ++k) ok = fscanf(f, "%d", &columns[k]) == 1;
+    fclose(f);
+    return ok && rb_load(model, n, type, axis, xyz, rpy, link, friction, gravity, 0.0) == RB_OK
+               ? 0
+               : -1;
+}
 
 int main(int argc, char **argv)
 {
     if (argc != 3 && argc != 4) return 2;
     const int mff = argc == 4 && strcmp(argv[3], "mff") == 0;
     if (argc == 4 && !mff && strcmp(argv[3], "lsm") != 0) return 2;
-    FILE *f = fopen(argv[1], "r");
-    if (!f) return 2;
-    int n = 0, p = 0, type[RB_MAX_JOINTS], columns[RB_MAX_PARAMETERS];
-    double axis[3 * RB_MAX_JOINTS], xyz[3 * RB_MAX_JOINTS], rpy[3 * RB_MAX_JOINTS];
-    double link[10 * RB_MAX_JOINTS], friction[2 * RB_MAX_JOINTS];
-    const double gravity[3] = {0.0, 0.0, -9.81};
-    if (fscanf(f, "%d", &n) != 1 || n < 1 || n > RB_MAX_JOINTS) return 2;
-    for (int i = 0; i < n; ++i) {
-        int ok = fscanf(f, "%d", &type[i]);
-        for (int k = 0; k < 3; ++k) ok += fscanf(f, "%lf", &axis[3 * i + k]);
-        for (int k = 0; k < 3; ++k) ok += fscanf(f, "%lf", &xyz[3 * i + k]);
-        for (int k = 0; k < 3; ++k) ok += fscanf(f, "%lf", &rpy[3 * i + k]);
-        for (int k = 0; k < 10; ++k) ok += fscanf(f, "%lf", &link[10 * i + k]);
-        for (int k = 0; k < 2; ++k) ok += fscanf(f, "%lf", &friction[2 * i + k]);
-        if (ok != 22) return 2;
-    }
-    if (fscanf(f, "%d", &p) != 1 || p < 1 || p > RB_MAX_PARAMETERS) return 2;
-    for (int k = 0; k < p; ++k)
-        if (fscanf(f, "%d", &columns[k]) != 1) return 2;
-    fclose(f);
     static RigidBodyModel model;
-    static RegressorIdentifier id;
-    if (rb_load(&model, n, type, axis, xyz, rpy, link, friction, gravity, 0.0) != RB_OK) return 2;
-    if (rri_init(&id, mff ? RRI_MFF : RRI_LSM, n, p, columns, NULL, 1e-4, 1e-6, 0.1) != 0)
-        return 2;
-    double pi[RB_MAX_PARAMETERS];
-    rb_get_parameters(&model, pi);
+    static RobotObserver observer;
+    static RobotRegression regression;
+    static RegressorIdentifier identifier;
+    static StatisticsJob statistics;
+    int p = 0, columns[RB_MAX_PARAMETERS];
+    if (read_model(argv[1], &model, &p, columns) != 0) return 2;
+    const int n = model.n;
     const long steps = atol(argv[2]);
-    double q[RB_MAX_JOINTS], qd[RB_MAX_JOINTS], qdd[RB_MAX_JOINTS], tau[RB_MAX_JOINTS];
-    double z[RB_MAX_JOINTS] = {0}, weight[RB_MAX_JOINTS];
-    static RbRegressor Y, filtered; /* filtered: zero-initialized */
-    const double gain = 0.18; /* 1 - exp(-h/tau) at h = 1 ms, tau = 5 ms */
+    if (steps < 1) return 2;
+    const double h = 1e-4, tau = 0.01;
+    double *y = malloc((size_t)steps * (size_t)n * sizeof *y);
+    double *u = malloc((size_t)steps * (size_t)n * sizeof *u);
+    if (!y || !u) return 2;
+    for (long k = 0; k < steps; ++k) {
+        double q[RB_MAX_JOINTS], qd[RB_MAX_JOINTS], qdd[RB_MAX_JOINTS];
+        for (int i = 0; i < n; ++i) {
+            const double w = 2.0 * 3.141592653589793 * (0.3 + 0.1 * i), t = (double)k * h;
+            q[i] = 0.5 * sin(w * t);
+            qd[i] = 0.5 * w * cos(w * t);
+            qdd[i] = -0.5 * w * w * sin(w * t);
+        }
+        memcpy(y + k * n, q, (size_t)n * sizeof *q);
+        double friction[RB_MAX_JOINTS];
+        rb_inverse_dynamics(&model, q, qd, qdd, 1, u + k * n);
+        rb_friction(&model, qd, friction);
+        for (int i = 0; i < n; ++i) u[k * n + i] += friction[i];
+    }
+    double alpha1[RB_MAX_JOINTS], alpha2[RB_MAX_JOINTS], zero[RB_MAX_JOINTS] = {0.0};
+    for (int i = 0; i < n; ++i) {
+        alpha1[i] = alpha2[i] = 0.0;
+        if (gains_complete(10.0, 0.5, &alpha1[i], &alpha2[i]) != 0) return 2;
+    }
+    ro_init(&observer, n, h, alpha1, alpha2, tau, 0.05, y, zero);
+    if (ro_regression_init(&regression, &model, h, tau, 0.05, 0.02) != 0 ||
+        rri_init(&identifier, mff ? RRI_MFF : RRI_LSM, n, p, columns, NULL, h, 1e-6, 0.1) != 0)
+        return 2;
+    sj_init(&statistics, p, sj_interval_steps(0.1, h), SJ_BUDGET);
+    const RobotPipeline pipeline = {&observer, &regression, &identifier, &statistics};
     struct timespec start, stop;
     clock_gettime(CLOCK_MONOTONIC, &start);
-    for (long s = 0; s < steps; ++s) {
-        for (int i = 0; i < n; ++i) {
-            const double t = 1e-4 * (double)s;
-            q[i] = 0.5 * (i + 1) * t;
-            qd[i] = 0.3 + 0.1 * i;
-            qdd[i] = 0.2 * i - 0.1 * t;
-        }
-        rb_regressor(&model, q, qd, qdd, &Y);
-        rb_regressor_torque(&model, &Y, pi, tau);
-        for (int i = 0; i < n; ++i) {
-            weight[i] = (s + i) % 16 ? 1.0 : 0.0; /* some equations left out */
-            z[i] += gain * (weight[i] * 0.01 * tau[i] - z[i]);
-        }
-        rri_filter_regressor(&id, &Y, weight, gain, &filtered);
-        rri_step(&id, z, &filtered);
-    }
+    rp_run(&pipeline, &model, y, u, n, steps, 0);
     clock_gettime(CLOCK_MONOTONIC, &stop);
-    const double ns = (stop.tv_sec - start.tv_sec) * 1e9 + (stop.tv_nsec - start.tv_nsec);
+    const double ns =
+        (double)(stop.tv_sec - start.tv_sec) * 1e9 + (double)(stop.tv_nsec - start.tv_nsec);
     printf("%.1f\n", ns / (double)steps);
-    return rri_solve(&id) == 0 ? 0 : 1;
+    free(y);
+    free(u);
+    return rri_solve(&identifier) == 0 && observer.model_failures == 0.0 ? 0 : 1;
 }

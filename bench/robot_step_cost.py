@@ -1,6 +1,7 @@
-"""Cost of one internal step of the robot identifier in C (regressor, nominal torques
-Y pi, LSM step over every base parameter and the friction, with its anchor re-solve
-every RRI_ANCHOR_INTERVAL steps), per example robot; with --fmu, of the RobotObserver
+"""Cost of one sample of the robot pipeline in C (core/robot_pipeline.c's rp_run: the
+model-based observer with its forward dynamics, the regression, the LSM step over every
+base parameter and the friction with its anchor re-solve every RRI_ANCHOR_INTERVAL
+steps, the statistics' share), per example robot; with --fmu, of the RobotObserver
 FMU's whole internal step.
 
     .venv/bin/python bench/robot_step_cost.py [--steps 20000] [--runs 5] [--callgrind]
