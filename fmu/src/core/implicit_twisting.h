@@ -26,6 +26,8 @@
 #ifndef IMPLICIT_TWISTING_H
 #define IMPLICIT_TWISTING_H
 
+#include "tuning.h"
+
 #include <math.h>
 
 #include "super_twisting.h"
@@ -44,8 +46,6 @@
  * the sliding set (exact data: on noisy data the injection saturates).  The
  * injection is published relative to the nominal level, so the identifier
  * and z_eq see the same perturbation as without learning. */
-#define IMPLICIT_REVERSAL_SAMPLES 2
-#define IMPLICIT_LEARNING_GAIN 0.5
 
 /* The published prediction (implicit_outputs) takes the injection's trend
  * where it is smooth: a perturbation that changes (a nominal b 10 % off with
@@ -57,7 +57,6 @@
  * IMPLICIT_SMOOTH_SAMPLES in the sliding set without a velocity reversal
  * (2.8e-7; 3.5e-7 without that condition), so that noise (a saturating
  * injection) and the Coulomb jumps are never extrapolated. */
-#define IMPLICIT_SMOOTH_SAMPLES 4
 
 /* The mean of sign(v) over one interval next to a sample, weighted as the
  * triangle below weighs it (1 at the sample, 0 at the neighbour), with v

@@ -30,8 +30,9 @@ void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, 
     id->rest_pull = (1.0 - id->rest_lambda) * rho;
     id->skip_threshold = INFO_SKIP_SHARE * m * (1.0 - id->reference_lambda) / h;
     /* LSM takes its scores' block increments every 32 samples */
-    const double interval = id->forgetting_rate > 0.0 ? 0.01 / (h * id->forgetting_rate)
-                                                      : INFO_ANCHOR_MAX_INTERVAL;
+    const double interval = id->forgetting_rate > 0.0
+                                ? INFO_ANCHOR_FORGETTING / (h * id->forgetting_rate)
+                                : INFO_ANCHOR_MAX_INTERVAL;
     id->anchor_interval = interval >= INFO_ANCHOR_MAX_INTERVAL ? INFO_ANCHOR_MAX_INTERVAL
                           : interval >= 1.0                    ? (int)interval
                                                                : 1;

@@ -51,19 +51,10 @@
 #ifndef INFORMATION_IDENTIFIER_H
 #define INFORMATION_IDENTIFIER_H
 
+#include "tuning.h"
+
 #include "block_scores.h"
 #include "identifier.h"
-#include "leave_out.h"
-
-#define INFO_ANCHOR_MAX_INTERVAL 32
-#define INFO_BATCH_WINDOW 1.0   /* [s] MFF: batch-mean filter of the residuals */
-#define INFO_LSM_SCORE_WINDOW 5.0 /* [s] LSM: window of the scores' mean (block_scores.h): with
-                                   * the regression filtered over tau_identifier = 0.1 s, 1 s
-                                   * reported b's error at 0.37-0.72 of its spread over noise
-                                   * seeds, 5 s at 0.80-0.87 (bench/standard_errors.py) */
-#define INFO_POWER_WINDOW 30.0  /* [s] mean square of that mean (growing window first) */
-#define INFO_SCORE_DELAY 2.0    /* [s] of identification before the scores count */
-#define INFO_STD_INTERVAL 256   /* samples between updates of the standard errors */
 
 typedef struct {
     int rows, m;          /* m: the identified regressors; the sums have 2m with drift */

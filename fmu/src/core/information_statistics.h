@@ -7,12 +7,11 @@
 #ifndef INFORMATION_STATISTICS_H
 #define INFORMATION_STATISTICS_H
 
+#include "tuning.h"
+
 #include <math.h>
 
 #include "cholesky.h"
-
-#define STATS_EIGEN_ITERATIONS 30   /* inverse iterations at most */
-#define STATS_EIGEN_TOLERANCE 1e-13 /* stop at this relative change of the eigenvalue */
 
 /* The sandwich variance g^T S g, S from its upper triangle. */
 static inline double stats_sandwich(const double *S, int p, int stride, const double g[])

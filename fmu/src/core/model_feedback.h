@@ -18,11 +18,7 @@
 #ifndef MODEL_FEEDBACK_H
 #define MODEL_FEEDBACK_H
 
-#define FEEDBACK_START 1.0  /* [s] of identification before the model is fed back ... */
-#define FEEDBACK_RAMP 1.0   /* [s] ... and over which it enters: a jump of the model puts
-                             * h times its change on the next velocity (2e-4 rad/s on
-                             * exact 10 kHz samples of data set A) */
-#define FEEDBACK_SIGMAS 2.0 /* a correction of this many standard errors enters at 4/5 */
+#include "tuning.h"
 
 /* The share of an identified correction the observer's model takes, after
  * `time` s of identification. */

@@ -95,7 +95,8 @@ void adaptive_init(AdaptiveBank *bank, double h)
     bank->velocity_gain = fmin(1.0, bank->gain * bank->stride);
     const double start = ceil(ADAPTIVE_START_TIME / h);
     bank->start_limit = start > 4e9 ? 4000000000u : start < 1.0 ? 1u : (unsigned)start;
-    for (double omega = 2.0; omega * h <= 0.5 && bank->count < ADAPTIVE_MAX_MEMBERS;
+    for (double omega = ADAPTIVE_LOWEST_BANDWIDTH;
+         omega * h <= ADAPTIVE_HIGHEST_BANDWIDTH && bank->count < ADAPTIVE_MAX_MEMBERS;
          omega *= ADAPTIVE_RATIO)
     {
         bank->gains[bank->count] = steady_state_gains(h, omega);
@@ -104,7 +105,8 @@ void adaptive_init(AdaptiveBank *bank, double h)
     for (int f = 0; bank->count > 0 && f <= (bank->count - 1) * ADAPTIVE_FINE; ++f)
         bank->fine[f] = f % ADAPTIVE_FINE == 0
                             ? bank->gains[f / ADAPTIVE_FINE]
-                            : steady_state_gains(h, 2.0 * pow(ADAPTIVE_RATIO, (double)f / ADAPTIVE_FINE));
+                            : steady_state_gains(h, ADAPTIVE_LOWEST_BANDWIDTH *
+                                                        pow(ADAPTIVE_RATIO, (double)f / ADAPTIVE_FINE));
     for (int i = 0; i < STO_MAX_DOF; ++i) {
         bank->selected[i] = bank->published[i] = bank->perturbation[i] = ADAPTIVE_SUPER_TWISTING;
         bank->center[i] = -1;

@@ -95,35 +95,17 @@
 #ifndef NOISE_ADAPTIVE_H
 #define NOISE_ADAPTIVE_H
 
+#include "tuning.h"
+
 #include "super_twisting.h"
 
 #define ADAPTIVE_MAX_MEMBERS 16
-#define ADAPTIVE_RATIO 1.8         /* between the bandwidths of neighbouring members */
-#define ADAPTIVE_WINDOW 1.0        /* [s] of the mean square innovations */
-#define ADAPTIVE_SECANT_TIME 0.04   /* [s] span of the secants that rank velocities ... */
-#define ADAPTIVE_SLOTS 16           /* ... at least this many strides (the slots in flight) */
-#define ADAPTIVE_PERTURBATION_SPANS 8 /* between the secants that measure the perturbation
-                                       * (see the header) */
 #define ADAPTIVE_PERTURBATION_LAG (ADAPTIVE_SLOTS * ADAPTIVE_PERTURBATION_SPANS) /* strides */
 #define ADAPTIVE_RING (ADAPTIVE_SLOTS + ADAPTIVE_PERTURBATION_LAG) /* strides of secants kept */
 /* strides from a published perturbation to the measurement it is compared with */
 #define ADAPTIVE_PERTURBATION_DELAY (ADAPTIVE_SLOTS / 2 + ADAPTIVE_PERTURBATION_LAG / 2)
 #define ADAPTIVE_MAX_STRIDE 100000000
-#define ADAPTIVE_START_TIME 0.3     /* [s]: the members start then if the super-twisting
-                                     * observer has not converged (quantized data); 0.1 s cut
-                                     * the reaching phase of the 6.1 loop */
-#define ADAPTIVE_MIN_SAMPLES 50     /* before the first selection */
-#define ADAPTIVE_HYSTERESIS 0.9     /* a smaller mean square by this factor takes over */
-#define ADAPTIVE_EXACT_RATIO 0.25   /* super-twisting one-step mean square below this times
-                                     * the members' best: exact data, it stays published */
-#define ADAPTIVE_SATURATION_LIMIT 0.1 /* ... and its injection saturated in fewer steps */
-#define ADAPTIVE_AVERAGING 10.0     /* z_eq_filtered: a member's xi averaged over this / omega */
-#define ADAPTIVE_SETTLED 0.6        /* windows of comparisons before the identifier follows
-                                     * a member: 0.25 followed one chosen too early (1 kHz,
-                                     * noise 1e-4: 1.08 % for 0.74 %; the 6.2 Euler replay:
-                                     * 17 % for 0.27 %) */
 #define ADAPTIVE_SUPER_TWISTING (-1) /* member index of the super-twisting observer */
-#define ADAPTIVE_FINE 3             /* steps of the zoom members' grid per ADAPTIVE_RATIO */
 #define ADAPTIVE_ZOOM (ADAPTIVE_FINE - 1) /* zoom members below the centre */
 #define ADAPTIVE_MAX_FINE ((ADAPTIVE_MAX_MEMBERS - 1) * ADAPTIVE_FINE + 1)
 

@@ -48,15 +48,14 @@
 #ifndef REGRESSOR_IDENTIFIER_H
 #define REGRESSOR_IDENTIFIER_H
 
-#include "leave_out.h"
+#include "tuning.h"
+
 #include "rigid_body.h"
 
 #define RRI_MAX_ROWS RB_MAX_JOINTS
 #define RRI_MAX_PARAMETERS RB_MAX_PARAMETERS
 #define RRI_PARAMETERS_OF(rows) (RB_PARAMETERS_PER_JOINT * (rows)) /* full regressor's columns */
-#define RRI_BATCH_TIME 0.5       /* [s] of scores summed into one batch */
 #define RRI_MAX_BATCH_SAMPLES 1e9 /* samples in a batch at most (an int) */
-#define RRI_ANCHOR_INTERVAL 32   /* samples between snapshots of the anchor's solve */
 
 typedef struct {
     int rows, p;                 /* joints n; identified (base) parameters p */

@@ -36,6 +36,8 @@
 #ifndef ROBOT_OBSERVER_H
 #define ROBOT_OBSERVER_H
 
+#include "tuning.h"
+
 #include "implicit_twisting.h"
 #include "regressor_identifier.h"
 #include "rigid_body.h"
@@ -86,9 +88,6 @@ static inline double ro_velocity(const RobotObserver *o, int i) { return o->dof[
 
 /* Every joint in its sliding mode by the switching-rate test. */
 int ro_converged(const RobotObserver *o);
-
-#define RO_MIN_SPEED 0.05        /* [rad/s or m/s] default of RobotRegression's min_speed */
-#define RO_REVERSAL_MARGIN 0.02  /* [s] default of its reversal_margin */
 
 typedef struct {
     double gain;                   /* 1 - exp(-h/tau) of the regression filter */

@@ -21,12 +21,12 @@
 #ifndef STATISTICS_JOB_H
 #define STATISTICS_JOB_H
 
+#include "tuning.h"
+
 #include <math.h>
 
 #include "information_statistics.h"
 #include "regressor_identifier.h"
-
-#define SJ_BUDGET 4096.0          /* multiply-adds per internal step (a unit at least) */
 
 typedef enum {
     SJ_IDLE = 0,   /* no job: the results are the last completed job's */

@@ -4,6 +4,8 @@
 #ifndef SUPER_TWISTING_H
 #define SUPER_TWISTING_H
 
+#include "tuning.h"
+
 #define STO_MAX_DOF 4
 
 typedef enum {
@@ -53,7 +55,6 @@ typedef struct {
 } SuperTwistingObserver;
 
 /* Rate of switching above which the observer counts as converged. */
-#define STO_CONVERGED_RATE 0.25
 
 /* Sets gains, filter and initial estimates; z_eq and its filter start at 0. */
 void sto_init(SuperTwistingObserver *o, int n, double h, const double alpha1[],

@@ -111,7 +111,8 @@ static const ModelVariable VARIABLES[] = {
      UNBOUNDED, .unit = "s",
      .description = "Time at which the identifier starts (after the observer's transient)")},
     {.name = "statistics_interval", .vr = 11, .type = TYPE_REAL,
-     PARAM(.offset = OFF(statistics_interval), .start = 0.1, .min = 0.0, .max = NAN, .unit = "s",
+     PARAM(.offset = OFF(statistics_interval), .start = RO_STATISTICS_INTERVAL, .min = 0.0,
+     .max = NAN, .unit = "s",
      .description = "Least time between the snapshots of solves with standard errors, whose "
                     "p^3 operations are spread over the internal steps after each (published "
                     "when complete); the estimates in between: the identifier's running "

@@ -1,0 +1,73 @@
+/* Every tuning constant of the core in one table: what each sets, in what
+ * unit.  The reasoning behind the values is in docs/design/; the mechanisms
+ * they tune are described in the header of the algorithm named in each group.
+ * Array sizes and limits of the data structures are not tuning and stay with
+ * their structures. */
+#ifndef TUNING_H
+#define TUNING_H
+
+/* ---- convergence test of every scheme (super_twisting.h) ---------------------------- */
+#define STO_CONVERGED_RATE 0.25 /* switching rate of sign(e) above which a DOF slides */
+
+/* ---- implicit scheme (implicit_twisting.h) ------------------------------------------ */
+#define IMPLICIT_REVERSAL_SAMPLES 2 /* samples after a reversal over which the injection's
+                                     * jump measures the Coulomb level missed */
+#define IMPLICIT_LEARNING_GAIN 0.5  /* share of that jump the learned level takes */
+#define IMPLICIT_SMOOTH_SAMPLES 4   /* samples in the sliding set without a reversal before
+                                     * the prediction takes the injection's trend */
+
+/* ---- noise-adaptive bank (noise_adaptive.h) ----------------------------------------- */
+#define ADAPTIVE_LOWEST_BANDWIDTH 2.0 /* [rad/s] the slowest linear member */
+#define ADAPTIVE_HIGHEST_BANDWIDTH 0.5 /* [1/h] the fastest member: omega h at most this */
+#define ADAPTIVE_RATIO 1.8          /* between the bandwidths of neighbouring members */
+#define ADAPTIVE_FINE 3             /* steps of the zoom members' grid per ADAPTIVE_RATIO */
+#define ADAPTIVE_WINDOW 1.0         /* [s] of the mean square innovations */
+#define ADAPTIVE_SECANT_TIME 0.04   /* [s] span of the secants that rank velocities ... */
+#define ADAPTIVE_SLOTS 16           /* ... at least this many strides (the slots in flight) */
+#define ADAPTIVE_PERTURBATION_SPANS 8 /* between the secants that measure the perturbation */
+#define ADAPTIVE_START_TIME 0.3     /* [s] the members start then if the super-twisting
+                                     * observer has not converged (quantized data) */
+#define ADAPTIVE_MIN_SAMPLES 50     /* before the first selection */
+#define ADAPTIVE_HYSTERESIS 0.9     /* a smaller mean square by this factor takes over */
+#define ADAPTIVE_EXACT_RATIO 0.25   /* super-twisting one-step mean square below this times
+                                     * the members' best: exact data, it stays published ... */
+#define ADAPTIVE_SATURATION_LIMIT 0.1 /* ... while its injection saturates in fewer steps */
+#define ADAPTIVE_AVERAGING 10.0     /* z_eq_filtered: a member's xi averaged over this / omega */
+#define ADAPTIVE_SETTLED 0.6        /* windows of comparisons before the identifier follows
+                                     * a member (earlier, it follows one chosen too early) */
+
+/* ---- identifier in information form (information_identifier.h) --------------------- */
+#define INFO_ANCHOR_MAX_INTERVAL 32 /* samples between the anchor's solves at most ... */
+#define INFO_ANCHOR_FORGETTING 0.01 /* ... and at least every this share of MFF's memory */
+#define INFO_BATCH_WINDOW 1.0       /* [s] MFF: batch-mean filter of the residuals */
+#define INFO_LSM_SCORE_WINDOW 5.0   /* [s] LSM: window of the scores' mean (block_scores.h) */
+#define INFO_POWER_WINDOW 30.0      /* [s] mean square of that mean (growing window first) */
+#define INFO_SCORE_DELAY 2.0        /* [s] of identification before the scores count */
+#define INFO_STD_INTERVAL 256       /* samples between updates of the standard errors */
+
+/* ---- MFF's rule that leaves uninformative samples out (information_identifier.h) -- */
+#define INFO_REFERENCE_MEMORY 10.0  /* Pref's memory, in MFF memories 1/|ln R| */
+#define INFO_REST_MEMORY 100.0      /* Pref's memory over the samples left out */
+#define INFO_SKIP_SHARE 0.04        /* below this share of the long-run inflow a sample is
+                                     * left out: |v| < 0.2 RMS(v) for a velocity regressor */
+#define INFO_GAP_MEMORY 0.25        /* gaps longer than this many memories freeze the sums */
+
+/* ---- model feedback (model_feedback.h) ---------------------------------------------- */
+#define FEEDBACK_START 1.0  /* [s] of identification before the model is fed back ... */
+#define FEEDBACK_RAMP 1.0   /* [s] ... and over which it enters (a jump would put h times
+                             * its change on the next velocity) */
+#define FEEDBACK_SIGMAS 2.0 /* a correction of this many standard errors enters at 4/5 */
+
+/* ---- robots: regression and identifier (robot_observer.h, regressor_identifier.h) --- */
+#define RO_MIN_SPEED 0.05          /* [rad/s or m/s] default of the regression's min_speed */
+#define RO_REVERSAL_MARGIN 0.02    /* [s] default of its reversal_margin */
+#define RO_STATISTICS_INTERVAL 0.1 /* [s] default of the FMU's statistics_interval */
+#define RRI_BATCH_TIME 0.5         /* [s] of scores summed into one batch */
+#define RRI_ANCHOR_INTERVAL 32     /* samples between snapshots of the anchor's solve */
+
+/* ---- statistics of an identifier (information_statistics.h, statistics_job.h) ------ */
+#define STATS_EIGEN_ITERATIONS 30   /* inverse iterations at most */
+#define STATS_EIGEN_TOLERANCE 1e-13 /* stop at this relative change of the eigenvalue */
+#define SJ_BUDGET 4096.0            /* multiply-adds of the statistics job per internal step */
+
+#endif
