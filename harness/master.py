@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import native
+from . import native_loop as native
 from .fmus import FMUError, FMUInstance, Value
 from .user_dynamics import AttachedDynamics, StepHook
 
