@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import native_loop as native
+from . import native_loop
 from .fmus import FMUError, FMUInstance, Value
 from .user_dynamics import AttachedDynamics, StepHook
 
@@ -175,15 +175,15 @@ class _Plan:
 
 def _run_native(plan: _Plan, records: np.ndarray, row: int, t0: float, H: float, k_begin: int,
                 k_end: int, decimation: int) -> int:
-    dll = native.load()
-    fmus = (native.LoopFMU * len(plan.fmus))(*[
-        native.LoopFMU(f.component, f.function_address("fmi2DoStep"),
+    dll = native_loop.load()
+    fmus = (native_loop.LoopFMU * len(plan.fmus))(*[
+        native_loop.LoopFMU(f.component, f.function_address("fmi2DoStep"),
                        f.function_address("fmi2GetReal"), f.function_address("fmi2SetReal"))
         for f in plan.fmus])
     order = (ctypes.c_int * len(plan.order))(*plan.order)
-    links = (native.LoopLink * max(1, len(plan.links)))(*[native.LoopLink(*l) for l in plan.links])
-    probes = (native.LoopProbe * max(1, len(plan.probes)))(*[native.LoopProbe(*p) for p in plan.probes])
-    failure = native.LoopFailure()
+    links = (native_loop.LoopLink * max(1, len(plan.links)))(*[native_loop.LoopLink(*l) for l in plan.links])
+    probes = (native_loop.LoopProbe * max(1, len(plan.probes)))(*[native_loop.LoopProbe(*p) for p in plan.probes])
+    failure = native_loop.LoopFailure()
     out = records[row:]
     written = dll.loop_run(fmus, order, len(plan.order), links, len(plan.links),
                            plan.signals.ctypes.data, plan.signals.shape[1], probes, len(plan.probes),
@@ -293,9 +293,9 @@ def run(sim: CoSimulation, start_time: float, stop_time: float, step: float, pro
     runner = _run_python if hook is None else partial(_run_python, hook=hook)
     if hook is None and (use_native is None or use_native):
         try:
-            native.load()
+            native_loop.load()
             runner = _run_native
-        except native.NativeUnavailable as error:
+        except native_loop.NativeUnavailable as error:
             if use_native:
                 raise
             print(f"harness: native loop unavailable, using the Python loop ({error})",
