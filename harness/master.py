@@ -181,8 +181,10 @@ def _run_native(plan: _Plan, records: np.ndarray, row: int, t0: float, H: float,
                        f.function_address("fmi2GetReal"), f.function_address("fmi2SetReal"))
         for f in plan.fmus])
     order = (ctypes.c_int * len(plan.order))(*plan.order)
-    links = (native_loop.LoopLink * max(1, len(plan.links)))(*[native_loop.LoopLink(*l) for l in plan.links])
-    probes = (native_loop.LoopProbe * max(1, len(plan.probes)))(*[native_loop.LoopProbe(*p) for p in plan.probes])
+    links = (native_loop.LoopLink * max(1, len(plan.links)))(
+        *[native_loop.LoopLink(*link) for link in plan.links])
+    probes = (native_loop.LoopProbe * max(1, len(plan.probes)))(
+        *[native_loop.LoopProbe(*probe) for probe in plan.probes])
     failure = native_loop.LoopFailure()
     out = records[row:]
     written = dll.loop_run(fmus, order, len(plan.order), links, len(plan.links),
