@@ -36,8 +36,9 @@ def _non_negative(text: str) -> float:
     return value
 
 
-def identify_command(args, out: Path) -> int:
-    from .pipeline import LogError, identify_robot, read_log, write_results
+def identify_command(args) -> int:
+    from ..outputs import Outputs
+    from .pipeline import OUTPUT_NAMES, LogError, identify_robot, read_log, write_results
     from .urdf import UrdfError, read_urdf
     mapping = {}  # --columns (harness/cli.py) with the roles t, q1..qn, u1..un
     for item in filter(None, (part.strip() for part in args.columns.split(","))):
@@ -47,16 +48,18 @@ def identify_command(args, out: Path) -> int:
             return 2
         mapping[name.strip()] = column.strip()
     try:
-        robot = read_urdf(args.robot, locked=tuple(args.lock))
-        log = read_log(args.data, robot.n, mapping)
-        speed = {} if args.min_speed is None else {"min_speed": args.min_speed}
-        result = identify_robot(robot, log, unknown=args.unknown, method=args.velocity,
-                                window=args.window, **speed)
+        with Outputs(args.out, "identify", inputs=[args.data, args.robot],
+                     names=OUTPUT_NAMES) as outputs:
+            robot = read_urdf(args.robot, locked=tuple(args.lock))
+            log = read_log(args.data, robot.n, mapping)
+            speed = {} if args.min_speed is None else {"min_speed": args.min_speed}
+            result = identify_robot(robot, log, unknown=args.unknown, method=args.velocity,
+                                    window=args.window, **speed)
+            written = write_results(outputs.staging, robot, log, result, Path(args.data).name)
     except (UrdfError, LogError) as error:
         print(f"harness identify: {error}", file=sys.stderr)
         return 2
-    written = write_results(out, robot, log, result, Path(args.data).name)
-    print("wrote " + ", ".join(map(str, written)))
+    print("wrote " + ", ".join(str(outputs.final(path)) for path in written))
     n = robot.n
     for i, joint in enumerate(robot.joints):
         print(f"  {joint.name}: mass {result.pi[10 * i]:.6g} kg, viscous "
@@ -97,8 +100,12 @@ def register_fmu_parameters(sub, parents) -> None:
 
 
 def fmu_parameters_command(args) -> int:
+    from ..outputs import Outputs
     from .fmu import fmu_parameters, write_ssv
     from .urdf import UrdfError, read_urdf
+    target = Path(args.out)
+    outputs = Outputs(target.parent, "robot-fmu-parameters", inputs=[args.urdf],
+                      names=[target.name], lock=False)  # one file: its rename is atomic
     try:
         robot = read_urdf(args.urdf, locked=tuple(args.lock))
         rule = {name: value for name, value in (("min_speed", args.min_speed),
@@ -110,6 +117,7 @@ def fmu_parameters_command(args) -> int:
     except (UrdfError, ValueError) as error:
         print(f"harness robot-fmu-parameters: {error}", file=sys.stderr)
         return 2
-    path = write_ssv(parameters, args.out, name=Path(args.urdf).stem)
-    print(f"wrote {path}: {robot.n} joints, {parameters['base_count']} base parameters")
+    with outputs:
+        write_ssv(parameters, outputs.file(target.name), name=Path(args.urdf).stem)
+    print(f"wrote {target}: {robot.n} joints, {parameters['base_count']} base parameters")
     return 0
