@@ -17,7 +17,8 @@ from typing import Any
 
 MAX_BYTES = 1 << 20   # a sweep spec is a few kB
 MAX_DEPTH = 32        # a spec nests 4 deep
-MAX_DIGITS = 40       # far beyond any 64-bit value, far below Python's 4300-digit limit
+MAX_DIGITS = 1000     # far beyond any 64-bit value (the entry says "out of range"),
+                      # far below the 4300 digits Python refuses to convert
 
 
 class InputError(ValueError):
