@@ -125,9 +125,23 @@ def _fmu_files(fmu_dir: Path) -> list[Path]:
     return sorted(fmu_dir.glob("*.fmu"))
 
 
+# identify's options for a recorded log of t, y, u, and their defaults: the robot path
+# reads its log itself and refuses them rather than ignoring them
+LOG_OPTIONS = {"identifier": ("--identifier", "lsm"), "param": ("--param", []),
+               "time_unit": ("--time-unit", None), "time_tolerance": ("--time-tolerance", 0.01),
+               "resample": ("--resample", None), "input_hold": ("--input-hold", "zoh"),
+               "csv_decimation": ("--csv-decimation", 1), "format": ("--format", "csv")}
+
+
 def cmd_identify(args) -> int:
     if args.robot:  # a serial robot from its URDF: harness.robot
         from .robot.cli import identify_command
+        given = [option for dest, (option, default) in LOG_OPTIONS.items()
+                 if getattr(args, dest) != default]
+        if given:
+            raise InputError(f"harness identify: {', '.join(given)} not available with "
+                             f"--robot (the robot log is read as t, q1..qn, u1..un in seconds, "
+                             f"evenly sampled); leave {'them' if len(given) > 1 else 'it'} out")
         return identify_command(args)
     from .fmus import check_parameters
     from .identify import DataError, ReadOptions, identify_file
@@ -291,7 +305,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("data", help="CSV file with a header row naming the time, position and "
                    "input columns")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
-    p.add_argument("--identifier", choices=["off", "lsm", "mff"], default="lsm",
+    p.add_argument("--identifier", choices=["off", "lsm", "mff"],
+                   default=LOG_OPTIONS["identifier"][1],
                    help="least squares for constant parameters (lsm, default), with matrix "
                         "forgetting factor for time-varying ones (mff), or none")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
@@ -300,25 +315,29 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the file's names of the time, position and input columns (default: "
                         "t or time, y, u; any case), e.g. t=time,y=theta,u=tau; with --robot "
                         "the roles are t, q1..qn, u1..un, e.g. q1=shoulder_pos")
-    p.add_argument("--time-unit", default=None, choices=["s", "ms", "us", "ns", "min"],
+    p.add_argument("--time-unit", default=LOG_OPTIONS["time_unit"][1], choices=["s", "ms", "us", "ns", "min"],
                    help="unit of the time column (default: seconds, with a warning when whole-"
                         "number stamps 1 or more apart look like milliseconds); epoch time "
                         "stamps are fine")
-    p.add_argument("--time-tolerance", type=TOLERANCE, default=0.01, metavar="FRACTION",
+    p.add_argument("--time-tolerance", type=TOLERANCE, default=LOG_OPTIONS["time_tolerance"][1],
+                   metavar="FRACTION",
                    help="how far a sampling step may differ from the recording's step, as a "
                         "fraction of it (default 0.01: clock jitter); larger gaps are refused "
                         "unless --resample")
-    p.add_argument("--resample", type=RESAMPLE, default=None, nargs="?", const=0.0,
+    p.add_argument("--resample", type=RESAMPLE, default=LOG_OPTIONS["resample"][1], nargs="?",
+                   const=0.0,
                    metavar="STEP",
                    help="put the samples on a uniform grid of STEP seconds first (without "
                         "STEP: the median step): y interpolated linearly, u holds its last "
                         "value; the time stamps written are then the grid's")
-    p.add_argument("--input-hold", choices=["zoh", "sampled"], default="zoh",
+    p.add_argument("--input-hold", choices=["zoh", "sampled"],
+                   default=LOG_OPTIONS["input_hold"][1],
                    help="zoh: u[k] was applied over the interval after t_k (a controller's "
                         "command, the default); sampled: u[k] samples a continuous signal")
-    p.add_argument("--csv-decimation", type=DECIMATION, default=1, metavar="N",
+    p.add_argument("--csv-decimation", type=DECIMATION, metavar="N",
+                   default=LOG_OPTIONS["csv_decimation"][1],
                    help="write every Nth sample to the estimates table (default 1: all)")
-    p.add_argument("--format", choices=["csv", "parquet"], default="csv",
+    p.add_argument("--format", choices=["csv", "parquet"], default=LOG_OPTIONS["format"][1],
                    help="estimates.csv (default) or estimates.parquet (faster for long logs)")
     from .robot.cli import add_arguments as add_robot_arguments
     add_robot_arguments(p)

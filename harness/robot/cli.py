@@ -4,8 +4,11 @@ and command (harness/cli.py dispatches here when --robot is given); and
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
+
+from ..values import argparse_type, real
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -22,18 +25,32 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                             "observer per joint (the observer FMU's default estimator: "
                             "implicit super-twisting + noise-adaptive linear observers, C "
                             "core) and a momentum-form regression through a causal filter")
-    group.add_argument("--window", type=float, default=0.05,
-                       help="Savitzky-Golay window [s] (default 0.05)")
+    group.add_argument("--window", type=_positive("--window"), default=0.05,
+                       help="Savitzky-Golay window [s] (default 0.05, > 0)")
     group.add_argument("--min-speed", type=_non_negative, default=None, metavar="V",
                        help="leave out joint equations at |q'| < V [rad/s or m/s], where "
                             "Coulomb friction is not f_c sign(q') (default 0.05)")
 
 
 def _non_negative(text: str) -> float:
-    value = float(text)
-    if not value >= 0.0:
+    """A finite number >= 0 (argparse names the option in its message)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value >= 0.0):
         raise argparse.ArgumentTypeError(f"{text!r} is not a number >= 0")
     return value
+
+
+def _positive(name: str, high: float | None = None):
+    """An argparse type: a finite number > 0 (and <= high)."""
+    return argparse_type(real, name, low=0.0, low_open=True, high=high)
+
+
+def _finite_non_negative(name: str):
+    """An argparse type: a finite number >= 0."""
+    return argparse_type(real, name, low=0.0)
 
 
 def identify_command(args) -> int:
@@ -84,10 +101,11 @@ def register_fmu_parameters(sub, parents) -> None:
     p.add_argument("--identifier", choices=["off", "lsm", "mff"], default="lsm",
                    help="the FMU's base-parameter identifier: off, least squares (lsm, "
                         "default) or matrix forgetting factor (mff)")
-    p.add_argument("--step", type=float, default=1e-3, help="sampling period h [s]")
-    p.add_argument("--f-plus", type=float, default=10.0,
-                   help="bound on the model's acceleration error [rad/s^2] (every joint)")
-    p.add_argument("--coulomb-velocity", type=float, default=0.0,
+    p.add_argument("--step", type=_positive("--step", high=1.0), default=1e-3,
+                   help="sampling period h [s] (0 < h <= 1, the FMU's range)")
+    p.add_argument("--f-plus", type=_positive("--f-plus"), default=10.0,
+                   help="bound on the model's acceleration error [rad/s^2] (every joint, > 0)")
+    p.add_argument("--coulomb-velocity", type=_finite_non_negative("--coulomb-velocity"), default=0.0,
                    help="Coulomb friction saturates below this velocity [rad/s] (0: sign)")
     p.add_argument("--min-speed", type=_non_negative, default=None, metavar="V",
                    help="the identifier leaves out joint equations at |q'| < V [rad/s or "
