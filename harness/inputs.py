@@ -15,7 +15,7 @@ import re
 from pathlib import Path
 from typing import Any
 
-MAX_BYTES = 1 << 20   # a sweep spec is a few kB
+MAX_BYTES = 1 << 24   # 16 MiB: a spec listing the most runs as points is about 4 MB
 MAX_DEPTH = 32        # a spec nests 4 deep
 MAX_DIGITS = 1000     # far beyond any 64-bit value (the entry says "out of range"),
                       # far below the 4300 digits Python refuses to convert

@@ -29,7 +29,7 @@ import os
 import shutil
 import signal
 import threading
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from types import FrameType, TracebackType
 
@@ -46,6 +46,21 @@ class OutputError(Exception):
 
 class Terminated(KeyboardInterrupt):
     """SIGTERM, raised in the main thread so that cleanup runs as for Ctrl-C."""
+
+
+def write_atomically(path: str | os.PathLike, write: Callable[[str], object]) -> Path:
+    """``write(name)`` writes the file under a temporary name beside ``path``, renamed
+    to ``path`` once it returns (a link at ``path`` is replaced, never followed); on
+    an exception nothing is left.  For files written one at a time into a folder that
+    a lock already guards (the sweep's)."""
+    path = Path(path)
+    partial = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        write(str(partial))
+        os.replace(partial, path)
+    finally:
+        partial.unlink(missing_ok=True)
+    return path
 
 
 def _same_file(a: Path, b: Path) -> bool:
