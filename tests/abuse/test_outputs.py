@@ -288,3 +288,33 @@ def test_an_fmu_dir_without_fmus_exits_2(tmp_path):
     code = main(["--fmu-dir", str(tmp_path), "identify", str(data), "--out",
                  str(tmp_path / "o")])
     assert code == 2
+
+
+def test_a_full_disk_under_robot_fmu_parameters_keeps_the_old_file(tmp_path, urdf,
+                                                                    monkeypatch):
+    from harness.robot import fmu
+
+    target = tmp_path / "robot.ssv"
+    target.write_text("the earlier parameters\n")
+
+    def half(parameters, path, name="robot"):
+        Path(path).write_text("<?xml")
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+
+    monkeypatch.setattr(fmu, "write_ssv", half)
+    code, text = cli(["robot-fmu-parameters", str(urdf), "--out", str(target)])
+    assert code == 2, text
+    refused(code, text, "No space left on device", "nothing was written")
+    assert target.read_text() == "the earlier parameters\n" and not leftovers(tmp_path)
+
+
+def test_a_hard_link_to_the_input_is_refused(tmp_path):
+    data = recording(tmp_path / "run.csv")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "estimates.csv").hardlink_to(data)
+    before = data.read_bytes()
+    code, text = cli(["identify", str(data), "--out", str(out)])
+    assert code == 2, text
+    refused(code, text, "input")
+    assert data.read_bytes() == before
