@@ -1,4 +1,4 @@
-"""Reading the structured files users give (sweep specs: JSON or TOML), bounded.
+"""Reading the structured files users give (sweep specs: JSON or TOML; XML), bounded.
 
 :func:`read_structured` refuses, with an :class:`InputError` that names the file
 (and the line or entry where it can): a file over MAX_BYTES; text that is not UTF-8
@@ -6,7 +6,7 @@
 object (JSON parsers keep the last silently); an integer of more than MAX_DIGITS
 digits (named by its entry).  Every harness command that reads such a file goes
 through it, so none can be made to recurse without bound or to allocate without
-bound by a file.
+bound by a file.  XML (URDF, SSP files) is parsed with :func:`xml_parser`.
 """
 from __future__ import annotations
 
@@ -47,6 +47,14 @@ def read_text(path: str | Path, what: str = "file", limit: int = MAX_BYTES) -> s
         line = data.count(b"\n", 0, error.start) + 1
         raise InputError(f"{path} line {line}: byte 0x{data[error.start]:02x} is not UTF-8; "
                          f"save the {what} as UTF-8") from None
+
+
+def xml_parser(**options: Any):
+    """An lxml parser for untrusted XML (URDF, SSV, SSD): no entity expanded, no DTD
+    loaded, no network; libxml2's own bounds on depth and sizes stay on."""
+    from lxml import etree
+    return etree.XMLParser(resolve_entities=False, load_dtd=False, no_network=True,
+                           huge_tree=False, **options)
 
 
 def _object(pairs: list[tuple[str, Any]]) -> dict[str, Any]:

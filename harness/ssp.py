@@ -30,6 +30,7 @@ from typing import Any
 
 from lxml import etree
 
+from .inputs import xml_parser
 from .scenarios import COMMUNICATION_STEP, SCENARIOS, Scenario, bench_links
 
 COMPONENTS = {"plant": "Pendulum", "controller": "TwistingController",
@@ -150,7 +151,7 @@ def fmpy_arguments(ssp: str | Path) -> dict[str, Any]:
     from fmpy.ssp.ssd import Parameter, ParameterSet
 
     with zipfile.ZipFile(ssp) as archive:
-        root = etree.fromstring(archive.read("SystemStructure.ssd"))
+        root = etree.fromstring(archive.read("SystemStructure.ssd"), xml_parser())
         types = {}
         for component in root.iterfind("ssd:System/ssd:Elements/ssd:Component", NAMESPACES):
             with archive.open(component.get("source")) as fmu:

@@ -19,6 +19,8 @@ from pathlib import Path
 import numpy as np
 from lxml import etree
 
+from ..inputs import xml_parser
+
 MAX_JOINTS = 7
 MOVING_TYPES = {"revolute": 0, "continuous": 0, "prismatic": 1}  # -> RbJointType
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
@@ -194,8 +196,7 @@ def check_inertia(inertia: np.ndarray, where: str, tolerance: float = 1e-9) -> N
 def parse_urdf(source: Path, remove_blank_text: bool = False):
     """The URDF's XML tree: no entity expanded, no DTD or network access; UrdfError if
     it does not parse or declares a document type (entities)."""
-    parser = etree.XMLParser(resolve_entities=False, load_dtd=False, no_network=True,
-                             remove_blank_text=remove_blank_text)
+    parser = xml_parser(remove_blank_text=remove_blank_text)
     try:
         tree = etree.parse(str(source), parser)
     except OSError as error:
