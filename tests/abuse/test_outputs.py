@@ -101,6 +101,15 @@ def test_ssp_refuses_to_write_over_an_fmu(tmp_path):
     assert (fmus / "Pendulum.fmu").read_bytes() == before
 
 
+def test_ssp_into_a_folder_name_is_refused(tmp_path):
+    from harness.ssp import main
+
+    folder = tmp_path / "loop.ssp"
+    folder.mkdir()
+    assert main([str(FMU_DIR), str(folder)]) == 2
+    assert not any(folder.iterdir()) and not leftovers(tmp_path)
+
+
 def test_ssp_with_an_fmu_missing_writes_nothing(tmp_path):
     from harness.ssp import main
 
