@@ -64,11 +64,12 @@ def write_atomically(path: str | os.PathLike, write: Callable[[str], object]) ->
 
 
 def _same_file(a: Path, b: Path) -> bool:
-    if a.resolve() == b.resolve():
-        return True
+    """The same file, by name (links resolved) or by inode (hard links)."""
     try:
+        if a.resolve() == b.resolve():
+            return True
         return a.exists() and b.exists() and os.path.samefile(a, b)
-    except OSError:
+    except (OSError, RuntimeError):
         return False
 
 
@@ -107,8 +108,10 @@ class Outputs:
         if relative.is_absolute() or ".." in relative.parts or not relative.parts:
             raise self._error(f"output name {name!r} is not a name inside {self.folder}")
         target = self.folder / relative
-        inside = self.folder.resolve()
-        resolved = target.resolve()
+        try:
+            inside, resolved = self.folder.resolve(), target.resolve()
+        except (OSError, RuntimeError):  # a loop of symbolic links
+            raise self._error(f"{target}: a loop of symbolic links") from None
         if resolved != inside and inside not in resolved.parents:
             raise self._error(f"{target} leads out of {self.folder} through a symbolic link "
                               f"(to {resolved}); remove the link or choose another --out")

@@ -327,3 +327,13 @@ def test_a_hard_link_to_the_input_is_refused(tmp_path):
     assert code == 2, text
     refused(code, text, "input")
     assert data.read_bytes() == before
+
+
+def test_a_loop_of_links_in_out_is_a_message(tmp_path):
+    data = recording(tmp_path / "run.csv")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "estimates.csv").symlink_to(out / "estimates.csv")
+    code, text = cli(["identify", str(data), "--out", str(out)])
+    assert code == 2, text
+    refused(code, text, "symbolic link")
