@@ -337,3 +337,28 @@ def test_a_loop_of_links_in_out_is_a_message(tmp_path):
     code, text = cli(["identify", str(data), "--out", str(out)])
     assert code == 2, text
     refused(code, text, "symbolic link")
+
+
+SWEEP_HOLD = textwrap.dedent("""
+    import sys, time
+    from pathlib import Path
+    from harness.sweep_lock import locked_output
+    with locked_output(Path(sys.argv[1])):
+        print("held", flush=True)
+        time.sleep(120)
+""")
+
+
+def test_identify_into_a_folder_a_sweep_writes_is_refused(tmp_path):
+    data = recording(tmp_path / "run.csv")
+    out = tmp_path / "sweep"
+    holder = subprocess.Popen([sys.executable, "-c", SWEEP_HOLD, str(out)], cwd=REPO,
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        code, text = cli(["identify", str(data), "--out", str(out)])
+        assert code == 2, text
+        refused(code, text, "another harness command is writing to")
+    finally:
+        holder.kill()
+        holder.wait()
