@@ -11,8 +11,11 @@
 
 Options of every command (before or after it): --fmu-dir DIR, --quiet.
 Exit status: 0 done; 1 done, but the result cannot be trusted (an FMU warned, the
-observer did not converge, some sweep runs failed: see stderr); 2 bad input or an FMU
-error; 3 a sweep's --out is locked by another sweep; 130 interrupted.
+observer did not converge, some sweep runs failed: see stderr); 2 bad input (named in
+the message), an FMU error, or the outputs could not be written (then none was: every
+command writes its files under a temporary name and renames them when all are
+complete, harness.outputs); 3 a sweep's --out is locked by another sweep; 130
+interrupted (Ctrl-C), 143 terminated (SIGTERM): nothing of the run is written.
 """
 from __future__ import annotations
 
@@ -23,7 +26,9 @@ import sys
 from pathlib import Path
 
 from .fmus import FMUError
+from .inputs import InputError
 from .messages import Console
+from .outputs import Outputs, OutputError, Terminated
 from .paths import default_fmu_dir
 from .values import INT32_MAX, BadValue, argparse_type, integer, real
 
@@ -31,7 +36,7 @@ from .values import INT32_MAX, BadValue, argparse_type, integer, real
 def _fmu_dir(args) -> Path:
     path = Path(args.fmu_dir) if args.fmu_dir else default_fmu_dir()
     if not (path / "SuperTwistingObserver.fmu").exists():
-        raise SystemExit(f"harness: no FMUs in {path}: run ./build.sh fmus first "
+        raise InputError(f"harness: no FMUs in {path}: run ./build.sh fmus first "
                          f"(or pass --fmu-dir)")
     return path
 
@@ -48,28 +53,30 @@ def cmd_reproduce(args) -> int:
 
     names = list(SCENARIOS) if args.scenario == "all" else [args.scenario]
     fmu_dir = _fmu_dir(args)
-    out = _output_folder(args.out, "reproduce")
     summary = {}
-    for name in names:
-        scenario = SCENARIOS[name]
-        print(f"{name}: {scenario.title} ({scenario.stop_time:g} s)", flush=True)
-        records = run_scenario(scenario, fmu_dir, noise_std=args.noise, seed=args.seed,
-                               use_native=False if args.python_loop else None,
-                               progress=Progress(name, quiet=True if args.quiet else None))
-        metrics = score(scenario, records)
-        folder = out / name
-        folder.mkdir(parents=True, exist_ok=True)
-        decimation = args.csv_decimation
-        from .master import Records
-        Records(records.time[::decimation],
-                {k: v[::decimation] for k, v in records.signals.items()}).to_csv(
-            folder / "signals.csv")
-        (folder / "metrics.json").write_text(json.dumps(
-            {"scenario": name, "title": scenario.title, "noise_std": args.noise,
-             "metrics": metrics, "choices": all_choices(scenario)}, indent=2) + "\n")
-        for path in plot_scenario(scenario, records, folder):
+    with Outputs(args.out, "reproduce", inputs=_fmu_files(fmu_dir),
+                 names=[f"{n}/{f}" for n in names for f in ("signals.csv", "metrics.json")]
+                 ) as outputs:
+        for name in names:
+            scenario = SCENARIOS[name]
+            print(f"{name}: {scenario.title} ({scenario.stop_time:g} s)", flush=True)
+            records = run_scenario(scenario, fmu_dir, noise_std=args.noise, seed=args.seed,
+                                   use_native=False if args.python_loop else None,
+                                   progress=Progress(name, quiet=True if args.quiet else None))
+            metrics = score(scenario, records)
+            decimation = args.csv_decimation
+            from .master import Records
+            Records(records.time[::decimation],
+                    {k: v[::decimation] for k, v in records.signals.items()}).to_csv(
+                outputs.file(f"{name}/signals.csv"))
+            outputs.file(f"{name}/metrics.json").write_text(json.dumps(
+                {"scenario": name, "title": scenario.title, "noise_std": args.noise,
+                 "metrics": metrics, "choices": all_choices(scenario)}, indent=2) + "\n")
+            plot_scenario(scenario, records, outputs.staging / name)
+            summary[name] = metrics
+    for path in outputs.written:
+        if path.suffix == ".png":
             print(f"  wrote {path}")
-        summary[name] = metrics
     print()
     print(summary_table(summary))
     return 0
@@ -98,7 +105,7 @@ def _parse_params(items: list[str]) -> dict[str, int | float | bool]:
     for item in items:
         name, sep, text = item.partition("=")
         if not sep or not name.strip():
-            raise SystemExit(f"harness: --param {item!r}: expected NAME=VALUE")
+            raise InputError(f"harness: --param {item!r}: expected NAME=VALUE")
         lowered = text.strip().lower()
         if lowered in ("true", "false"):
             params[name.strip()] = lowered == "true"
@@ -109,28 +116,33 @@ def _parse_params(items: list[str]) -> dict[str, int | float | bool]:
             try:
                 params[name.strip()] = float(text)
             except ValueError:
-                raise SystemExit(f"harness: --param {item!r}: {text!r} is not a number") from None
+                raise InputError(f"harness: --param {item!r}: {text!r} is not a number") from None
     return params
 
 
-def _output_folder(path: str, command: str) -> Path:
-    """The --out folder, created now (before any computation): SystemExit with a
-    message if it cannot be (a file of that name, no permission, ...)."""
-    out = Path(path)
-    if out.exists() and not out.is_dir():
-        raise SystemExit(f"harness {command}: --out {out} exists and is not a folder")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as error:
-        raise SystemExit(f"harness {command}: cannot create --out {out}: "
-                         f"{error.strerror or error}") from None
-    return out
+def _fmu_files(fmu_dir: Path) -> list[Path]:
+    """The FMUs a command reads (outputs never overwrite them)."""
+    return sorted(fmu_dir.glob("*.fmu"))
+
+
+# identify's options for a recorded log of t, y, u, and their defaults: the robot path
+# reads its log itself and refuses them rather than ignoring them
+LOG_OPTIONS = {"identifier": ("--identifier", "lsm"), "param": ("--param", []),
+               "time_unit": ("--time-unit", None), "time_tolerance": ("--time-tolerance", 0.01),
+               "resample": ("--resample", None), "input_hold": ("--input-hold", "zoh"),
+               "csv_decimation": ("--csv-decimation", 1), "format": ("--format", "csv")}
 
 
 def cmd_identify(args) -> int:
     if args.robot:  # a serial robot from its URDF: harness.robot
         from .robot.cli import identify_command
-        return identify_command(args, _output_folder(args.out, "identify"))
+        given = [option for dest, (option, default) in LOG_OPTIONS.items()
+                 if getattr(args, dest) != default]
+        if given:
+            raise InputError(f"harness identify: {', '.join(given)} not available with "
+                             f"--robot (the robot log is read as t, q1..qn, u1..un in seconds, "
+                             f"evenly sampled); leave {'them' if len(given) > 1 else 'it'} out")
+        return identify_command(args)
     from .fmus import check_parameters
     from .identify import DataError, ReadOptions, identify_file
     from .recording import parse_columns
@@ -146,12 +158,22 @@ def cmd_identify(args) -> int:
     except DataError as error:
         print(f"harness identify: {error}", file=sys.stderr)
         return 2
-    out = _output_folder(args.out, "identify")
+    table_name = f"estimates.{args.format}"
     try:
-        table = out / f"estimates.{args.format}"
-        summary = identify_file(args.data, fmu, parameters, table,
-                                options=options, input_hold=args.input_hold,
-                                decimation=args.csv_decimation)
+        with Outputs(args.out, "identify", inputs=[args.data, fmu],
+                     names=[table_name, "estimates.json", "identification.png"]) as outputs:
+            summary = identify_file(args.data, fmu, parameters, outputs.file(table_name),
+                                    options=options, input_hold=args.input_hold,
+                                    decimation=args.csv_decimation)
+            from .plots import plot_identification  # matplotlib: once the log is through
+
+            plot = outputs.final(plot_identification(
+                summary.figure_rows["t"], summary.figure_rows, outputs.staging,
+                nominal=_nominal(fmu, parameters)))
+            outputs.file("estimates.json").write_text(json.dumps(
+                {**summary.as_json(), "parameters": parameters, "input_hold": args.input_hold,
+                 "columns": options.columns, "time_unit": args.time_unit,
+                 "resample": args.resample}, indent=2) + "\n")
     except DataError as error:
         print(f"harness identify: {error}", file=sys.stderr)
         return 2
@@ -159,15 +181,8 @@ def cmd_identify(args) -> int:
         print(f"note: samples {summary.step:g} s apart are more than the observer's largest "
               f"internal step: h = {summary.h:g} s ({round(summary.step / summary.h)} internal "
               f"steps per sample); set it with --param h=...")
-    from .plots import plot_identification  # matplotlib: imported once the log is through
-
-    plot = plot_identification(summary.figure_rows["t"], summary.figure_rows, out,
-                               nominal=_nominal(fmu, parameters))
-    (out / "estimates.json").write_text(json.dumps(
-        {**summary.as_json(), "parameters": parameters, "input_hold": args.input_hold,
-         "columns": options.columns, "time_unit": args.time_unit,
-         "resample": args.resample}, indent=2) + "\n")
-    print(f"wrote {table}, {out / 'estimates.json'}, {plot}")
+    out = outputs.folder
+    print(f"wrote {out / table_name}, {out / 'estimates.json'}, {plot}")
     for name, value in summary.final.items():
         print(f"  {name} = {value:.6g} +- {summary.standard_error[name]:.2g} (1 sigma)")
     print(f"  measurement noise (estimated) = {summary.noise_std:.3g} rad")
@@ -207,9 +222,12 @@ def cmd_compare(args) -> int:
     from .compare import markdown_table, run_comparison
 
     noise = args.noise if isinstance(args.noise, tuple) else _noise_list(args.noise)
-    rows = run_comparison(_fmu_dir(args), _output_folder(args.out, "compare"),
-                          None if args.scenario == "all" else [args.scenario], noise,
-                          quiet=True if args.quiet else None)
+    fmu_dir = _fmu_dir(args)
+    with Outputs(args.out, "compare", inputs=_fmu_files(fmu_dir),
+                 names=["compare.csv", "compare.json", "compare.md"]) as outputs:
+        rows = run_comparison(fmu_dir, outputs.staging,
+                              None if args.scenario == "all" else [args.scenario], noise,
+                              quiet=True if args.quiet else None)
     print(markdown_table(rows))
     print(f"\nwrote {Path(args.out) / 'compare.md'}, compare.csv and figures")
     return 0
@@ -287,7 +305,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("data", help="CSV file with a header row naming the time, position and "
                    "input columns")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
-    p.add_argument("--identifier", choices=["off", "lsm", "mff"], default="lsm",
+    p.add_argument("--identifier", choices=["off", "lsm", "mff"],
+                   default=LOG_OPTIONS["identifier"][1],
                    help="least squares for constant parameters (lsm, default), with matrix "
                         "forgetting factor for time-varying ones (mff), or none")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
@@ -296,25 +315,29 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the file's names of the time, position and input columns (default: "
                         "t or time, y, u; any case), e.g. t=time,y=theta,u=tau; with --robot "
                         "the roles are t, q1..qn, u1..un, e.g. q1=shoulder_pos")
-    p.add_argument("--time-unit", default=None, choices=["s", "ms", "us", "ns", "min"],
+    p.add_argument("--time-unit", default=LOG_OPTIONS["time_unit"][1], choices=["s", "ms", "us", "ns", "min"],
                    help="unit of the time column (default: seconds, with a warning when whole-"
                         "number stamps 1 or more apart look like milliseconds); epoch time "
                         "stamps are fine")
-    p.add_argument("--time-tolerance", type=TOLERANCE, default=0.01, metavar="FRACTION",
+    p.add_argument("--time-tolerance", type=TOLERANCE, default=LOG_OPTIONS["time_tolerance"][1],
+                   metavar="FRACTION",
                    help="how far a sampling step may differ from the recording's step, as a "
                         "fraction of it (default 0.01: clock jitter); larger gaps are refused "
                         "unless --resample")
-    p.add_argument("--resample", type=RESAMPLE, default=None, nargs="?", const=0.0,
+    p.add_argument("--resample", type=RESAMPLE, default=LOG_OPTIONS["resample"][1], nargs="?",
+                   const=0.0,
                    metavar="STEP",
                    help="put the samples on a uniform grid of STEP seconds first (without "
                         "STEP: the median step): y interpolated linearly, u holds its last "
                         "value; the time stamps written are then the grid's")
-    p.add_argument("--input-hold", choices=["zoh", "sampled"], default="zoh",
+    p.add_argument("--input-hold", choices=["zoh", "sampled"],
+                   default=LOG_OPTIONS["input_hold"][1],
                    help="zoh: u[k] was applied over the interval after t_k (a controller's "
                         "command, the default); sampled: u[k] samples a continuous signal")
-    p.add_argument("--csv-decimation", type=DECIMATION, default=1, metavar="N",
+    p.add_argument("--csv-decimation", type=DECIMATION, metavar="N",
+                   default=LOG_OPTIONS["csv_decimation"][1],
                    help="write every Nth sample to the estimates table (default 1: all)")
-    p.add_argument("--format", choices=["csv", "parquet"], default="csv",
+    p.add_argument("--format", choices=["csv", "parquet"], default=LOG_OPTIONS["format"][1],
                    help="estimates.csv (default) or estimates.parquet (faster for long logs)")
     from .robot.cli import add_arguments as add_robot_arguments
     add_robot_arguments(p)
@@ -334,18 +357,23 @@ def main(argv: list[str] | None = None) -> int:
     with Console(quiet=args.quiet) as console:
         try:
             code = args.func(args)
-        except FMUError as error:
-            print(f"harness: {error}", file=sys.stderr)
+        except (FMUError, InputError, OutputError) as error:
+            print(error if str(error).startswith("harness") else f"harness: {error}",
+                  file=sys.stderr)
+            return 2
+        except BrokenPipeError:
+            _silence_stdout()  # the reader went away (| head): nothing more to say
+            return 0
+        except OSError as error:  # a full or read-only disk, a vanished file: nothing written
+            where = f" {error.filename}:" if error.filename else ""
+            print(f"harness:{where} {error.strerror or error}", file=sys.stderr)
             return 2
         except KeyError as error:
             print(f"harness: {error.args[0] if error.args else error}", file=sys.stderr)
             return 2
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as interrupt:  # Ctrl-C or SIGTERM (outputs.Terminated)
             print("\nharness: interrupted", file=sys.stderr)
-            return 130
-        except BrokenPipeError:
-            _silence_stdout()  # the reader went away (| head): nothing more to say
-            return 0
+            return 143 if isinstance(interrupt, Terminated) else 130
         if code == 0 and console.warnings + console.errors:
             print(f"harness: the FMUs or the harness warned {console.warnings + console.errors} "
                   f"time(s) (see above{'; --quiet hid them' if args.quiet else ''}): the "

@@ -35,6 +35,11 @@ if TYPE_CHECKING:
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9, "min": 60.0}
 DEFAULT_TOLERANCE = 0.01  # of the sampling step
 BLOCK_BYTES = 1 << 20  # 1 MB of CSV text per block (about 2 10^4 rows of t, y, u)
+# --resample fills gaps of at most this many grid steps (a longer one would be made-up
+# data, and a gap of 10^6 s at 1 kHz alone is 10^9 rows); the grid is made in pieces of
+# GRID_PIECE points, so memory stays that of a block whatever the gaps
+MAX_GAP_STEPS = 1000
+GRID_PIECE = 1 << 16
 
 
 class DataError(ValueError):
@@ -259,6 +264,16 @@ def _checked(path: Path, blocks, options: ReadOptions) -> Iterator[Block]:
                 note(f"{path}: whole-number time stamps {step:g} apart, taken as seconds: "
                      f"if they are milliseconds (or us, ns), give --time-unit ms; "
                      f"--time-unit s confirms seconds")
+        if options.resample is not None and step is not None and dt.size:
+            grid = options.resample if options.resample > 0 else step  # [s]
+            wide = np.nonzero(dt > MAX_GAP_STEPS * grid)[0]
+            if wide.size:
+                i = int(wide[0])
+                raise DataError(
+                    f"{path} line {first_line + i + 1}: a gap of {dt[i]:.9g} s in the time "
+                    f"stamps, {dt[i] / grid:.3g} steps of the --resample grid ({grid:g} s); "
+                    f"--resample fills gaps of at most {MAX_GAP_STEPS} steps: split the log "
+                    f"at the gap")
         if options.resample is None and step is not None and dt.size:
             # a step may deviate by the tolerance (jitter) and by rounding of the stamps
             slack = options.tolerance * step + 8 * np.finfo(float).eps * np.abs(
@@ -299,14 +314,13 @@ def _resampled(blocks: Iterator[Block], step: float, scale: float) -> Iterator[B
                           np.concatenate([carry.y[-1:], block.y]),
                           np.concatenate([carry.u[-1:], block.u]))
         last = int(np.floor(block.time[-1] / step + 1e-9))
-        grid = np.arange(k, last + 1) * step
         carry = block
-        if not grid.size:
-            continue
-        k = last + 1
-        held = np.searchsorted(block.time, grid, side="right") - 1
-        stamps = pa.array([repr(float(first + g / scale)) for g in grid], pa.string())
-        yield Block(stamps, grid, np.interp(grid, block.time, block.y), block.u[held])
+        for start in range(k, last + 1, GRID_PIECE):
+            grid = np.arange(start, min(start + GRID_PIECE, last + 1)) * step
+            held = np.searchsorted(block.time, grid, side="right") - 1
+            stamps = pa.array([repr(float(first + g / scale)) for g in grid], pa.string())
+            yield Block(stamps, grid, np.interp(grid, block.time, block.y), block.u[held])
+        k = max(k, last + 1)
 
 
 def read_recording(path: str | Path, options: ReadOptions | None = None) -> Recording:

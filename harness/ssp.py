@@ -30,6 +30,7 @@ from typing import Any
 
 from lxml import etree
 
+from .inputs import xml_parser
 from .scenarios import COMMUNICATION_STEP, SCENARIOS, Scenario, bench_links
 
 COMPONENTS = {"plant": "Pendulum", "controller": "TwistingController",
@@ -121,13 +122,24 @@ def system_structure(s: Scenario, step: float = COMMUNICATION_STEP) -> bytes:
 
 
 def write_ssp(fmu_dir: Path, out: Path, scenario: str = "6.2") -> Path:
-    """The .ssp of a scenario, with the FMUs of ``fmu_dir``."""
+    """The .ssp of a scenario, with the FMUs of ``fmu_dir``: written whole under a
+    temporary name, then renamed (harness.outputs); InputError if an FMU is missing,
+    OutputError if ``out`` is one of the FMUs or cannot be written."""
+    from .inputs import InputError
+    from .outputs import Outputs
+
     s = SCENARIOS[scenario]
-    out.parent.mkdir(parents=True, exist_ok=True)
-    with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as archive:
-        archive.writestr("SystemStructure.ssd", system_structure(s))
-        for model in COMPONENTS.values():
-            archive.write(fmu_dir / f"{model}.fmu", f"resources/{model}.fmu")
+    fmus = [Path(fmu_dir) / f"{model}.fmu" for model in COMPONENTS.values()]
+    missing = [str(fmu) for fmu in fmus if not fmu.is_file()]
+    if missing:
+        raise InputError(f"harness.ssp: no FMU {', '.join(missing)} (run ./build.sh fmus, or "
+                         f"give the folder of the three FMUs)")
+    out = Path(out)
+    with Outputs(out.parent, "ssp", inputs=fmus, names=[out.name], lock=False) as outputs:
+        with zipfile.ZipFile(outputs.file(out.name), "w", zipfile.ZIP_DEFLATED) as archive:
+            archive.writestr("SystemStructure.ssd", system_structure(s))
+            for fmu in fmus:
+                archive.write(fmu, f"resources/{fmu.name}")
     return out
 
 
@@ -139,7 +151,7 @@ def fmpy_arguments(ssp: str | Path) -> dict[str, Any]:
     from fmpy.ssp.ssd import Parameter, ParameterSet
 
     with zipfile.ZipFile(ssp) as archive:
-        root = etree.fromstring(archive.read("SystemStructure.ssd"))
+        root = etree.fromstring(archive.read("SystemStructure.ssd"), xml_parser())
         types = {}
         for component in root.iterfind("ssd:System/ssd:Elements/ssd:Component", NAMESPACES):
             with archive.open(component.get("source")) as fmu:
@@ -175,7 +187,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--scenario", default="6.2", choices=list(SCENARIOS),
                         help="whose parameters and experiment to bind (default 6.2)")
     args = parser.parse_args(argv)
-    print(f"wrote {write_ssp(Path(args.fmu_dir), Path(args.out), args.scenario)}")
+    from .inputs import InputError
+    from .outputs import OutputError, Terminated
+
+    try:
+        print(f"wrote {write_ssp(Path(args.fmu_dir), Path(args.out), args.scenario)}")
+    except (InputError, OutputError) as error:
+        print(error, file=sys.stderr)
+        return 2
+    except OSError as error:
+        print(f"harness.ssp: {args.out}: {error.strerror or error}; nothing was written",
+              file=sys.stderr)
+        return 2
+    except KeyboardInterrupt as interrupt:
+        print("\nharness.ssp: interrupted; nothing was written", file=sys.stderr)
+        return 143 if isinstance(interrupt, Terminated) else 130
     return 0
 
 

@@ -92,6 +92,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from .outputs import Outputs, OutputError, write_atomically
 from .paths import default_fmu_dir
 from .sweep_lock import OutputLocked, locked_output
 from .sweep_plan import (DEFAULT_FMU_DIR, FMU_FILES, METHODS, Run, SweepSpec, load_spec,
@@ -151,7 +152,8 @@ def _run_sweep(spec: SweepSpec, out: Path, fmu_dir: Path, *, scheduler, client, 
                retry_failed, plots, progress, stream, connect_timeout) -> SweepResult:
     stream = stream or sys.stderr
     table = ResultsTable(out)
-    (out / "spec.json").write_text(json.dumps(spec.source, indent=2, default=str) + "\n")
+    text = json.dumps(spec.source, indent=2, default=str) + "\n"
+    write_atomically(out / "spec.json", lambda path: Path(path).write_text(text))
     runs = spec.runs()
     done = table.status()
     todo = [r for r in runs if r.key not in done or (retry_failed and done[r.key] != "ok")]
@@ -247,6 +249,13 @@ def cmd_sweep(args) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         print(f"harness sweep: --out {out} exists and is not a folder", file=sys.stderr)
+        return 2
+    try:  # names the sweep writes: never an input (the spec), never out through a link
+        guard = Outputs(out, "sweep", inputs=[args.spec, *sorted(fmu_dir.glob("*.fmu"))])
+        for name in ("spec.json", "summary.json", TABLE, CSV_EXPORT):
+            guard.check(name)
+    except OutputError as error:
+        print(error, file=sys.stderr)
         return 2
     runs = spec.runs()
     if args.dry_run:

@@ -15,6 +15,8 @@ from pathlib import Path
 
 from filelock import FileLock, Timeout
 
+from .outputs import LOCK_NAME as COMMAND_LOCK
+
 LOCK_NAME = ".sweep.lock"
 
 
@@ -25,17 +27,23 @@ class OutputLocked(RuntimeError):
 @contextmanager
 def locked_output(out: Path) -> Iterator[Path]:
     """Holds the lock of output folder ``out`` (created if needed) for the
-    duration of the block; OutputLocked at once if another process holds it."""
+    duration of the block; OutputLocked at once if another process holds it.
+    Also the lock every other harness command takes (harness.outputs), so that no
+    identify or reproduce writes into the folder while the sweep does."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     path = out / LOCK_NAME
-    lock = FileLock(str(path), timeout=0, thread_local=False, is_singleton=False)
+    held: list[FileLock] = []
     try:
-        lock.acquire()
-    except Timeout:
-        raise OutputLocked(f"another sweep is writing to {out} (it holds {path}); wait until it "
-                           f"has finished, or sweep into another --out") from None
-    try:
+        for name, who in ((LOCK_NAME, "another sweep"), (COMMAND_LOCK, "another harness command")):
+            lock = FileLock(str(out / name), timeout=0, thread_local=False, is_singleton=False)
+            try:
+                lock.acquire()
+            except Timeout:
+                raise OutputLocked(f"{who} is writing to {out} (it holds {out / name}); wait "
+                                   f"until it has finished, or sweep into another --out") from None
+            held.append(lock)
         yield path
     finally:
-        lock.release()
+        for lock in reversed(held):
+            lock.release()

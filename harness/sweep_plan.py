@@ -210,22 +210,15 @@ def parse_spec(data: Mapping[str, Any], fmu_dir: Path = DEFAULT_FMU_DIR) -> Swee
 
 
 def load_spec(path: str | Path, fmu_dir: Path = DEFAULT_FMU_DIR) -> SweepSpec:
+    """The spec of a JSON (or .toml) file, read by harness.inputs (bounded size and
+    depth, UTF-8, no duplicate keys), then checked (parse_spec)."""
+    from .inputs import InputError, read_structured
+
     path = Path(path)
     try:
-        text = path.read_text()
-    except OSError as error:
-        raise SpecError(f"{path}: {error.strerror}") from None
-    try:
-        if path.suffix == ".toml":
-            import tomllib  # Python >= 3.11
-
-            data = tomllib.loads(text)
-        else:
-            data = json.loads(text)
-    except ImportError:
-        raise SpecError(f"{path}: TOML needs Python >= 3.11; use JSON") from None
-    except ValueError as error:  # JSONDecodeError, TOMLDecodeError
-        raise SpecError(f"{path}: {error}") from None
+        data = read_structured(path, "sweep spec")
+    except InputError as error:
+        raise SpecError(str(error)) from None
     try:
         return parse_spec(mapping(data, str(path)), fmu_dir)
     except SpecError as error:

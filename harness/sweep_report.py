@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from .outputs import write_atomically
 from .sweep_plan import SweepSpec
 
 
@@ -60,7 +61,8 @@ def write_summary(spec: SweepSpec, rows: list[dict[str, Any]], out: Path, *, res
                "resumed": resumed, "executed": executed, "wall_time": wall,
                "runs_per_second": executed / wall if wall > 0 else None, "workers": workers,
                "swept": spec.swept, "best": best}
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=str) + "\n")
+    text = json.dumps(summary, indent=2, default=str) + "\n"
+    write_atomically(out / "summary.json", lambda path: Path(path).write_text(text))
 
 
 def _is_number(value: Any) -> bool:
@@ -131,7 +133,8 @@ def plot_summary(spec: SweepSpec, rows: list[dict[str, Any]], out: Path) -> list
         fig.suptitle(f"{spec.scenario} ({spec.stop_time:g} s, {spec.method}): {n_ok} ok, "
                      f"{len(rows) - n_ok} failed of {len(rows)} runs", fontsize=10)
         path = out / f"sweep_{_filename(param)}.png"
-        fig.savefig(path, dpi=100, bbox_inches="tight")
+        write_atomically(path, lambda name: fig.savefig(name, format="png", dpi=100,
+                                                        bbox_inches="tight"))
         paths.append(path)
     return paths
 

@@ -5,6 +5,10 @@ In the output folder DIR:
 - ``runs/<key>.parquet``: one file per finished run, written (to a temporary
   name, then renamed) the moment its result arrives, so a killed sweep loses
   no finished run and never leaves a half-written row;
+- ``runs/MANIFEST``: the names of the run files the sweep wrote, one a line,
+  each added before its file is renamed into place.  Only these files are
+  read and only these are ever removed: anything else in runs/ is left alone,
+  and a ``runs`` that is a symbolic link (which could point anywhere) is refused;
 - ``results.parquet``: the consolidated table, written at the end of a sweep
   from the previous table and the run files (a retried run's newer row
   replaces the older one), after which the run files it holds are removed;
@@ -12,32 +16,26 @@ In the output folder DIR:
   pandas.read_csv), rewritten with results.parquet.
 
 Columns keep their types (numbers, Booleans, text; a value a run does not
-have is null).  A re-run reads results.parquet and any run files left by an
-interrupted sweep; a folder of an earlier version with only results.csv is
-read from that file.  Read the table with ``pandas.read_parquet``.
+have is null).  A re-run reads results.parquet and the run files an
+interrupted sweep listed in its manifest; a folder of an earlier version with
+only results.csv is read from that file.  Reading (``ResultsTable(out)``, as
+``--dry-run`` does) never changes the folder.  Read the table with
+``pandas.read_parquet``.
 """
 from __future__ import annotations
 
-import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from .outputs import write_atomically as _write_atomically
 from .sweep_plan import Run, SweepSpec
 from .sweep_spec import SpecError
 
 TABLE = "results.parquet"
 CSV_EXPORT = "results.csv"
 RUNS = "runs"
-
-
-def _write_atomically(path: Path, write) -> None:
-    partial = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        write(str(partial))
-        partial.replace(path)
-    finally:
-        partial.unlink(missing_ok=True)
+MANIFEST = "MANIFEST"
 
 
 def _table(rows: Sequence[Mapping[str, Any]]):
@@ -57,15 +55,31 @@ class ResultsTable:
         self.csv_path = self.out / CSV_EXPORT
         self.runs_dir = self.out / RUNS
         self._rows: dict[str, dict[str, Any]] = {}
+        if self.runs_dir.is_symlink() or (self.runs_dir.exists() and not self.runs_dir.is_dir()):
+            raise SpecError(f"{self.runs_dir} is a symbolic link or not a folder; the sweep "
+                            f"writes its run files there: move it away")
         if self.path.exists():
             self._load(self.path)
         elif self.csv_path.exists():
             self._load(self.csv_path)
-        for path in sorted(self.runs_dir.glob("*.parquet")) if self.runs_dir.is_dir() else []:
+        for path in self._own_run_files():
             try:
                 self._load(path)
-            except SpecError:
-                path.unlink()  # not a finished run's row (renamed only once written)
+            except SpecError:  # ours, unreadable (a full disk?): consolidate removes it
+                continue
+
+    def _own_run_files(self) -> list[Path]:
+        """The run files the manifest lists that exist (plain files in runs/)."""
+        try:
+            names = (self.runs_dir / MANIFEST).read_text(encoding="utf-8").splitlines()
+        except (FileNotFoundError, NotADirectoryError):
+            return []
+        except (OSError, UnicodeDecodeError) as error:
+            raise SpecError(f"{self.runs_dir / MANIFEST} cannot be read ({error}); move "
+                            f"{self.runs_dir} away to start afresh") from None
+        paths = [self.runs_dir / name for name in dict.fromkeys(names)
+                 if name.endswith(".parquet") and "/" not in name and not name.startswith(".")]
+        return [p for p in paths if p.is_file() and not p.is_symlink()]
 
     def _load(self, path: Path) -> None:
         import pyarrow as pa
@@ -102,8 +116,10 @@ class ResultsTable:
         row = {k: v for k, v in row.items() if v is not None}
         self.runs_dir.mkdir(parents=True, exist_ok=True)
         table = _table([row])
-        _write_atomically(self.runs_dir / f"{row['key']}.parquet",
-                          lambda path: pq.write_table(table, path))
+        name = f"{row['key']}.parquet"
+        with (self.runs_dir / MANIFEST).open("a", encoding="utf-8") as manifest:
+            manifest.write(name + "\n")  # before the file exists: every file of ours is listed
+        _write_atomically(self.runs_dir / name, lambda path: pq.write_table(table, path))
         self._rows.pop(row["key"], None)
         self._rows[row["key"]] = row
 
@@ -121,8 +137,9 @@ class ResultsTable:
         _write_atomically(self.path, lambda path: pq.write_table(table, path))
         _write_atomically(self.csv_path, lambda path: pacsv.write_csv(table, path))
         if self.runs_dir.is_dir():
-            for path in self.runs_dir.glob("*.parquet"):
+            for path in self._own_run_files():  # only what this table wrote (the manifest)
                 path.unlink()
+            (self.runs_dir / MANIFEST).unlink(missing_ok=True)
             try:
                 self.runs_dir.rmdir()
             except OSError:

@@ -4,8 +4,11 @@ and command (harness/cli.py dispatches here when --robot is given); and
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
+
+from ..values import argparse_type, real
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -22,22 +25,37 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                             "observer per joint (the observer FMU's default estimator: "
                             "implicit super-twisting + noise-adaptive linear observers, C "
                             "core) and a momentum-form regression through a causal filter")
-    group.add_argument("--window", type=float, default=0.05,
-                       help="Savitzky-Golay window [s] (default 0.05)")
+    group.add_argument("--window", type=_positive("--window"), default=0.05,
+                       help="Savitzky-Golay window [s] (default 0.05, > 0)")
     group.add_argument("--min-speed", type=_non_negative, default=None, metavar="V",
                        help="leave out joint equations at |q'| < V [rad/s or m/s], where "
                             "Coulomb friction is not f_c sign(q') (default 0.05)")
 
 
 def _non_negative(text: str) -> float:
-    value = float(text)
-    if not value >= 0.0:
+    """A finite number >= 0 (argparse names the option in its message)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value >= 0.0):
         raise argparse.ArgumentTypeError(f"{text!r} is not a number >= 0")
     return value
 
 
-def identify_command(args, out: Path) -> int:
-    from .pipeline import LogError, identify_robot, read_log, write_results
+def _positive(name: str, high: float | None = None):
+    """An argparse type: a finite number > 0 (and <= high)."""
+    return argparse_type(real, name, low=0.0, low_open=True, high=high)
+
+
+def _finite_non_negative(name: str):
+    """An argparse type: a finite number >= 0."""
+    return argparse_type(real, name, low=0.0)
+
+
+def identify_command(args) -> int:
+    from ..outputs import Outputs
+    from .pipeline import OUTPUT_NAMES, LogError, identify_robot, read_log, write_results
     from .urdf import UrdfError, read_urdf
     mapping = {}  # --columns (harness/cli.py) with the roles t, q1..qn, u1..un
     for item in filter(None, (part.strip() for part in args.columns.split(","))):
@@ -47,16 +65,18 @@ def identify_command(args, out: Path) -> int:
             return 2
         mapping[name.strip()] = column.strip()
     try:
-        robot = read_urdf(args.robot, locked=tuple(args.lock))
-        log = read_log(args.data, robot.n, mapping)
-        speed = {} if args.min_speed is None else {"min_speed": args.min_speed}
-        result = identify_robot(robot, log, unknown=args.unknown, method=args.velocity,
-                                window=args.window, **speed)
+        with Outputs(args.out, "identify", inputs=[args.data, args.robot],
+                     names=OUTPUT_NAMES) as outputs:
+            robot = read_urdf(args.robot, locked=tuple(args.lock))
+            log = read_log(args.data, robot.n, mapping)
+            speed = {} if args.min_speed is None else {"min_speed": args.min_speed}
+            result = identify_robot(robot, log, unknown=args.unknown, method=args.velocity,
+                                    window=args.window, **speed)
+            written = write_results(outputs.staging, robot, log, result, Path(args.data).name)
     except (UrdfError, LogError) as error:
         print(f"harness identify: {error}", file=sys.stderr)
         return 2
-    written = write_results(out, robot, log, result, Path(args.data).name)
-    print("wrote " + ", ".join(map(str, written)))
+    print("wrote " + ", ".join(str(outputs.final(path)) for path in written))
     n = robot.n
     for i, joint in enumerate(robot.joints):
         print(f"  {joint.name}: mass {result.pi[10 * i]:.6g} kg, viscous "
@@ -81,10 +101,11 @@ def register_fmu_parameters(sub, parents) -> None:
     p.add_argument("--identifier", choices=["off", "lsm", "mff"], default="lsm",
                    help="the FMU's base-parameter identifier: off, least squares (lsm, "
                         "default) or matrix forgetting factor (mff)")
-    p.add_argument("--step", type=float, default=1e-3, help="sampling period h [s]")
-    p.add_argument("--f-plus", type=float, default=10.0,
-                   help="bound on the model's acceleration error [rad/s^2] (every joint)")
-    p.add_argument("--coulomb-velocity", type=float, default=0.0,
+    p.add_argument("--step", type=_positive("--step", high=1.0), default=1e-3,
+                   help="sampling period h [s] (0 < h <= 1, the FMU's range)")
+    p.add_argument("--f-plus", type=_positive("--f-plus"), default=10.0,
+                   help="bound on the model's acceleration error [rad/s^2] (every joint, > 0)")
+    p.add_argument("--coulomb-velocity", type=_finite_non_negative("--coulomb-velocity"), default=0.0,
                    help="Coulomb friction saturates below this velocity [rad/s] (0: sign)")
     p.add_argument("--min-speed", type=_non_negative, default=None, metavar="V",
                    help="the identifier leaves out joint equations at |q'| < V [rad/s or "
@@ -97,8 +118,12 @@ def register_fmu_parameters(sub, parents) -> None:
 
 
 def fmu_parameters_command(args) -> int:
+    from ..outputs import Outputs
     from .fmu import fmu_parameters, write_ssv
     from .urdf import UrdfError, read_urdf
+    target = Path(args.out)
+    outputs = Outputs(target.parent, "robot-fmu-parameters", inputs=[args.urdf],
+                      names=[target.name], lock=False)  # one file: its rename is atomic
     try:
         robot = read_urdf(args.urdf, locked=tuple(args.lock))
         rule = {name: value for name, value in (("min_speed", args.min_speed),
@@ -110,6 +135,7 @@ def fmu_parameters_command(args) -> int:
     except (UrdfError, ValueError) as error:
         print(f"harness robot-fmu-parameters: {error}", file=sys.stderr)
         return 2
-    path = write_ssv(parameters, args.out, name=Path(args.urdf).stem)
-    print(f"wrote {path}: {robot.n} joints, {parameters['base_count']} base parameters")
+    with outputs:
+        write_ssv(parameters, outputs.file(target.name), name=Path(args.urdf).stem)
+    print(f"wrote {target}: {robot.n} joints, {parameters['base_count']} base parameters")
     return 0

@@ -20,7 +20,7 @@ import scipy.optimize
 from lxml import etree
 
 from .base_parameters import BaseParameters
-from .urdf import Robot, body_inertial, check_inertia, inertia_matrix
+from .urdf import Robot, body_inertial, check_inertia, inertia_matrix, parse_urdf
 
 PRIOR_WEIGHT = 1e-3  # of the pull toward the URDF relative to one standard error
 
@@ -105,7 +105,7 @@ def write_identified_urdf(robot: Robot, pi: np.ndarray, path: Path, comment: str
     """The robot's URDF with each body's identified inertial on the joint's child link
     (links merged into that body lose theirs: the body's inertial holds them) and
     <dynamics damping="viscous" friction="Coulomb"/> on each joint."""
-    tree = etree.parse(str(robot.source), etree.XMLParser(remove_blank_text=False))
+    tree = parse_urdf(robot.source)  # as read_urdf parsed it: no entity, no DTD
     root = tree.getroot()
     root.insert(0, etree.Comment(f" {comment.replace('--', '- -')} "))
     links = {link.get("name"): link for link in root.findall("link")}

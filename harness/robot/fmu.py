@@ -111,8 +111,11 @@ def write_ssv(parameters: dict[str, object], path: str | Path, name: str = "robo
 def read_ssv(path: str | Path) -> dict[str, float | int]:
     """The parameters of an SSV file as fmpy start values (FMI 2 names)."""
     from lxml import etree
+
+    from ..inputs import xml_parser
     values = {}
-    for parameter in etree.parse(str(path)).getroot().iter(f"{{{SSV}}}Parameter"):
+    root = etree.parse(str(path), xml_parser()).getroot()
+    for parameter in root.iter(f"{{{SSV}}}Parameter"):
         for child in parameter:
             kind = etree.QName(child).localname
             values[parameter.get("name")] = (int(child.get("value")) if kind == "Integer"

@@ -39,6 +39,9 @@ MIN_SPEED = 0.05  # [rad/s or m/s] below it, joint equations are left out (frict
 # a joint keeping fewer of its equations than this share is an error (its friction cannot
 # be identified), fewer than FEW_ROWS a warning
 TOO_FEW_ROWS, FEW_ROWS = 0.01, 0.1
+# what write_results writes into the output folder
+OUTPUT_NAMES = ("velocities.csv", "parameters.csv", "identified.urdf", "summary.json",
+                "velocities.png")
 
 
 class LogError(ValueError):

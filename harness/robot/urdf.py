@@ -4,7 +4,12 @@ A URDF is accepted when it describes a serial chain of at most 7 revolute,
 continuous or prismatic joints from a fixed base: fixed joints (and joints the
 caller locks, at position 0) are merged into the moving body they hang from, and
 branches that carry no moving joint (sensors, tool frames) are allowed.  Every
-problem is a UrdfError whose message names the file and the joint or link.
+problem is a UrdfError whose message names the file and the joint or link: also a
+document type declaration (entities are never expanded, so a file that declares
+them would mean something else to another reader), a number beyond LARGEST in SI
+units (no robot part has it, and products of such numbers overflow), and links or
+joints that the tree from the root does not reach (a closed loop, a second tree).
+Chains of any length are walked without recursion.
 """
 from __future__ import annotations
 
@@ -14,9 +19,12 @@ from pathlib import Path
 import numpy as np
 from lxml import etree
 
+from ..inputs import xml_parser
+
 MAX_JOINTS = 7
 MOVING_TYPES = {"revolute": 0, "continuous": 0, "prismatic": 1}  # -> RbJointType
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
+LARGEST = 1e6  # [m, kg, kg m^2, rad, N m s/rad, N m]: a larger URDF number is refused
 
 
 class UrdfError(ValueError):
@@ -139,6 +147,10 @@ def _floats(element, attribute: str, count: int, default: str, where: str) -> np
         raise UrdfError(f"{where}: {attribute}={text!r} is not {count} numbers") from None
     if values.size != count or not np.all(np.isfinite(values)):
         raise UrdfError(f"{where}: {attribute}={text!r} is not {count} finite numbers")
+    if np.any(np.abs(values) > LARGEST):
+        tag = f"<{element.tag} {attribute}={text!r}>" if element is not None else attribute
+        raise UrdfError(f"{where}: {tag} holds a number beyond {LARGEST:g} (SI units): "
+                        f"not a robot's")
     return values
 
 
@@ -181,16 +193,28 @@ def check_inertia(inertia: np.ndarray, where: str, tolerance: float = 1e-9) -> N
                         f"violate the triangle inequality (a + b >= c): no rigid body has them")
 
 
-def read_urdf(path: str | Path, locked: tuple[str, ...] | list[str] = (),
-              gravity=DEFAULT_GRAVITY) -> Robot:
-    """Read and validate a URDF as a serial chain; `locked` joints are fixed at 0."""
-    source = Path(path)
+def parse_urdf(source: Path, remove_blank_text: bool = False):
+    """The URDF's XML tree: no entity expanded, no DTD or network access; UrdfError if
+    it does not parse or declares a document type (entities)."""
+    parser = xml_parser(remove_blank_text=remove_blank_text)
     try:
-        root = etree.parse(str(source), etree.XMLParser(resolve_entities=False)).getroot()
+        tree = etree.parse(str(source), parser)
     except OSError as error:
         raise UrdfError(f"{source}: cannot read ({error})") from None
     except etree.XMLSyntaxError as error:
         raise UrdfError(f"{source}: does not parse as XML ({error})") from None
+    if tree.docinfo.doctype or tree.docinfo.internalDTD is not None or any(
+            isinstance(node, etree._Entity) for node in tree.getroot().iter()):
+        raise UrdfError(f"{source}: declares a document type or entities (<!DOCTYPE ...>, "
+                        f"<!ENTITY ...>); a URDF has none: remove the declaration")
+    return tree
+
+
+def read_urdf(path: str | Path, locked: tuple[str, ...] | list[str] = (),
+              gravity=DEFAULT_GRAVITY) -> Robot:
+    """Read and validate a URDF as a serial chain; `locked` joints are fixed at 0."""
+    source = Path(path)
+    root = parse_urdf(source).getroot()
     if root.tag != "robot":
         raise UrdfError(f"{source}: not a URDF (the root element is <{root.tag}>, not <robot>)")
     links = {}
@@ -225,6 +249,7 @@ def read_urdf(path: str | Path, locked: tuple[str, ...] | list[str] = (),
     if len(roots) != 1:
         raise UrdfError(f"{source}: expected one root link, found {len(roots)} "
                         f"({', '.join(roots[:5])})")
+    _check_connected(source, roots[0], links, joints)
     chain = _Chain(source, links, joints, set(locked))
     chain.walk(roots[0])
     if not chain.joints:
@@ -232,8 +257,33 @@ def read_urdf(path: str | Path, locked: tuple[str, ...] | list[str] = (),
     if len(chain.joints) > MAX_JOINTS:
         raise UrdfError(f"{source}: {len(chain.joints)} moving joints; at most {MAX_JOINTS} are "
                         f"supported (lock some with --lock)")
-    return Robot(root.get("name", source.stem), source, roots[0], chain.joints, tuple(locked),
-                 np.asarray(gravity, dtype=float))
+    robot = Robot(root.get("name", source.stem), source, roots[0], chain.joints, tuple(locked),
+                  np.asarray(gravity, dtype=float))
+    for joint in robot.joints:  # merged bodies: sums of bounded numbers, still finite?
+        if not all(np.all(np.isfinite(x)) for x in (joint.xyz, joint.rpy, joint.link)):
+            raise UrdfError(f"{source}: joint {joint.name!r}: its body's position or inertia "
+                            f"is not finite")
+    return robot
+
+
+def _check_connected(source: Path, root: str, links: dict, joints: dict) -> None:
+    """UrdfError naming the links that the tree from ``root`` does not reach (a closed
+    loop of joints, or a second tree whose root has a parent)."""
+    children: dict[str, list[str]] = {}
+    for joint in joints.values():
+        children.setdefault(joint.find("parent").get("link"), []).append(
+            joint.find("child").get("link"))
+    reached, stack = {root}, [root]
+    while stack:
+        for child in children.get(stack.pop(), []):
+            if child not in reached:
+                reached.add(child)
+                stack.append(child)
+    lost = [name for name in links if name not in reached]
+    if lost:
+        raise UrdfError(f"{source}: link(s) {', '.join(map(repr, lost[:5]))} are not reached "
+                        f"from the root link {root!r}: the joints form a closed loop or a "
+                        f"second tree; a URDF is one tree")
 
 
 class _Chain:
@@ -245,15 +295,29 @@ class _Chain:
         for joint in joints.values():
             self.children.setdefault(joint.find("parent").get("link"), []).append(joint)
         self.joints: list[ChainJoint] = []
+        self._reaching = self._links_reaching_moving()
 
     def moving(self, joint) -> bool:
         return joint.get("type") in MOVING_TYPES and joint.get("name") not in self.locked
 
+    def _links_reaching_moving(self) -> set[str]:
+        """The links with a moving joint below them: from every moving joint up to the
+        root, iteratively (a chain of thousands of fixed links recursed too deep)."""
+        parent_of = {joint.find("child").get("link"): joint.find("parent").get("link")
+                     for joints in self.children.values() for joint in joints}
+        reaching: set[str] = set()
+        for joints in self.children.values():
+            for joint in joints:
+                if self.moving(joint):
+                    link = joint.find("parent").get("link")
+                    while link is not None and link not in reaching:
+                        reaching.add(link)
+                        link = parent_of.get(link)
+        return reaching
+
     def reaches_moving(self, joint) -> bool:
         """The joint moves, or a joint below it does."""
-        if self.moving(joint):
-            return True
-        return any(self.reaches_moving(j) for j in self.children.get(joint.find("child").get("link"), []))
+        return self.moving(joint) or joint.find("child").get("link") in self._reaching
 
     def walk(self, root: str) -> None:
         # (link, the body it belongs to (None: the base), R, p of its frame in the body frame)
@@ -284,7 +348,7 @@ class _Chain:
                       where: str) -> ChainJoint:
         """The chain joint at (R, p) in the previous body's frame, appended to the chain."""
         axis = _floats(joint.find("axis"), "xyz", 3, "1 0 0", where)
-        if np.linalg.norm(axis) == 0:
+        if not np.linalg.norm(axis) > 1e-9:
             raise UrdfError(f"{where}: the axis is zero")
         dynamics = joint.find("dynamics")
         damping, friction = (_floats(dynamics, key, 1, "0", where)[0]

@@ -218,18 +218,22 @@ def test_sweep_on_a_local_cluster_records_failures_and_resumes(client, fmu_dir, 
     pd.testing.assert_frame_equal(pd.read_parquet(out / "results.parquet"), table)
 
     # A killed sweep: the table holds two runs, a third finished run is only in its run
-    # file, a fourth run's file was never renamed into place.
+    # file, a fourth run's file was never renamed into place (both in the manifest); a
+    # file of someone else's in runs/ is not the sweep's to read or remove.
     table.iloc[:2].to_parquet(out / "results.parquet")
     (out / "runs").mkdir()
     table.iloc[2:3].to_parquet(out / "runs" / f"{table['key'].iloc[2]}.parquet")
     (out / "runs" / f".{table['key'].iloc[3]}.parquet.123.tmp").write_bytes(b"PAR1 half")
+    (out / "runs" / "MANIFEST").write_text(f"{table['key'].iloc[2]}.parquet\n"
+                                           f"{table['key'].iloc[3]}.parquet\n")
     (out / "runs" / "junk.parquet").write_bytes(b"not parquet")
     resumed = sweep.run_sweep(spec, out, fmu_dir, client=client, progress=False, plots=False)
     assert (resumed.resumed, resumed.executed) == (3, 2)
     after = pd.read_parquet(out / "results.parquet")
     assert len(after) == 5 and after["key"].is_unique
     pd.testing.assert_frame_equal(after.iloc[:3], table.iloc[:3])
-    assert not (out / "runs" / "junk.parquet").exists()
+    assert (out / "runs" / "junk.parquet").read_bytes() == b"not parquet"
+    assert not (out / "runs" / "MANIFEST").exists()
 
     # A wider grid runs only the new points; --retry-failed redoes the failed run only.
     wider = sweep.parse_spec({**SPEC, "grid": {"noise_std": [0.0, 1e-5, 1e-4]}}, fmu_dir)
@@ -253,7 +257,7 @@ def test_rows_are_on_disk_as_each_run_completes(fmu_dir, tmp_path):
                                                   "metrics": {"delay": 0.01}}))
     table.append(sweep.result_row(spec, runs[0], {"status": "ok", "metrics": {"delay": 0.02}}))
     assert sorted(p.name for p in (tmp_path / "runs").iterdir()) == sorted(
-        f"{r.key}.parquet" for r in runs[:2])
+        [f"{r.key}.parquet" for r in runs[:2]] + ["MANIFEST"])
     again = sweep.ResultsTable(tmp_path)
     assert again.status() == {runs[0].key: "ok", runs[1].key: "ok"}
     rows = {r["key"]: r for r in again.rows({runs[0].key, runs[1].key})}

@@ -1,0 +1,127 @@
+"""Reading the structured files users give (sweep specs: JSON or TOML; XML), bounded.
+
+:func:`read_structured` refuses, with an :class:`InputError` that names the file
+(and the line or entry where it can): a file over MAX_BYTES; text that is not UTF-8
+(the line and byte); nesting deeper than MAX_DEPTH; a key given twice in one JSON
+object (JSON parsers keep the last silently); an integer of more than MAX_DIGITS
+digits (named by its entry).  Every harness command that reads such a file goes
+through it, so none can be made to recurse without bound or to allocate without
+bound by a file.  XML (URDF, SSP files) is parsed with :func:`xml_parser`.
+"""
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+from typing import Any
+
+MAX_BYTES = 1 << 24   # 16 MiB: a spec listing the most runs as points is about 4 MB
+MAX_DEPTH = 32        # a spec nests 4 deep
+MAX_DIGITS = 1000     # far beyond any 64-bit value (the entry says "out of range"),
+                      # far below the 4300 digits Python refuses to convert
+
+
+class InputError(ValueError):
+    """An input (a file or an option's value) cannot be used; the message names it.
+    The command line answers it with exit status 2."""
+
+
+class _BigInteger(str):
+    """A JSON integer too long to convert: kept as text so that its entry can be named."""
+
+
+def read_text(path: str | Path, what: str = "file", limit: int = MAX_BYTES) -> str:
+    """The file's UTF-8 text (a BOM dropped); InputError if it cannot be read, is
+    larger than ``limit`` bytes or is not UTF-8 (naming the line and byte)."""
+    path = Path(path)
+    try:
+        with path.open("rb") as handle:
+            data = handle.read(limit + 1)
+    except OSError as error:
+        raise InputError(f"{path}: cannot read the {what} ({error.strerror or error})") from None
+    if len(data) > limit:
+        raise InputError(f"{path}: the {what} is larger than {limit} bytes")
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as error:
+        line = data.count(b"\n", 0, error.start) + 1
+        raise InputError(f"{path} line {line}: byte 0x{data[error.start]:02x} is not UTF-8; "
+                         f"save the {what} as UTF-8") from None
+
+
+def xml_parser(**options: Any):
+    """An lxml parser for untrusted XML (URDF, SSV, SSD): no entity expanded, no DTD
+    loaded, no network; libxml2's own bounds on depth and sizes stay on."""
+    from lxml import etree
+    return etree.XMLParser(resolve_entities=False, load_dtd=False, no_network=True,
+                           huge_tree=False, **options)
+
+
+def _object(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    result: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in result:
+            raise InputError(f"the key {key!r} is given twice in one object")
+        result[key] = value
+    return result
+
+
+def _integer(text: str) -> int | _BigInteger:
+    digits = len(text.lstrip("-"))
+    return _BigInteger(text) if digits > MAX_DIGITS else int(text)
+
+
+def _check(data: Any, path: Path) -> None:
+    """Depth and integer sizes, walked without recursion; InputError names the entry."""
+    stack: list[tuple[Any, str, int]] = [(data, "", 0)]
+    while stack:
+        value, where, depth = stack.pop()
+        if depth > MAX_DEPTH:
+            raise InputError(f"{path}: {where or 'the top level'} is nested more than "
+                             f"{MAX_DEPTH} deep")
+        if isinstance(value, _BigInteger) or (isinstance(value, int)
+                                              and len(str(abs(value))) > MAX_DIGITS):
+            raise InputError(f"{path}: {where or 'the value'}: an integer of "
+                             f"{len(str(value).lstrip('-'))} digits (at most {MAX_DIGITS})")
+        if isinstance(value, dict):
+            stack.extend((v, f"{where}.{k}" if where else str(k), depth + 1)
+                         for k, v in value.items())
+        elif isinstance(value, list):
+            stack.extend((v, f"{where}[{i}]", depth + 1) for i, v in enumerate(value))
+
+
+def read_structured(path: str | Path, what: str = "file") -> Any:
+    """The data of a JSON file, or of a TOML file if the name ends in .toml, checked as
+    the module describes."""
+    path = Path(path)
+    text = read_text(path, what)
+    try:
+        if path.suffix == ".toml":
+            import tomllib  # Python >= 3.11
+            data = tomllib.loads(text)
+        else:
+            data = json.loads(text, object_pairs_hook=_object, parse_int=_integer)
+    except ImportError:
+        raise InputError(f"{path}: TOML needs Python >= 3.11; use JSON") from None
+    except InputError as error:
+        raise InputError(f"{path}: {error}") from None
+    except RecursionError:
+        raise InputError(f"{path}: nested more than {MAX_DEPTH} deep") from None
+    except ValueError as error:  # JSONDecodeError, TOMLDecodeError, int() of 4300+ digits
+        if "digits" in str(error) and "limit" in str(error):
+            raise InputError(f"{path}{_long_integer_place(text)}: an integer of more than "
+                             f"{MAX_DIGITS} digits") from None
+        raise InputError(f"{path}: {error}") from None
+    _check(data, path)
+    return data
+
+
+def _long_integer_place(text: str) -> str:
+    """' line L (entry KEY)' of the first run of more than MAX_DIGITS digits."""
+    match = re.search(r"\d{%d,}" % (MAX_DIGITS + 1), text)
+    if not match:
+        return ""
+    line = text.count("\n", 0, match.start()) + 1
+    start = text.rfind("\n", 0, match.start()) + 1
+    key = text[start:match.start()].split("=")[0].strip()
+    return f" line {line}" + (f" (entry {key})" if key else "")
