@@ -57,6 +57,7 @@ from robot_trajectories import multisine  # noqa: E402
 from harness.robot.base_parameters import base_parameters  # noqa: E402
 from harness.robot.examples import example_urdf  # noqa: E402
 from harness.robot.fmu import read_ssv  # noqa: E402
+from harness.robot.native import core_defaults  # noqa: E402
 from harness.robot.urdf import read_urdf  # noqa: E402
 
 def model_file(name: str, path: Path) -> int:
@@ -79,7 +80,6 @@ FMU_DESCRIPTION = REPO / "fmu/robot/modelDescription.xml"
 FMU_H = 1e-4        # [s] the sampling period: 10 kHz
 FMU_T_ID = 0.02     # [s] the identifier starts here ...
 FMU_WARMUP = 500    # ... before these doSteps of H = h end (0.05 s)
-FMU_STATISTICS_INTERVAL = 0.1  # [s] the FMU's default statistics_interval
 
 
 def build(binary: Path, revision: str | None, fmu: bool = False) -> None:
@@ -255,7 +255,7 @@ def fmu_cost(args, binaries: dict[str, Path], tmp: Path) -> None:
                         f"slowest doStep {slowest:.0f} us")
                 if H == "h":
                     interval = args.statistics_interval
-                    interval = FMU_STATISTICS_INTERVAL if interval is None else interval
+                    interval = core_defaults().statistics_interval if interval is None else interval
                     line += f"; {statistics_lag(runs[label][0], round(interval / files_h))}"
                 if args.callgrind and shutil.which("valgrind"):
                     case = f"{name}-{label}-H={H.replace(' ', '')}"

@@ -1,10 +1,15 @@
 # libFuzzer targets (the fuzz preset: clang with ASan and UBSan on every object):
-# fuzz_deserialize (state blobs, forged ones included) and fuzz_calls (FMI call
-# sequences) for each model, linked with the FMI 2 API file and the same objects.
+# fuzz_deserialize (state blobs, forged ones included) and fuzz_calls (FMI 2 call
+# sequences) linked with the FMI 2 API file, fuzz_fmi3_calls (FMI 3 call sequences,
+# states included) with the FMI 3 one, for each model, over the same objects.
 foreach(id IN LISTS STO_MODELS)
-    foreach(target fuzz_deserialize fuzz_calls)
+    foreach(target fuzz_deserialize fuzz_calls fuzz_fmi3_calls)
+        set(api fmi2)
+        if(target STREQUAL fuzz_fmi3_calls)
+            set(api fmi3)
+        endif()
         add_executable(${target}-${id} "${CMAKE_SOURCE_DIR}/tools/abuse/${target}.c"
-                       "${SRC}/fmi2/fmi2_functions.c" "${SRC}/${STO_${id}_MODEL}")
+                       "${SRC}/${api}/${api}_functions.c" "${SRC}/${STO_${id}_MODEL}")
         target_include_directories(${target}-${id} SYSTEM PRIVATE "${STO_FMI_INCLUDE_DIR}")
         target_link_libraries(${target}-${id} PRIVATE sto_instance sto_core)
         target_link_options(${target}-${id} PRIVATE -fsanitize=fuzzer)

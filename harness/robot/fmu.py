@@ -18,11 +18,10 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from .base_parameters import base_parameters
-from .native import MIN_SPEED, REVERSAL_MARGIN
+from .native import core_defaults
 from .pipeline import JointLog
 from .urdf import Robot
 
-MAX_JOINTS = 7
 INTEGERS = {"n", "identifier", "base_count", "joint_type", "base_columns", "max_internal_steps"}
 IDENTIFIERS = {"off": 0, "lsm": 1, "mff": 2}
 SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
@@ -32,8 +31,8 @@ def fmu_parameters(robot: Robot, unknown: str = "all", h: float = 1e-3, f_plus=1
                    identifier: str = "lsm", tau: float = 0.01, rho: float = 1e-6,
                    R: float = 0.1, t_id: float = 0.2, torque_scale=None,
                    coulomb_velocity: float = 0.0, pi: np.ndarray | None = None,
-                   alpha1=0.0, alpha2=0.0, min_speed: float = MIN_SPEED,
-                   reversal_margin: float = REVERSAL_MARGIN) -> dict[str, object]:
+                   alpha1=0.0, alpha2=0.0, min_speed: float | None = None,
+                   reversal_margin: float | None = None) -> dict[str, object]:
     """The RobotObserver parameters for `robot`: name -> scalar or array (the joints'
     rows only; the FMU's other rows keep their start values).
 
@@ -44,9 +43,12 @@ def fmu_parameters(robot: Robot, unknown: str = "all", h: float = 1e-3, f_plus=1
     link parameters, then friction) replaces the URDF's inertials and friction (e.g. an
     identified model); the identifier leaves out joint i's equation where |q_i'| <
     min_speed [rad/s or m/s] or q_i' reverses, and for reversal_margin [s] after (both 0:
-    every equation is used)."""
+    every equation is used; None: the core's defaults)."""
     if identifier not in IDENTIFIERS:
         raise ValueError(f"identifier {identifier!r}: one of {', '.join(IDENTIFIERS)}")
+    defaults = core_defaults()
+    min_speed = defaults.min_speed if min_speed is None else min_speed
+    reversal_margin = defaults.reversal_margin if reversal_margin is None else reversal_margin
     for name, value in (("min_speed", min_speed), ("reversal_margin", reversal_margin)):
         if not (np.isfinite(value) and value >= 0.0):
             raise ValueError(f"{name} must be a finite number >= 0, not {value!r}")

@@ -14,11 +14,6 @@ import numpy as np
 
 from ..native_library import load_library
 
-# the online regression's rule of the joint equations left out (robot_observer.h's
-# RO_MIN_SPEED and RO_REVERSAL_MARGIN): the FMU's defaults
-MIN_SPEED = 0.05        # [rad/s or m/s]
-REVERSAL_MARGIN = 0.02  # [s]
-STATISTICS_INTERVAL = 0.1  # [s] the FMU's default statistics_interval
 _double_p = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
 _int_p = np.ctypeslib.ndpointer(dtype=np.int32, flags="C_CONTIGUOUS")
 
@@ -29,6 +24,7 @@ def load() -> ctypes.CDLL:
     dll = load_library()
     dll.rn_model_size.restype = ctypes.c_size_t
     dll.rn_max_joints.restype = ctypes.c_int
+    dll.rn_defaults.argtypes = [ctypes.POINTER(ctypes.c_double)]
     dll.rn_load.restype = ctypes.c_int
     dll.rn_load.argtypes = [ctypes.c_void_p, ctypes.c_int, _int_p, _double_p, _double_p,
                             _double_p, _double_p, _double_p, _double_p, ctypes.c_double]
@@ -63,6 +59,26 @@ def load() -> ctypes.CDLL:
         count, ctypes.c_double, _double_p, _double_p, _double_p, _double_p, _double_p,
         _double_p]
     return dll
+
+
+@dataclass(frozen=True)
+class CoreDefaults:
+    """The C core's defaults the harness shares (fmu/src/core/tuning.h, rigid_body.h),
+    read from the library so that Python keeps no copy of them."""
+
+    min_speed: float            # [rad/s or m/s] joint equations slower than this left out
+    reversal_margin: float      # [s] and for this long after a reversal
+    statistics_interval: float  # [s] between the solves with standard errors
+    max_joints: int             # joints of a serial robot at most
+
+
+@lru_cache(maxsize=1)
+def core_defaults() -> CoreDefaults:
+    """The defaults of the native library in use."""
+    dll = load()
+    values = (ctypes.c_double * 3)()
+    dll.rn_defaults(values)
+    return CoreDefaults(values[0], values[1], values[2], int(dll.rn_max_joints()))
 
 
 @dataclass
@@ -206,12 +222,12 @@ class RigidBody:
         index), "min_speed", "reversal_margin"} the online identifier runs too, adding
         "delta" (base parameters minus the nominal ones), "std_error", "gamma_trace" and
         "excitation" at the end, and "published": what the FMU publishes after the last
-        sample (identify's "statistics_interval", default STATISTICS_INTERVAL: the
+        sample (identify's "statistics_interval", default core_defaults(): the
         solves with standard errors spread over the samples after each snapshot,
         fmu/src/core/statistics_job.h) as {"delta", "std_error", "gamma_trace",
         "excitation"}.  Joint i's equation weighs 0 where |q_i'| < min_speed
-        (rad/s or m/s, default MIN_SPEED), where q_i' reverses, and for reversal_margin
-        seconds after (default REVERSAL_MARGIN); both 0: every equation is used."""
+        (rad/s or m/s, default core_defaults()), where q_i' reverses, and for reversal_margin
+        seconds after (default core_defaults()); both 0: every equation is used."""
         dll = load()
         q, u = _samples(q, self.n), _samples(u, self.n)
         gains = [np.ascontiguousarray(np.broadcast_to(np.asarray(a, float), (self.n,)))
@@ -219,8 +235,9 @@ class RigidBody:
         velocity, prediction = np.empty_like(q), np.empty_like(q)
         weight, acceleration = np.empty_like(q), np.empty_like(q)
         options = dict(identify or {})
-        rule = (float(options.get("min_speed", MIN_SPEED)),
-                float(options.get("reversal_margin", REVERSAL_MARGIN)))
+        defaults = core_defaults()
+        rule = (float(options.get("min_speed", defaults.min_speed)),
+                float(options.get("reversal_margin", defaults.reversal_margin)))
         columns = np.ascontiguousarray(options.get("columns", [0]), dtype=np.int32)
         scale = options.get("torque_scale")
         scale = np.ascontiguousarray(np.ones(self.n) if scale is None else scale, dtype=float)
@@ -232,7 +249,8 @@ class RigidBody:
             self._buffer, run, len(q), h, *gains, tau, q, u, velocity, prediction, kind,
             len(columns), columns, scale, options.get("rho", 1e-6), options.get("R", 0.1),
             *rule, int(options.get("start", 0)),
-            float(options.get("statistics_interval", STATISTICS_INTERVAL)), delta, std, stats,
+            float(options.get("statistics_interval", defaults.statistics_interval)), delta, std,
+            stats,
             published, weight, acceleration)
         if failures == -2:
             raise ValueError(f"no observer gains for f_plus {gains[2].tolist()}")

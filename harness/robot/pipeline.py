@@ -31,11 +31,11 @@ from .base_parameters import BaseParameters, base_parameters
 from .filtered_regression import filtered_regression, low_pass
 from .consistency import consistent_parameters, write_identified_urdf
 from .least_squares import Fit, torque_least_squares
+from .native import core_defaults
 from .smoothing import adaptive_velocities
 from .urdf import Robot
 
 
-MIN_SPEED = 0.05  # [rad/s or m/s] below it, joint equations are left out (friction_rows)
 # a joint keeping fewer of its equations than this share is an error (its friction cannot
 # be identified), fewer than FEW_ROWS a warning
 TOO_FEW_ROWS, FEW_ROWS = 0.01, 0.1
@@ -140,14 +140,15 @@ class Identification:
 
 def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: str = "sg",
                    window: float = 0.05, tau: float = 0.02, max_samples: int = 20000,
-                   skip: float = 0.5, min_speed: float = MIN_SPEED) -> Identification:
+                   skip: float = 0.5, min_speed: float | None = None) -> Identification:
     """Identify the unknown parameters ("all" or "payload") from the log.
 
     The first `skip` seconds (observer convergence, filter edges) and the last window
     are not used; at most max_samples evenly spaced samples enter the regression.
     Joint i's equation is left out near its velocity reversals and where
-    |q_i'| < min_speed (rad/s or m/s; see friction_rows).  method "observer": tau is
-    the time constant of the regression's causal filter (two first-order stages)."""
+    |q_i'| < min_speed (rad/s or m/s, None: the core's default; see friction_rows).
+    method "observer": tau is the time constant of the regression's causal filter (two
+    first-order stages)."""
     if log.q.shape[1] != robot.n:
         raise LogError(f"the log has {log.q.shape[1]} joints, the robot {robot.n}")
     if method not in ("sg", "observer"):
@@ -177,6 +178,8 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     nominal = robot.parameters()
     z = torque - Y[:, :, known] @ nominal[known]
     correlation = max(1, int(np.ceil(2 * memory / (stride * log.step))))
+    if min_speed is None:
+        min_speed = core_defaults().min_speed
     mask = friction_rows(qd, log.step, margin, min_speed, slow_margin)[used]
     check_friction_rows(mask, qd[used], robot.joint_names, min_speed)
     fit = torque_least_squares(base.regressor(Y), z, batch=correlation, mask=mask)
@@ -185,7 +188,7 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
 
 
 def friction_rows(velocity: np.ndarray, h: float, margin: float,
-                  min_speed: float = MIN_SPEED, slow_margin: float = 0.0) -> np.ndarray:
+                  min_speed: float | None = None, slow_margin: float = 0.0) -> np.ndarray:
     """(N, n) True for the joint equations whose friction is f_v q' + f_c sign(q'):
     away from the joint's reversals (away_from_reversals) and at |q'| >= min_speed,
     also over the slow_margin s on both sides.
@@ -194,7 +197,10 @@ def friction_rows(velocity: np.ndarray, h: float, margin: float,
     Stribeck effect, a simulator's smoothing), also where the joint slows down
     without reversing, which the reversal margin does not catch.  A filtered
     regression (filtered_regression) carries the friction of the filter's memory:
-    its rows need the speed over that memory, slow_margin."""
+    its rows need the speed over that memory, slow_margin.  min_speed None: the core's
+    default (core_defaults)."""
+    if min_speed is None:
+        min_speed = core_defaults().min_speed
     if not min_speed >= 0.0:
         raise ValueError(f"min_speed must be >= 0, not {min_speed!r}")
     flips = np.zeros(velocity.shape, dtype=bool)

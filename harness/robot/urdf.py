@@ -20,8 +20,8 @@ import numpy as np
 from lxml import etree
 
 from ..inputs import xml_parser
+from .native import core_defaults
 
-MAX_JOINTS = 7
 MOVING_TYPES = {"revolute": 0, "continuous": 0, "prismatic": 1}  # -> RbJointType
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
 LARGEST = 1e6  # [m, kg, kg m^2, rad, N m s/rad, N m]: a larger URDF number is refused
@@ -254,8 +254,9 @@ def read_urdf(path: str | Path, locked: tuple[str, ...] | list[str] = (),
     chain.walk(roots[0])
     if not chain.joints:
         raise UrdfError(f"{source}: no revolute, continuous or prismatic joint")
-    if len(chain.joints) > MAX_JOINTS:
-        raise UrdfError(f"{source}: {len(chain.joints)} moving joints; at most {MAX_JOINTS} are "
+    max_joints = core_defaults().max_joints
+    if len(chain.joints) > max_joints:
+        raise UrdfError(f"{source}: {len(chain.joints)} moving joints; at most {max_joints} are "
                         f"supported (lock some with --lock)")
     robot = Robot(root.get("name", source.stem), source, roots[0], chain.joints, tuple(locked),
                   np.asarray(gravity, dtype=float))

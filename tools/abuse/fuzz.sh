@@ -7,9 +7,11 @@
 #   FUZZ_SECONDS=60 tools/abuse/fuzz.sh fuzz_calls SuperTwistingObserver
 #   FUZZ_FORGED=0 ...                    leave out the forged-checksum states
 #
-# Targets: fuzz_deserialize (fmi2DeSerializeFMUstate of arbitrary bytes) and
-# fuzz_calls (random FMI call sequences); each is linked statically with the FMI 2
-# API file, the model and the same core objects as the FMUs (CMake preset `fuzz`).
+# Targets: fuzz_deserialize (fmi2DeSerializeFMUstate of arbitrary bytes),
+# fuzz_calls (random FMI 2 call sequences) and fuzz_fmi3_calls (random FMI 3 call
+# sequences, states serialized, damaged and forged); each is linked statically with
+# its FMI API file, the model and the same core objects as the FMUs (CMake preset
+# `fuzz`).
 # A crash leaves its input in build/fuzz/artifacts/ and fails the script.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -17,7 +19,7 @@ REPO=$PWD
 PY=$REPO/.venv/bin/python
 OUT=$REPO/build/fuzz
 SECONDS_EACH=${FUZZ_SECONDS:-30}
-TARGETS=(${1:-fuzz_deserialize fuzz_calls})
+TARGETS=(${1:-fuzz_deserialize fuzz_calls fuzz_fmi3_calls})
 MODELS=(${2:-SuperTwistingObserver Pendulum TwistingController RobotObserver})
 die() { echo "fuzz.sh: $*" >&2; exit 1; }
 log() { printf '\033[1m== %s\033[0m\n' "$*"; }

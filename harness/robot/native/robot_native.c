@@ -18,6 +18,15 @@ size_t rn_model_size(void) { return sizeof(RigidBodyModel); }
 
 int rn_max_joints(void) { return RB_MAX_JOINTS; }
 
+/* The core's defaults that the harness shares (tuning.h): the regression's
+ * min_speed and reversal_margin, the statistics' interval. */
+void rn_defaults(double out[3])
+{
+    out[0] = RO_MIN_SPEED;
+    out[1] = RO_REVERSAL_MARGIN;
+    out[2] = RO_STATISTICS_INTERVAL;
+}
+
 int rn_load(RigidBodyModel *model, int n, const int type[], const double axis[], const double xyz[],
             const double rpy[], const double link[], const double friction[],
             const double gravity[3], double coulomb_velocity)
