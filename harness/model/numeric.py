@@ -17,9 +17,9 @@ def compile_regressor(arguments: Sequence[sympy.Symbol],
 def as_samples(values: object, count: int, what: str) -> np.ndarray:
     """``values`` as a float array (samples, count); a 1-D array is the samples of a single
     name when ``count`` is 1."""
-    array = np.asarray(values if values is not None else np.empty((0, 0)), dtype=float)
-    if count == 0 and (array.size == 0):
-        return array.reshape(-1, 0)
+    if values is None and count == 0:  # a model without inputs
+        return np.empty((0, 0))
+    array = np.asarray(values, dtype=float)
     if array.ndim == 1 and count == 1:
         array = array[:, None]
     if array.ndim != 2 or array.shape[1] != count:
