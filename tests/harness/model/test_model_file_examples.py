@@ -167,4 +167,4 @@ def test_regressor_is_fast_enough_for_long_logs():
     start = time.perf_counter()
     Y, _ = model.regressor(big, big, big, big[:, :1])
     assert Y.shape == (1_000_000, 2, 6)
-    assert time.perf_counter() - start < 5.0  # measured about 0.1 s; shared machine
+    assert time.perf_counter() - start < 5.0  # measured 0.53 s; the machine is shared
