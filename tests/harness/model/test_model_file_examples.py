@@ -91,15 +91,17 @@ def test_the_contracts_file_splits_into_its_regressor():
 
 
 def test_without_units_or_columns():
-    model = parse_model("""
+    equation = ("a*der(q,2) + b*cos(q)*der(q)^2 + c*tanh(10*der(q))"
+                " + e*exp(-abs(q))*sqrt(1 + q^2) = 0")
+    model = parse_model(f"""
 [model]
 coordinates = ["q"]
-equations = ["a*der(q,2) + b*cos(q)*der(q)^2 + c*tanh(10*der(q)) + e*exp(-abs(q))*sqrt(1 + q^2) = 0"]
+equations = ["{equation}"]
 [parameters]
-a = { nominal = 1 }
-b = { nominal = 0 }
-c = { nominal = 0 }
-e = { nominal = 0 }
+a = {{ nominal = 1 }}
+b = {{ nominal = 0 }}
+c = {{ nominal = 0 }}
+e = {{ nominal = 0 }}
 """)
     assert model.inputs == () and model.units == {} and model.columns == {"t": "t", "q": "q"}
     assert model.parameter_units == {"a": "", "b": "", "c": "", "e": ""}
@@ -168,3 +170,42 @@ def test_regressor_is_fast_enough_for_long_logs():
     Y, _ = model.regressor(big, big, big, big[:, :1])
     assert Y.shape == (1_000_000, 2, 6)
     assert time.perf_counter() - start < 5.0  # measured 0.53 s; the machine is shared
+
+
+def test_a_two_link_arm_with_coupled_inertia():
+    """M(q) q'' + C(q, q') q' + G(q) = tau with the arm's base parameters a1..a5: the
+    inertia terms are products of parameters and functions of q, still linear in a."""
+    model = parse_model("""
+[model]
+coordinates = ["q1", "q2"]
+inputs = ["tau1", "tau2"]
+equations = [
+  "(a1 + 2*a2*cos(q2))*der(q1,2) + (a3 + a2*cos(q2))*der(q2,2) - a2*sin(q2)*(2*der(q1)*der(q2) + der(q2)^2) + a4*g*cos(q1) + a5*g*cos(q1 + q2) = tau1",
+  "(a3 + a2*cos(q2))*der(q1,2) + a3*der(q2,2) + a2*sin(q2)*der(q1)^2 + a5*g*cos(q1 + q2) = tau2",
+]
+[parameters]
+a1 = { nominal = 1.0, unit = "kg.m^2" }
+a2 = { nominal = 0.2, unit = "kg.m^2" }
+a3 = { nominal = 0.3, unit = "kg.m^2" }
+a4 = { nominal = 1.5, unit = "kg.m" }
+a5 = { nominal = 0.5, unit = "kg.m" }
+[constants]
+g = { value = 9.81, unit = "m/s^2" }
+[units]
+q1 = "rad"
+q2 = "rad"
+tau1 = "N.m"
+tau2 = "N.m"
+""")
+    q, qd, qdd, tau = (_random((SAMPLES, 2), seed) for seed in range(4))
+    a1, a2, a3, a4, a5 = theta = _theta(model, 5)
+    (q1, q2), (v1, v2), (w1, w2) = q.T, qd.T, qdd.T
+    g = 9.81
+    direct = np.stack([
+        (a1 + 2 * a2 * np.cos(q2)) * w1 + (a3 + a2 * np.cos(q2)) * w2
+        - a2 * np.sin(q2) * (2 * v1 * v2 + v2 ** 2) + a4 * g * np.cos(q1)
+        + a5 * g * np.cos(q1 + q2) - tau[:, 0],
+        (a3 + a2 * np.cos(q2)) * w1 + a3 * w2 + a2 * np.sin(q2) * v1 ** 2
+        + a5 * g * np.cos(q1 + q2) - tau[:, 1]], axis=1)
+    Y, r = model.regressor(q, qd, qdd, tau)
+    np.testing.assert_allclose(Y @ theta - r, direct, rtol=1e-12, atol=1e-9)
