@@ -21,7 +21,7 @@ FUNCTIONS: dict[str, Callable[..., sympy.Expr]] = {
     "exp": sympy.exp, "log": sympy.log, "sqrt": sympy.sqrt,
     "sign": sympy.sign, "abs": sympy.Abs,
 }
-#: Names with a fixed meaning in equations, so no coordinate, input, parameter or constant may take them.
+#: Names with a fixed meaning, which no coordinate, input, parameter or constant may take.
 RESERVED = frozenset(FUNCTIONS) | {"der", "pi", "t"}
 
 _OPERATORS = (ast.Add, ast.Sub, ast.Mult, ast.Div, ast.Pow, ast.USub, ast.UAdd)

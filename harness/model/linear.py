@@ -35,7 +35,8 @@ def split_linear(residual: sympy.Expr, parameters: list[sympy.Symbol]) -> Split:
     known = -residual.subs({theta: 0 for theta in parameters})
     rest = sympy.expand(residual - sum((t * p for t, p in zip(terms, parameters)),
                                        sympy.Integer(0)) + known)
-    if rest != 0 and sympy.simplify(rest) != 0:  # a guard; the derivative test above should make this unreachable
+    # A guard: the derivative test above should leave nothing here.
+    if rest != 0 and sympy.simplify(rest) != 0:
         raise ExpressionError(f"is not linear in the unknown parameters (remainder '{rest}')")
     return Split(tuple(terms), known)
 

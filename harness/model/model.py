@@ -3,7 +3,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
-from pathlib import Path
 from typing import Callable, Mapping
 
 import numpy as np
@@ -11,6 +10,7 @@ import sympy
 
 from .expressions import Symbols
 from .numeric import as_samples, compile_regressor, rms_columns, stack
+from .units import si_factor
 
 
 @dataclass(frozen=True)
@@ -24,7 +24,8 @@ class Parameter:
 
 @dataclass(frozen=True)
 class Constant:
-    """A known value used in the equations (``g = 9.81`` or ``{ value = 9.81, unit = "m/s^2" }``)."""
+    """A known value of the equations: ``g = 9.81`` (dimensionless) or
+    ``g = { value = 9.81, unit = "m/s^2" }``."""
 
     name: str
     value: float
@@ -70,6 +71,7 @@ class Model:
 
     @property
     def parameter_names(self) -> tuple[str, ...]:
+        """The unknowns' names, in the order of the regressor's columns."""
         return tuple(p.name for p in self.parameters)
 
     @property
@@ -85,7 +87,6 @@ class Model:
     @cached_property
     def _scales(self) -> tuple[dict[sympy.Symbol, float], np.ndarray]:
         """SI factors of the measured names and constants, and of the parameter columns."""
-        from .units import si_factor
         if not self.units:
             return {}, np.ones(len(self.parameters))
         s = self.symbols

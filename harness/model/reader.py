@@ -5,7 +5,7 @@ import keyword
 import math
 import re
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 try:
     import tomllib
@@ -18,6 +18,7 @@ from .errors import ModelFileError
 from .expressions import RESERVED, ExpressionError, Symbols, free_names, parse_equation
 from .linear import check_accelerations, split_linear
 from .model import Constant, Equation, Model, Parameter
+from .units import check_equation, quantity
 
 #: Most coordinates a model may have (the FMUs' fixed sizes).
 MAX_COORDINATES = 7
@@ -26,6 +27,8 @@ SECTIONS = {"model": True, "parameters": True, "constants": False, "units": Fals
 _MODEL_KEYS = {"coordinates", "inputs", "equations"}
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 TIME = "t"
+#: Builds the error for a problem, with the file named.
+Fail = Callable[[str], ModelFileError]
 
 
 def read_model(path: str | Path) -> Model:
@@ -92,7 +95,7 @@ def parse_model(text: str, source: str | Path | None = None) -> Model:
                  tuple(equations), symbols)
 
 
-def _names(model: Mapping[str, Any], key: str, fail, required: bool) -> list[str]:
+def _names(model: Mapping[str, Any], key: str, fail: Fail, required: bool) -> list[str]:
     if key not in model:
         if required:
             raise fail(f"[model] has no '{key}' list")
@@ -103,7 +106,7 @@ def _names(model: Mapping[str, Any], key: str, fail, required: bool) -> list[str
     return names
 
 
-def _number(value: Any, what: str, fail) -> float:
+def _number(value: Any, what: str, fail: Fail) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise fail(f"{what} must be a number, not {value!r}")
     if not math.isfinite(value):
@@ -111,8 +114,7 @@ def _number(value: Any, what: str, fail) -> float:
     return float(value)
 
 
-def _unit(unit: Any, what: str, fail) -> str:
-    from .units import quantity
+def _unit(unit: Any, what: str, fail: Fail) -> str:
     if not isinstance(unit, str):
         raise fail(f"the unit of {what} must be a string, not {unit!r}")
     try:
@@ -122,7 +124,7 @@ def _unit(unit: Any, what: str, fail) -> str:
     return unit
 
 
-def _parameter(name: str, spec: Any, fail) -> Parameter:
+def _parameter(name: str, spec: Any, fail: Fail) -> Parameter:
     if not isinstance(spec, dict):
         raise fail(f"parameter {name} must be a table such as "
                    f"{name} = {{ nominal = 1.0, unit = \"kg\" }}")
@@ -136,7 +138,7 @@ def _parameter(name: str, spec: Any, fail) -> Parameter:
     return Parameter(name, nominal, unit)
 
 
-def _constant(name: str, spec: Any, fail) -> Constant:
+def _constant(name: str, spec: Any, fail: Fail) -> Constant:
     if isinstance(spec, dict):
         unknown = set(spec) - {"value", "unit"}
         if unknown or "value" not in spec:
@@ -147,7 +149,8 @@ def _constant(name: str, spec: Any, fail) -> Constant:
     return Constant(name, _number(spec, f"constant {name}", fail))
 
 
-def _check_names(coordinates, inputs, parameters, constants, fail) -> None:
+def _check_names(coordinates: list[str], inputs: list[str], parameters: list[str],
+                 constants: list[str], fail: Fail) -> None:
     seen: dict[str, str] = {}
     for kind, names in (("coordinate", coordinates), ("input", inputs),
                         ("parameter", parameters), ("constant", constants)):
@@ -163,7 +166,9 @@ def _check_names(coordinates, inputs, parameters, constants, fail) -> None:
             seen[name] = kind
 
 
-def _units(table: Any, coordinates, inputs, parameters, constants, fail) -> dict[str, str]:
+def _units(table: Any, coordinates: list[str], inputs: list[str],
+           parameters: list[Parameter], constants: list[Constant],
+           fail: Fail) -> dict[str, str]:
     """The [units] table, complete for coordinates and inputs, or {} without one."""
     if table is None:
         return {}
@@ -182,7 +187,8 @@ def _units(table: Any, coordinates, inputs, parameters, constants, fail) -> dict
     return {name: _unit(table[name], name, fail) for name in (*coordinates, *inputs)}
 
 
-def _columns(table: Any, coordinates, inputs, fail) -> dict[str, str]:
+def _columns(table: Any, coordinates: list[str], inputs: list[str],
+             fail: Fail) -> dict[str, str]:
     """Each coordinate's, input's and the time's log column; a name's default is itself."""
     known = {TIME, *coordinates, *inputs}
     unknown = set(table) - known
@@ -197,9 +203,9 @@ def _columns(table: Any, coordinates, inputs, fail) -> dict[str, str]:
     return columns
 
 
-def _equations(model: Mapping[str, Any], coordinates, symbols: Symbols,
+def _equations(model: Mapping[str, Any], coordinates: list[str], symbols: Symbols,
                units: Mapping[str, str], parameter_units: Mapping[str, str],
-               constant_units: Mapping[str, str], fail) -> list[Equation]:
+               constant_units: Mapping[str, str], fail: Fail) -> list[Equation]:
     texts = model.get("equations")
     if texts is None:
         raise fail("[model] has no 'equations' list")
@@ -224,7 +230,6 @@ def _equations(model: Mapping[str, Any], coordinates, symbols: Symbols,
             check_accelerations(residual, accelerations)
             split = split_linear(residual, parameters)
             if unit_of is not None:
-                from .units import check_equation
                 check_equation(lhs, rhs, unit_of)
         except ExpressionError as exc:
             raise fail(f"{where} {exc}") from None
@@ -233,9 +238,9 @@ def _equations(model: Mapping[str, Any], coordinates, symbols: Symbols,
 
 
 def _symbol_units(symbols: Symbols, units: Mapping[str, str],
-                  parameter_units: Mapping[str, str], constant_units: Mapping[str, str]):
+                  parameter_units: Mapping[str, str],
+                  constant_units: Mapping[str, str]) -> dict[sympy.Symbol, Any]:
     """The pint unit of every symbol, for the dimension check."""
-    from .units import quantity
     second = quantity("s")
     out: dict[sympy.Symbol, Any] = {}
     for c, sym in symbols.position.items():

@@ -77,11 +77,32 @@ def test_two_mass_example():
     assert not Y[:, 0, [1, 3]].any() and not Y[:, 1, [0, 2]].any()
 
 
+# The model file as the contract writes it, comments included.
+CONTRACT = """
+[model]
+coordinates = ["x"]                 # generalized coordinates, measured
+inputs = ["F"]                      # known inputs (forces / torques)
+equations = ["M*der(x,2) + Fv*der(x) + Fc*sign(der(x)) + OF = F"]   # one per coordinate
+[parameters]                        # unknown: identified
+M  = { nominal = 100, unit = "kg" }
+Fv = { nominal = 0, unit = "N.s/m" }
+Fc = { nominal = 0, unit = "N" }
+OF = { nominal = 0, unit = "N" }
+[constants]                         # known values, e.g. g = 9.81
+[units]                             # optional: then every term is dimension-checked
+x = "m"
+F = "N"
+[columns]                           # log column of each name (default: the name itself)
+t = "t"
+x = "qm"
+F = "force"
+"""
+
+
 def test_the_contracts_file_splits_into_its_regressor():
-    model = parse_model(Path(__file__).with_name("test_model_file_errors.py").read_text()
-                        .split('GOOD = """')[1].split('"""')[0])
+    model = parse_model(CONTRACT)
     (equation,) = model.equations
-    x, F = model.symbols.position["x"], model.symbols.inputs["F"]
+    F = model.symbols.inputs["F"]
     v, a = model.symbols.velocity["x"], model.symbols.acceleration["x"]
     assert equation.terms == (a, v, sympy.sign(v), sympy.Integer(1))
     assert equation.known == F
