@@ -137,3 +137,26 @@ def test_an_angle_in_degrees_enters_the_functions_in_radians():
     Y_deg, r_deg = degrees.regressor(angle * deg, rate * deg, acc * deg, torque)
     np.testing.assert_allclose(Y_deg, Y_rad, rtol=1e-12)
     np.testing.assert_allclose(r_deg, r_rad, rtol=1e-12)
+
+
+def test_a_regularization_relative_to_the_column_scales_ignores_the_units():
+    """Ridge toward the nominal values, weighted by each column's RMS: the same pull in
+    m, N as in mm, kN (an absolute weight would pull differently in each)."""
+    metres = read_model(EXAMPLES / "emps" / "emps.toml")
+    kilo = parse_model(EMPS.replace('x = "m"', 'x = "mm"')
+                       .replace('M  = { nominal = 100, unit = "kg" }',
+                                'M  = { nominal = 0.1, unit = "kN.s^2/m" }')
+                       .replace('unit = "N.s/m"', 'unit = "kN.s/mm"'))
+    t = np.linspace(0, 10, 5001)
+    q, qd, qdd = 0.1 * np.sin(t), 0.1 * np.cos(t), -0.1 * np.sin(t)
+    vir = (95 * qdd + 203 * qd + 20 * np.sign(qd) - 3) / 35.15065188
+
+    def ridge(model, scale, rho=0.1):
+        Y, r = model.regressor(q * scale, qd * scale, qdd * scale, vir)
+        Y, r = Y[:, 0, :], r[:, 0]
+        weight = rho * len(r) * np.diag(model.column_scales(q * scale, qd * scale,
+                                                            qdd * scale, vir) ** 2)
+        theta = np.linalg.solve(Y.T @ Y + weight, Y.T @ r + weight @ model.nominal)
+        return _physical(model, theta)
+    np.testing.assert_allclose(ridge(kilo, 1e3), ridge(metres, 1.0), rtol=1e-9)
+    assert abs(ridge(metres, 1.0)[1] / 203 - 1) > 0.01  # rho = 0.1 does pull
