@@ -1,0 +1,154 @@
+"""The model a file declares: names, parameters, equations and their regressor."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Callable, Mapping
+
+import numpy as np
+import sympy
+
+from .expressions import Symbols
+from .numeric import as_samples, compile_regressor, rms_columns, stack
+from .units import si_factor
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """An unknown to identify: its name, the nominal (first guess) value and its unit."""
+
+    name: str
+    nominal: float
+    unit: str = ""
+
+
+@dataclass(frozen=True)
+class Constant:
+    """A known value of the equations: ``g = 9.81`` (dimensionless) or
+    ``g = { value = 9.81, unit = "m/s^2" }``."""
+
+    name: str
+    value: float
+    unit: str = ""
+
+
+@dataclass(frozen=True)
+class Equation:
+    """One equation of motion, ``lhs = rhs``, and its regressor form
+    ``sum_k theta_k * terms[k] = known`` (``terms`` has one entry per model parameter,
+    0 where the parameter does not occur; constants stay symbolic)."""
+
+    text: str
+    lhs: sympy.Expr
+    rhs: sympy.Expr
+    terms: tuple[sympy.Expr, ...]
+    known: sympy.Expr
+
+    @property
+    def residual(self) -> sympy.Expr:
+        """``lhs - rhs``, zero on the model's trajectories."""
+        return self.lhs - self.rhs
+
+
+@dataclass(frozen=True)
+class Model:
+    """A model file, read and checked (see :func:`harness.model.read_model`).
+
+    With ``units`` given, the numeric regressor works in SI base units: each coordinate,
+    input and constant is scaled by its unit's SI factor, each parameter column by its
+    unit's, so ``Y @ theta = r`` holds with theta in the units of the file.
+    """
+
+    source: str
+    coordinates: tuple[str, ...]
+    inputs: tuple[str, ...]
+    parameters: tuple[Parameter, ...]
+    constants: tuple[Constant, ...]
+    units: Mapping[str, str]
+    columns: Mapping[str, str]
+    equations: tuple[Equation, ...]
+    symbols: Symbols = field(repr=False)
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        """The unknowns' names, in the order of the regressor's columns."""
+        return tuple(p.name for p in self.parameters)
+
+    @property
+    def parameter_units(self) -> dict[str, str]:
+        """Each parameter's unit as the file writes it ("" when it gives none)."""
+        return {p.name: p.unit for p in self.parameters}
+
+    @property
+    def nominal(self) -> np.ndarray:
+        """The parameters' nominal values, in the order of the regressor's columns."""
+        return np.array([p.nominal for p in self.parameters], dtype=float)
+
+    @cached_property
+    def _scales(self) -> tuple[dict[sympy.Symbol, float], np.ndarray]:
+        """SI factors of the measured names and constants, and of the parameter columns."""
+        if not self.units:
+            return {}, np.ones(len(self.parameters))
+        s = self.symbols
+        factors: dict[sympy.Symbol, float] = {}
+        for c in self.coordinates:
+            for table in (s.position, s.velocity, s.acceleration):
+                factors[table[c]] = si_factor(self.units[c])  # per s, per s^2: factor 1
+        for u in self.inputs:
+            factors[s.inputs[u]] = si_factor(self.units[u])
+        for k in self.constants:
+            factors[s.constants[k.name]] = si_factor(k.unit)
+        return factors, np.array([si_factor(p.unit) for p in self.parameters])
+
+    @cached_property
+    def _evaluate(self) -> Callable[..., list]:
+        factors, _ = self._scales
+        s = self.symbols
+        values = {s.constants[k.name]: sympy.Float(k.value) * factors.get(s.constants[k.name], 1.0)
+                  for k in self.constants}
+        scaled = {sym: sym * f for sym, f in factors.items() if sym not in values and f != 1.0}
+        entries = []
+        for eq in self.equations:
+            for term in (*eq.terms, eq.known):
+                entries.append(term.subs(values).xreplace(scaled))
+        return compile_regressor(s.measured(), entries)
+
+    def regressor(self, q: object, qd: object, qdd: object,
+                  inputs: object = None) -> tuple[np.ndarray, np.ndarray]:
+        """The equations as ``Y @ theta = r`` at every sample.
+
+        q, qd, qdd: positions, velocities, accelerations, shape (samples, n_coordinates)
+        (or (samples,) for one coordinate); inputs: shape (samples, n_inputs), in the order
+        of ``self.inputs``. Returns Y (samples, n_equations, n_parameters) and
+        r (samples, n_equations).
+        """
+        n, m = len(self.coordinates), len(self.inputs)
+        q, qd, qdd = (as_samples(a, n, name) for a, name in ((q, "q"), (qd, "qd"), (qdd, "qdd")))
+        u = as_samples(inputs, m, "inputs")
+        samples = q.shape[0]
+        if not (qd.shape[0] == qdd.shape[0] == samples and (m == 0 or u.shape[0] == samples)):
+            raise ValueError("q, qd, qdd and inputs must have the same number of samples")
+        columns = [*q.T, *qd.T, *qdd.T, *u.T]
+        flat = stack(self._evaluate(*columns), samples)
+        p = len(self.parameters)
+        flat = flat.reshape(samples, len(self.equations), p + 1)
+        Y = flat[:, :, :p] * self._scales[1]
+        return np.ascontiguousarray(Y), np.ascontiguousarray(flat[:, :, p])
+
+    def column_scales(self, q: object, qd: object, qdd: object,
+                      inputs: object = None) -> np.ndarray:
+        """Each parameter's regressor column scale over a log (RMS, see
+        :func:`harness.model.numeric.rms_columns`), in the order of ``self.parameters``:
+        the yardstick that makes a regularization relative to each column."""
+        Y, _ = self.regressor(q, qd, qdd, inputs)
+        return rms_columns(Y)
+
+    def residuals(self, theta: object, q: object, qd: object, qdd: object,
+                  inputs: object = None) -> np.ndarray:
+        """``Y theta - r`` at every sample, shape (samples, n_equations)."""
+        Y, r = self.regressor(q, qd, qdd, inputs)
+        return Y @ np.asarray(theta, dtype=float) - r
+
+    def column(self, name: str) -> str:
+        """The log column that holds ``name`` (a coordinate, an input or t)."""
+        return self.columns[name]

@@ -1,0 +1,44 @@
+"""Numbers from the symbolic regressor: Y and r over many samples at once (numpy)."""
+from __future__ import annotations
+
+from typing import Callable, Sequence
+
+import numpy as np
+import sympy
+
+
+def compile_regressor(arguments: Sequence[sympy.Symbol],
+                      entries: Sequence[sympy.Expr]) -> Callable[..., list]:
+    """A numpy function of ``arguments`` (arrays of one shape) returning ``entries``."""
+    # cse shares subexpressions (sign(der(x)), sin(q), ...) between the entries.
+    return sympy.lambdify(list(arguments), list(entries), modules="numpy", cse=True)
+
+
+def as_samples(values: object, count: int, what: str) -> np.ndarray:
+    """``values`` as a float array (samples, count); a 1-D array is the samples of a single
+    name when ``count`` is 1."""
+    if values is None and count == 0:  # a model without inputs
+        return np.empty((0, 0))
+    array = np.asarray(values, dtype=float)
+    if array.ndim == 1 and count == 1:
+        array = array[:, None]
+    if array.ndim != 2 or array.shape[1] != count:
+        raise ValueError(f"{what} must have shape (samples, {count}), not {array.shape}")
+    return array
+
+
+def stack(values: Sequence[object], samples: int) -> np.ndarray:
+    """The entries lambdify returned (arrays, or plain numbers for constant entries) as an
+    array (samples, len(values))."""
+    out = np.empty((samples, len(values)))
+    for k, value in enumerate(values):
+        out[:, k] = np.broadcast_to(np.asarray(value, dtype=float), (samples,))
+    return out
+
+
+def rms_columns(Y: np.ndarray) -> np.ndarray:
+    """Scale of each parameter's regressor column: sqrt(mean over samples of the squared
+    column, summed over the equations), i.e. sqrt(diag(Y'Y) / samples)."""
+    if Y.shape[0] == 0:
+        raise ValueError("no samples to take the column scales from")
+    return np.sqrt(np.einsum("sik,sik->k", Y, Y) / Y.shape[0])

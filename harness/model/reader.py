@@ -1,0 +1,256 @@
+"""Read a model file (TOML) into a checked :class:`Model`."""
+from __future__ import annotations
+
+import keyword
+import math
+import re
+from pathlib import Path
+from typing import Any, Callable, Mapping
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+import sympy
+
+from .errors import ModelFileError
+from .expressions import RESERVED, ExpressionError, Symbols, free_names, parse_equation
+from .linear import check_accelerations, split_linear
+from .model import Constant, Equation, Model, Parameter
+from .units import check_equation, quantity
+
+#: Most coordinates a model may have (the FMUs' fixed sizes).
+MAX_COORDINATES = 7
+SECTIONS = {"model": True, "parameters": True, "constants": False, "units": False,
+            "columns": False}
+_MODEL_KEYS = {"coordinates", "inputs", "equations"}
+_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
+TIME = "t"
+#: Builds the error for a problem, with the file named.
+Fail = Callable[[str], ModelFileError]
+
+
+def read_model(path: str | Path) -> Model:
+    """Read and check the model file at ``path``; raises :class:`ModelFileError`."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ModelFileError(path, f"cannot be read ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise ModelFileError(path, "is not UTF-8 text") from None
+    return parse_model(text, source=path)
+
+
+def parse_model(text: str, source: str | Path | None = None) -> Model:
+    """Check and build the model of TOML ``text``; ``source`` names it in error messages."""
+    def fail(problem: str) -> ModelFileError:
+        return ModelFileError(source, problem)
+
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise fail(f"is not valid TOML: {exc}") from None
+    for section in data:
+        if section not in SECTIONS:
+            raise fail(f"has an unknown section [{section}] (known: "
+                       + ", ".join(f"[{s}]" for s in SECTIONS) + ")")
+    for section, required in SECTIONS.items():
+        if section not in data:
+            if required:
+                raise fail(f"has no [{section}] section")
+            continue
+        if not isinstance(data[section], dict):
+            raise fail(f"[{section}] must be a table")
+    model = data["model"]
+    unknown = set(model) - _MODEL_KEYS
+    if unknown:
+        raise fail(f"[model] has unknown keys {sorted(unknown)} (known: {sorted(_MODEL_KEYS)})")
+    coordinates = _names(model, "coordinates", fail, required=True)
+    inputs = _names(model, "inputs", fail, required=False)
+    if not 1 <= len(coordinates) <= MAX_COORDINATES:
+        raise fail(f"declares {len(coordinates)} coordinates; a model has 1 to "
+                   f"{MAX_COORDINATES}")
+    parameters = [_parameter(name, spec, fail) for name, spec in data["parameters"].items()]
+    if not parameters:
+        raise fail("[parameters] is empty: declare at least one unknown to identify")
+    constants = [_constant(name, spec, fail) for name, spec in data.get("constants", {}).items()]
+    _check_names(coordinates, inputs, [p.name for p in parameters],
+                 [k.name for k in constants], fail)
+
+    symbols = Symbols.of(coordinates, inputs, [p.name for p in parameters],
+                         [k.name for k in constants])
+    units = _units(data.get("units"), coordinates, inputs, parameters, constants, fail)
+    columns = _columns(data.get("columns", {}), coordinates, inputs, fail)
+    equations = _equations(model, coordinates, symbols, units,
+                           {p.name: p.unit for p in parameters},
+                           {k.name: k.unit for k in constants}, fail)
+    used = set().union(*(free_names(e.residual, symbols.parameters) for e in equations))
+    unused = [p.name for p in parameters if p.name not in used]
+    if unused:
+        raise fail(f"parameter(s) {', '.join(unused)} appear in no equation")
+    return Model(str(source) if source is not None else "<model>", tuple(coordinates),
+                 tuple(inputs), tuple(parameters), tuple(constants), units, columns,
+                 tuple(equations), symbols)
+
+
+def _names(model: Mapping[str, Any], key: str, fail: Fail, required: bool) -> list[str]:
+    if key not in model:
+        if required:
+            raise fail(f"[model] has no '{key}' list")
+        return []
+    names = model[key]
+    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+        raise fail(f"[model] {key} must be a list of names")
+    return names
+
+
+def _number(value: Any, what: str, fail: Fail) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise fail(f"{what} must be a number, not {value!r}")
+    if not math.isfinite(value):
+        raise fail(f"{what} must be finite, not {value}")
+    return float(value)
+
+
+def _unit(unit: Any, what: str, fail: Fail) -> str:
+    if not isinstance(unit, str):
+        raise fail(f"the unit of {what} must be a string, not {unit!r}")
+    try:
+        quantity(unit)
+    except ValueError as exc:
+        raise fail(f"the unit of {what}: {exc}") from None
+    return unit
+
+
+def _parameter(name: str, spec: Any, fail: Fail) -> Parameter:
+    if not isinstance(spec, dict):
+        raise fail(f"parameter {name} must be a table such as "
+                   f"{name} = {{ nominal = 1.0, unit = \"kg\" }}")
+    unknown = set(spec) - {"nominal", "unit"}
+    if unknown:
+        raise fail(f"parameter {name} has unknown keys {sorted(unknown)} (known: nominal, unit)")
+    if "nominal" not in spec:
+        raise fail(f"parameter {name} has no nominal value")
+    nominal = _number(spec["nominal"], f"the nominal value of parameter {name}", fail)
+    unit = _unit(spec.get("unit", ""), f"parameter {name}", fail)
+    return Parameter(name, nominal, unit)
+
+
+def _constant(name: str, spec: Any, fail: Fail) -> Constant:
+    if isinstance(spec, dict):
+        unknown = set(spec) - {"value", "unit"}
+        if unknown or "value" not in spec:
+            raise fail(f"constant {name} must be a number or a table "
+                       "{ value = ..., unit = \"...\" }")
+        return Constant(name, _number(spec["value"], f"constant {name}", fail),
+                        _unit(spec.get("unit", ""), f"constant {name}", fail))
+    return Constant(name, _number(spec, f"constant {name}", fail))
+
+
+def _check_names(coordinates: list[str], inputs: list[str], parameters: list[str],
+                 constants: list[str], fail: Fail) -> None:
+    seen: dict[str, str] = {}
+    for kind, names in (("coordinate", coordinates), ("input", inputs),
+                        ("parameter", parameters), ("constant", constants)):
+        for name in names:
+            if not _NAME.match(name) or keyword.iskeyword(name):
+                raise fail(f"{kind} name '{name}' is not a name (a letter, then letters, "
+                           "digits or _)")
+            if name in RESERVED:
+                raise fail(f"{kind} name '{name}' is reserved (" + ", ".join(sorted(RESERVED))
+                           + ")")
+            if name in seen:
+                raise fail(f"the name '{name}' is used twice: as {seen[name]} and as {kind}")
+            seen[name] = kind
+
+
+def _units(table: Any, coordinates: list[str], inputs: list[str],
+           parameters: list[Parameter], constants: list[Constant],
+           fail: Fail) -> dict[str, str]:
+    """The [units] table, complete for coordinates and inputs, or {} without one."""
+    if table is None:
+        return {}
+    unknown = set(table) - set(coordinates) - set(inputs)
+    if unknown:
+        raise fail(f"[units] names {sorted(unknown)}, which are not coordinates or inputs "
+                   "(parameters and constants carry their unit themselves)")
+    missing = [n for n in (*coordinates, *inputs) if n not in table]
+    if missing:
+        raise fail(f"[units] gives no unit for {', '.join(missing)}: with [units], every "
+                   "coordinate and input needs one")
+    without = [p.name for p in parameters if not p.unit]
+    if without:
+        raise fail(f"parameter(s) {', '.join(without)} have no unit, which the dimension "
+                   "check of [units] needs (write unit = \"1\" for a dimensionless one)")
+    return {name: _unit(table[name], name, fail) for name in (*coordinates, *inputs)}
+
+
+def _columns(table: Any, coordinates: list[str], inputs: list[str],
+             fail: Fail) -> dict[str, str]:
+    """Each coordinate's, input's and the time's log column; a name's default is itself."""
+    known = {TIME, *coordinates, *inputs}
+    unknown = set(table) - known
+    if unknown:
+        raise fail(f"[columns] maps {sorted(unknown)}, which are not t, a coordinate or an "
+                   "input")
+    columns = {name: name for name in (TIME, *coordinates, *inputs)}
+    for name, column in table.items():
+        if not isinstance(column, str) or not column:
+            raise fail(f"[columns] {name} must be a column name, not {column!r}")
+        columns[name] = column
+    return columns
+
+
+def _equations(model: Mapping[str, Any], coordinates: list[str], symbols: Symbols,
+               units: Mapping[str, str], parameter_units: Mapping[str, str],
+               constant_units: Mapping[str, str], fail: Fail) -> list[Equation]:
+    texts = model.get("equations")
+    if texts is None:
+        raise fail("[model] has no 'equations' list")
+    if not isinstance(texts, list):
+        raise fail("[model] equations must be a list of strings, one per coordinate")
+    if len(texts) != len(coordinates):
+        raise fail(f"[model] has {len(texts)} equation(s) for {len(coordinates)} "
+                   "coordinate(s): write one equation of motion per coordinate, in order")
+    unit_of = _symbol_units(symbols, units, parameter_units, constant_units) if units else None
+    parameters = list(symbols.parameters.values())
+    accelerations = list(symbols.acceleration.values())
+    equations = []
+    for i, (text, coordinate) in enumerate(zip(texts, coordinates), start=1):
+        where = f"equation {i} ('{text}')"
+        try:
+            lhs, rhs = parse_equation(text, symbols)
+            residual = lhs - rhs
+            if symbols.acceleration[coordinate] not in residual.free_symbols:
+                raise ExpressionError(
+                    f"has no der({coordinate},2): equation {i} is the equation of motion of "
+                    f"coordinate {coordinate} and must contain its second derivative")
+            check_accelerations(residual, accelerations)
+            split = split_linear(residual, parameters)
+            if unit_of is not None:
+                check_equation(lhs, rhs, unit_of)
+        except ExpressionError as exc:
+            raise fail(f"{where} {exc}") from None
+        equations.append(Equation(text, lhs, rhs, split.terms, split.known))
+    return equations
+
+
+def _symbol_units(symbols: Symbols, units: Mapping[str, str],
+                  parameter_units: Mapping[str, str],
+                  constant_units: Mapping[str, str]) -> dict[sympy.Symbol, Any]:
+    """The pint unit of every symbol, for the dimension check."""
+    second = quantity("s")
+    out: dict[sympy.Symbol, Any] = {}
+    for c, sym in symbols.position.items():
+        out[sym] = quantity(units[c])
+        out[symbols.velocity[c]] = out[sym] / second
+        out[symbols.acceleration[c]] = out[sym] / second ** 2
+    for name, sym in symbols.inputs.items():
+        out[sym] = quantity(units[name])
+    for name, sym in symbols.parameters.items():
+        out[sym] = quantity(parameter_units[name])
+    for name, sym in symbols.constants.items():
+        out[sym] = quantity(constant_units[name])  # a plain number is dimensionless
+    return out

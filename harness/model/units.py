@@ -1,0 +1,101 @@
+"""Units with pint: parse the file's unit strings, check each equation's dimensions and
+give the factor that brings each name to SI base units."""
+from __future__ import annotations
+
+import re
+from functools import lru_cache
+
+import pint
+import sympy
+
+from .expressions import ExpressionError
+
+# '.' as a product between unit names ("N.s/m", "kg.m^2"), never inside a number ("1.5").
+_DOT_PRODUCT = re.compile(r"(?<=[A-Za-z0-9_)\]])\.(?=[A-Za-z_(])")
+
+
+@lru_cache(maxsize=1)
+def registry() -> pint.UnitRegistry:
+    """One registry for the process (building one takes a while)."""
+    return pint.UnitRegistry()
+
+
+def quantity(unit: str) -> pint.Quantity:
+    """One of ``unit``: "kg", "N.s/m", "kN", "deg", "" (dimensionless). Raises ValueError."""
+    text = _DOT_PRODUCT.sub("*", unit.strip())
+    if not text:
+        return registry().Quantity(1.0)
+    try:
+        value = registry().Quantity(1.0, text)
+    except Exception as exc:  # pint raises several unrelated types for a bad string
+        raise ValueError(f"'{unit}' is not a unit pint knows ({type(exc).__name__}: {exc})") \
+            from None
+    return value
+
+
+def si_factor(unit: str) -> float:
+    """What one ``unit`` is in SI base units (1000 for "kN", pi/180 for "deg")."""
+    return float(quantity(unit).to_base_units().magnitude)
+
+
+def _dimension(expr: sympy.Expr, units: dict[sympy.Symbol, pint.Quantity]) -> pint.Quantity:
+    """The unit of ``expr`` as a pint quantity of magnitude 1 (its dimension is what counts)."""
+    one = registry().Quantity(1.0)
+    if expr.is_Symbol:
+        return units[expr]
+    if expr.is_Number or expr is sympy.pi:
+        return one
+    if expr.is_Add:
+        _same_dimension(list(expr.args), units, "a sum")
+        return _dimension(expr.args[0], units)
+    if expr.is_Mul:
+        result = one
+        for arg in expr.args:
+            result = result * _dimension(arg, units)
+        return result
+    if expr.is_Pow:
+        base, power = expr.args
+        if not _dimension(power, units).dimensionless:
+            raise ExpressionError(f"has an exponent with a dimension: '{power}'")
+        base_unit = _dimension(base, units)
+        if base_unit.dimensionless:
+            return one
+        if not power.is_Number:
+            raise ExpressionError(f"raises '{base}' ({base_unit.dimensionality}) to the "
+                                  f"non-numeric power '{power}'")
+        return base_unit ** float(power)
+    if isinstance(expr, (sympy.Abs,)):
+        return _dimension(expr.args[0], units)
+    if isinstance(expr, sympy.sign):
+        _dimension(expr.args[0], units)  # any dimension: only its sign counts
+        return one
+    if isinstance(expr, sympy.Function):  # sin, cos, tanh, exp, log, ...
+        inner = _dimension(expr.args[0], units)
+        if not inner.dimensionless:
+            raise ExpressionError(f"takes {expr.func.__name__} of '{expr.args[0]}', which has "
+                                  f"the dimension {inner.dimensionality} (it must be "
+                                  "dimensionless, e.g. an angle in rad)")
+        return one
+    raise ExpressionError(f"has a term '{expr}' whose unit cannot be worked out")
+
+
+def _same_dimension(terms: list[sympy.Expr], units, where: str) -> None:
+    first = _dimension(terms[0], units)
+    for term in terms[1:]:
+        other = _dimension(term, units)
+        if other.dimensionality != first.dimensionality:
+            raise ExpressionError(
+                f"mixes dimensions in {where}: '{terms[0]}' is {first.dimensionality} "
+                f"but '{term}' is {other.dimensionality}")
+
+
+def check_equation(lhs: sympy.Expr, rhs: sympy.Expr,
+                   units: dict[sympy.Symbol, pint.Quantity]) -> None:
+    """Every additive term of both sides has one dimension; raises ExpressionError naming two
+    terms that differ."""
+    terms = [*sympy.Add.make_args(sympy.expand(lhs)), *sympy.Add.make_args(sympy.expand(rhs))]
+    terms = [t for t in terms if t != 0]
+    if len(terms) > 1:
+        _same_dimension(terms, units, "its terms")
+    elif terms:
+        _dimension(terms[0], units)
