@@ -13,7 +13,7 @@ import scipy.signal
 from harness.model import Model, read_model
 
 REPO = Path(__file__).resolve().parents[3]
-DATA = REPO.parent / "shared" / "data" / "emps"
+DATA = REPO / "examples" / "emps" / "data"
 # Published IDIM-LS values and relative standard deviations (DATA README).
 PUBLISHED = {"M": (95.1089, 0.0016), "Fv": (203.5034, 0.0067), "Fc": (20.3935, 0.0129),
              "OF": (-3.1648, 0.061)}
@@ -24,8 +24,7 @@ def _log(model: Model, name: str):
     central differences for velocity and acceleration, and the inputs, by column name."""
     path = DATA / name
     if not path.exists():
-        pytest.fail(f"{path} is missing (the EMPS data lives in shared/data/emps beside the "
-                    "repository)")
+        pytest.fail(f"{path} is missing (the EMPS data ships in examples/emps/data)")
     data = scipy.io.loadmat(path)
     t = data[model.column("t")].ravel()
     step = float(np.median(np.diff(t)))
