@@ -3,7 +3,8 @@
 # in CMakePresets.json) and the pinned Python environment.
 #
 #   ./build.sh            build the FMUs, then run the closed-loop demonstration
-#   ./build.sh test       build, install the importers (FMI4j, fmi-sim), run the C and Python tests
+#   ./build.sh test       build, install the importers (FMI4j, fmi-sim), run the C tests, the
+#                         linter and type checker (ruff, mypy) and the Python tests
 #   ./build.sh fmus       build the FMUs only
 #   ./build.sh wheel      build the FMUs, then the Python wheel (build/wheel/)
 #   ./build.sh docs       the Python API documentation (build/api/)
@@ -75,6 +76,9 @@ case "$COMMAND" in
         bash tools/importers/install.sh
         log "C tests (ctest)"
         ctest --preset default
+        log "linter and type checker (ruff, mypy)"
+        "$PY" -m ruff check .
+        "$PY" -m mypy
         log "Python tests"
         "$PY" -m pytest -q tests ;;
     demo) log "closed-loop demonstration"; "$PY" -m harness demo --out "$BUILD/demo" ;;

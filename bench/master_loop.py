@@ -22,11 +22,10 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from harness.master import initialize, run  # noqa: E402
-from harness.scenarios import (COMMUNICATION_STEP, PROBES, SCENARIOS, build,  # noqa: E402
-                               improved_overrides)
-
 import numpy as np  # noqa: E402
+
+from harness.master import initialize, run  # noqa: E402
+from harness.scenarios import COMMUNICATION_STEP, PROBES, SCENARIOS, build, improved_overrides  # noqa: E402
 
 
 def time_loop(use_native: bool, steps: int, coupled: bool = True) -> float:

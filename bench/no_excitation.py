@@ -44,9 +44,9 @@ sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(REPO / "bench"))
 
 import numpy as np  # noqa: E402
+from realdata import methods, plants, sensors  # noqa: E402
 
 from harness.scenarios import A_COULOMB, A_GRAVITY, SCENARIOS  # noqa: E402
-from realdata import methods, plants, sensors  # noqa: E402
 
 RATE = 10000  # Hz: the paper's h = 1e-4 of 6.3
 EXCITED, QUIET = 50.0, 60.0  # s

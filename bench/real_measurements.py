@@ -38,9 +38,9 @@ sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(REPO / "bench"))
 
 import numpy as np  # noqa: E402
+from realdata import held_out, methods, plants, report, scoring, sensors  # noqa: E402
 
 from harness.scenarios import SCENARIOS  # noqa: E402
-from realdata import held_out, methods, plants, report, scoring, sensors  # noqa: E402
 
 SCENARIO_NAMES = ("6.1-sine", "6.2", "6.3")
 RATES = (1000, 10000)
@@ -236,7 +236,7 @@ def grid_conditions() -> list[str]:
         "paper's 6.2; `J +-10 %`: every coefficient divided by the wrong inertia "
         "(b' = b/1.1, c' = c/1.1 and likewise 0.9); `c2, c3 x1.5`: friction 50 % high. "
         "B: the scenario's nominal model.",
-        f"* Grid: base case A / accurate / 1 kHz / noise-free / exact b, plus: "
+        "* Grid: base case A / accurate / 1 kHz / noise-free / exact b, plus: "
         + "; ".join(GRID_NOTES) + ".",
     ]
 

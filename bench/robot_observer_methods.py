@@ -82,7 +82,7 @@ def model_observer(method: str, robot, log, qd: np.ndarray, unknown: str, skip: 
                    shared: dict) -> tuple[np.ndarray, np.ndarray]:
     """(identified standard parameters, velocity at each sample) of one method; `shared`
     carries the identified model and the tuned gains from one method to the next."""
-    n, h = robot.n, log.step
+    h = log.step
     base = base_parameters(robot.rigid_body(), robot.arrays()["types"], robot.joint_names,
                            unknown)
     scale = np.sqrt(np.mean(log.u ** 2, axis=0))

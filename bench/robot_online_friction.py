@@ -30,8 +30,8 @@ from robot_trajectories import quantize, simulate  # noqa: E402
 from robots import pinocchio_truth, prediction_error, truth_of  # noqa: E402
 
 from harness.robot.base_parameters import base_parameters  # noqa: E402
-from harness.robot.filtered_regression import low_pass  # noqa: E402
 from harness.robot.examples import example_urdf  # noqa: E402
+from harness.robot.filtered_regression import low_pass  # noqa: E402
 from harness.robot.pipeline import JointLog, identify_robot  # noqa: E402
 from harness.robot.urdf import read_urdf  # noqa: E402
 

@@ -105,7 +105,7 @@ def judge(rows: Sequence[Row]) -> list[dict]:
             chosen = [r for r in mine if r["encoder"] == encoder]
             if chosen:
                 limit = LIMITS["friction"][encoder]
-                row, value, met = worst(chosen, friction, lambda r: limit)
+                row, value, met = worst(chosen, friction, lambda r: limit)  # noqa: B023 (called in this iteration)
                 kind = "viscous" if row["viscous"] >= row["coulomb"] else "Coulomb"
                 out.append({"target": f"friction per joint within {_pct(limit, 0)} ({encoder})",
                             "method": method, "figure": f"{_pct(value, 2)} ({kind})",
@@ -179,7 +179,7 @@ def rate_table(rows: Sequence[Row]) -> list[str]:
 
         def cell(values: dict, key: str) -> str:
             text = shown[key](_nan(values[key]))
-            return f"**{text}**" if text == best[key] else text
+            return f"**{text}**" if text == best[key] else text  # noqa: B023 (called in this iteration)
 
         for r in group:
             lines.append("| " + " | ".join([

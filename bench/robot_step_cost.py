@@ -60,6 +60,7 @@ from harness.robot.fmu import read_ssv  # noqa: E402
 from harness.robot.native import core_defaults  # noqa: E402
 from harness.robot.urdf import read_urdf  # noqa: E402
 
+
 def model_file(name: str, path: Path) -> int:
     urdf, locked = example_urdf(name)
     robot = read_urdf(urdf, locked=locked)

@@ -5,7 +5,7 @@ compensation from the nominal model; the controller acts in continuous time, so
 the torques logged at the samples are exactly those the integrator applied."""
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 from scipy.integrate import solve_ivp

@@ -54,13 +54,13 @@ def main() -> int:
     members = [2.0 * 1.8 ** k for k in range(40) if 2.0 * 1.8 ** k * h <= 0.5]
     for i in range(robot.n):
         def rms(v):
-            return float(np.sqrt(np.mean((v[scored] - qd[scored, i]) ** 2)))
+            return float(np.sqrt(np.mean((v[scored] - qd[scored, i]) ** 2)))  # noqa: B023 (called in this iteration)
         published, counts = np.unique(bank.bandwidth[scored, i], return_counts=True)
         share = ", ".join(f"{w:.0f}: {100 * c / counts.sum():.0f} %"
                           for w, c in zip(published, counts))
         at_members = {w: rms(kalman(y[:, i], h, (w * h) ** 6)[1]) for w in members}
         best = min(at_members, key=at_members.get)
-        log_lam, oracle = tune_log10(lambda lam: rms(kalman(y[:, i], h, lam)[1]), -18, 0,
+        log_lam, oracle = tune_log10(lambda lam: rms(kalman(y[:, i], h, lam)[1]), -18, 0,  # noqa: B023 (called in this iteration)
                                      coarse=1.0)
         print(f"joint {i + 1}: bank {rms(bank.velocity[:, i]):.3g} rad/s (published rad/s: "
               f"{share}); Kalman at the members' bandwidths: best {best:.0f} rad/s "

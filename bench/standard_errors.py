@@ -37,9 +37,10 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(REPO / "bench"))
 
+from realdata import plants  # noqa: E402
+
 from harness.identify import Recording, identify  # noqa: E402
 from harness.scenarios import J  # noqa: E402
-from realdata import plants  # noqa: E402
 
 PARAMETERS = ("gravity", "viscous", "Coulomb", "b")
 TRUTH = np.array([*plants.C_TRUE, plants.B_TRUE])

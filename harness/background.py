@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
-from typing import Any, TypeVar
+from typing import Any, TypeVar, cast
 
 T = TypeVar("T")
 _END = object()
@@ -22,7 +22,7 @@ def read_ahead(items: Iterator[T]) -> Iterator[T]:
         pending = pool.submit(next, items, _END)
         while (item := pending.result()) is not _END:
             pending = pool.submit(next, items, _END)
-            yield item
+            yield cast(T, item)
 
 
 class WriteBehind:
@@ -44,7 +44,7 @@ class WriteBehind:
             pending, self._pending = self._pending, None
             pending.result()
 
-    def __enter__(self) -> "WriteBehind":
+    def __enter__(self) -> WriteBehind:
         return self
 
     def __exit__(self, *exc) -> None:

@@ -28,7 +28,7 @@ from pathlib import Path
 from .fmus import FMUError
 from .inputs import InputError
 from .messages import Console
-from .outputs import Outputs, OutputError, Terminated
+from .outputs import OutputError, Outputs, Terminated
 from .paths import default_fmu_dir
 from .values import INT32_MAX, BadValue, argparse_type, integer, real
 
@@ -94,7 +94,8 @@ def summary_table(summary: dict[str, dict[str, float]]) -> str:
     for name, m in summary.items():
         keys = headline[SCENARIOS[name].kind]
         ident = ", ".join(f"{k} = {_format(m[k])}" for k in keys)
-        lines.append(f"{name:<11} {m['convergence_time']:>9.3f} {m['max_e2_after_1s']:>15.2e}  {ident}")
+        lines.append(f"{name:<11} {m['convergence_time']:>9.3f} "
+                     f"{m['max_e2_after_1s']:>15.2e}  {ident}")
     return "\n".join(lines)
 
 
@@ -315,7 +316,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the file's names of the time, position and input columns (default: "
                         "t or time, y, u; any case), e.g. t=time,y=theta,u=tau; with --robot "
                         "the roles are t, q1..qn, u1..un, e.g. q1=shoulder_pos")
-    p.add_argument("--time-unit", default=LOG_OPTIONS["time_unit"][1], choices=["s", "ms", "us", "ns", "min"],
+    p.add_argument("--time-unit", default=LOG_OPTIONS["time_unit"][1],
+                   choices=["s", "ms", "us", "ns", "min"],
                    help="unit of the time column (default: seconds, with a warning when whole-"
                         "number stamps 1 or more apart look like milliseconds); epoch time "
                         "stamps are fine")

@@ -11,9 +11,10 @@ import logging
 import shutil
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
-from fmpy import extract, read_model_description
+from fmpy import calloc, extract, free, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (
     FMU2Slave,
@@ -22,7 +23,6 @@ from fmpy.fmi2 import (
     fmi2CallbackFunctions,
     fmi2CallbackLoggerTYPE,
 )
-from fmpy import calloc, free
 
 from .tempdirs import owned_temp_dir
 from .values import BadValue, fmi_value
@@ -36,6 +36,13 @@ STATUS_LEVELS = (logging.DEBUG, logging.WARNING, logging.WARNING, logging.ERROR,
 LOGGER = logging.getLogger("harness.fmu")
 MAX_REPEATS = 5  # the same line is passed on this many times per instance, then counted
 
+
+
+def _address(pointer: ctypes.c_void_p) -> int:
+    """The address a pointer holds; a NULL one is a broken instance, never 0 handed on."""
+    if pointer.value is None:
+        raise RuntimeError("a NULL FMI function or component pointer")
+    return pointer.value
 
 class FMUError(RuntimeError):
     """An FMI call failed; the message includes what the FMU logged."""
@@ -184,7 +191,7 @@ class FMUInstance:
             typed = check_value(var, value, f"{self.name}: ")
             setter = {"Real": self.slave.setReal, "Integer": self.slave.setInteger,
                       "Boolean": self.slave.setBoolean}[var.type]
-            self._call(lambda: setter([var.value_reference], [typed]),
+            self._call(partial(setter, [var.value_reference], [typed]),
                        f"setting {name} = {value!r}")
 
     def get(self, names: Iterable[str]) -> list[Value]:
@@ -194,7 +201,7 @@ class FMUInstance:
             var = self.variable(name)
             getter = {"Real": self.slave.getReal, "Integer": self.slave.getInteger,
                       "Boolean": self.slave.getBoolean}[var.type]
-            out.append(self._call(lambda: getter([var.value_reference])[0], f"getting {name}"))
+            out.append(self._call(partial(getter, [var.value_reference]), f"getting {name}")[0])
         return out
 
     # -- lifecycle -------------------------------------------------------------
@@ -233,7 +240,7 @@ class FMUInstance:
             self.slave = None
         shutil.rmtree(self._unzip_dir, ignore_errors=True)
 
-    def __enter__(self) -> "FMUInstance":
+    def __enter__(self) -> FMUInstance:
         return self
 
     def __exit__(self, *exc) -> None:
@@ -241,7 +248,7 @@ class FMUInstance:
 
     # -- raw handles for the native loop ----------------------------------------
     def function_address(self, name: str) -> int:
-        return ctypes.cast(self.slave._functions[name], ctypes.c_void_p).value
+        return _address(ctypes.cast(self.slave._functions[name], ctypes.c_void_p))
 
     def raw_function(self, name: str):
         """The FMI function without ctypes argument types (the caller passes ctypes
@@ -252,4 +259,4 @@ class FMUInstance:
 
     @property
     def component(self) -> int:
-        return ctypes.cast(self.slave.component, ctypes.c_void_p).value
+        return _address(ctypes.cast(self.slave.component, ctypes.c_void_p))

@@ -13,6 +13,7 @@ import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -162,7 +163,7 @@ def identify_file(path: str | Path, observer_fmu: Path, parameters: Mapping[str,
         raise ValueError(f"decimation {decimation} must be >= 1")
     blocks = read_ahead(read_blocks(path, options))
     first = next(blocks)
-    observer = None
+    observer: _Run | None = None
     kept = _Thinned(PLOT_POINTS)
     index = 0
     last: dict[str, float] = {}
@@ -179,6 +180,7 @@ def identify_file(path: str | Path, observer_fmu: Path, parameters: Mapping[str,
                 kept.add(index, {"t": block.time, **columns})
                 last = {k: float(v[-1]) for k, v in (("t", block.time), *columns.items())}
                 index += len(block.y)
+            assert observer is not None  # the first block made it
             flags = observer.flags()
             warnings = observer.observer.warnings()
             h = float(observer.parameters["h"])
@@ -217,7 +219,7 @@ class _NoStream:
     def write(self, columns) -> None:
         pass
 
-    def __enter__(self) -> "_NoStream":
+    def __enter__(self) -> _NoStream:
         return self
 
     def __exit__(self, *exc) -> None:
@@ -271,7 +273,7 @@ def default_internal_step(step: float, h_max: float | None) -> float:
     return step / math.ceil(step / h_max)
 
 
-def final_estimates(columns: Mapping[str, np.ndarray]) -> dict[str, object]:
+def final_estimates(columns: Mapping[str, np.ndarray]) -> dict[str, Any]:
     """The estimates at the end of the record with their standard errors (1 sigma) and
     the estimated measurement noise."""
     names = [f"theta_hat[1,{k}]" for k in range(1, 6)] + ["b_hat"]

@@ -118,7 +118,7 @@ def read_structured(path: str | Path, what: str = "file") -> Any:
 
 def _long_integer_place(text: str) -> str:
     """' line L (entry KEY)' of the first run of more than MAX_DIGITS digits."""
-    match = re.search(r"\d{%d,}" % (MAX_DIGITS + 1), text)
+    match = re.search(rf"\d{{{MAX_DIGITS + 1},}}", text)
     if not match:
         return ""
     line = text.count("\n", 0, match.start()) + 1

@@ -140,11 +140,13 @@ class _Plan:
         self.signal_names = list(signals)
         for name, values in signals.items():
             if len(values) < n_steps:
-                raise ValueError(f"signal {name!r} has {len(values)} samples, the run needs {n_steps}")
-        self.signals = (np.ascontiguousarray(np.vstack([np.asarray(signals[n], dtype=float)[:n_steps]
-                                                        for n in self.signal_names]))
+                raise ValueError(f"signal {name!r} has {len(values)} samples, "
+                                 f"the run needs {n_steps}")
+        self.signals = (np.ascontiguousarray(np.vstack(
+            [np.asarray(signals[n], dtype=float)[:n_steps] for n in self.signal_names]))
                         if signals else np.zeros((0, n_steps)))
-        self.links = []  # (source_fmu, source_vr, source_signal, noise_signal, target_fmu, target_vr)
+        # (source_fmu, source_vr, source_signal, noise_signal, target_fmu, target_vr)
+        self.links = []
         for link in sim.links:
             target_fmu, target_var = sim._split(link.target)
             signal = _signal_name(link.source)
@@ -188,8 +190,9 @@ def _run_native(plan: _Plan, records: np.ndarray, row: int, t0: float, H: float,
     failure = native_loop.LoopFailure()
     out = records[row:]
     written = dll.loop_run(fmus, order, len(plan.order), links, len(plan.links),
-                           plan.signals.ctypes.data, plan.signals.shape[1], probes, len(plan.probes),
-                           decimation, out.ctypes.data, t0, H, k_begin, k_end, ctypes.byref(failure))
+                           plan.signals.ctypes.data, plan.signals.shape[1], probes,
+                           len(plan.probes), decimation, out.ctypes.data, t0, H, k_begin, k_end,
+                           ctypes.byref(failure))
     if written < 0:
         raise plan.failure(failure.step, failure.fmu, failure.call, t0, H)
     return row + written
@@ -247,7 +250,7 @@ def _run_python(plan: _Plan, records: np.ndarray, row: int, t0: float, H: float,
                 values[i] = values[i] + signals[noise][k]
             if n.value and set_real[f](components[f], targets, n, values) >= 3:
                 raise plan.failure(k, f, 2, t0, H)
-            if f == hook_fmu:
+            if f == hook_fmu and hook is not None:
                 hook(k, t)
             if do_step[f](components[f], c_double(t), step, no) >= 3:
                 raise plan.failure(k, f, 0, t0, H)
@@ -292,7 +295,8 @@ def run(sim: CoSimulation, start_time: float, stop_time: float, step: float, pro
     if hook is not None and use_native:
         raise ValueError("user dynamics run in the Python loop only: use_native must be "
                          "None or False")
-    runner = _run_python if hook is None else partial(_run_python, hook=hook)
+    runner: Callable[..., int] = (_run_python if hook is None
+                                  else partial(_run_python, hook=hook))
     if hook is None and (use_native is None or use_native):
         try:
             native_loop.load()

@@ -43,7 +43,7 @@ class Console(logging.Handler):
         except (BrokenPipeError, ValueError):  # a closed stderr: nothing to tell
             pass
 
-    def __enter__(self) -> "Console":
+    def __enter__(self) -> Console:
         LOGGER.addHandler(self)
         self._level = LOGGER.level
         if LOGGER.getEffectiveLevel() > logging.WARNING:

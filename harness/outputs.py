@@ -125,7 +125,7 @@ class Outputs:
 
     # ---- the block --------------------------------------------------------------------
 
-    def __enter__(self) -> "Outputs":
+    def __enter__(self) -> Outputs:
         if self.folder.exists() and not self.folder.is_dir():
             raise self._error(f"--out {self.folder} exists and is not a folder")
         for name in self.names:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.colors import to_rgb
@@ -23,7 +24,7 @@ PAPER_FIGURE = {("6.1-sine", "perturbation"): 1, ("6.1-square", "perturbation"):
 # The joint basis [sin x1, x2, sign x2, x1, 1]: its coefficients' names and units.
 COEFFICIENTS = [("a1 = MgL/(2J)", "1/s²"), ("a2 = Vs/J", "1/s"), ("a3 = Ps/J", "rad/s²"),
                 ("c4", "1/s²"), ("c5", "rad/s²")]
-TRUE_STYLE = {"color": "k", "ls": "--", "lw": 1.0, "zorder": 3}
+TRUE_STYLE: dict[str, Any] = {"color": "k", "ls": "--", "lw": 1.0, "zorder": 3}
 NOMINAL_STYLE = {"color": "0.5", "ls": ":", "lw": 1.2, "zorder": 2}
 _FAINT_C0 = tuple(0.3 * c + 0.7 for c in to_rgb("C0"))  # C0 at alpha 0.3 on white (see save)
 

@@ -74,7 +74,7 @@ class Block:
     """Consecutive samples: the stamps as written (text), time since the first
     sample [s], position and input."""
 
-    stamps: "pa.StringArray"  # pyarrow strings: written out unchanged
+    stamps: pa.StringArray  # pyarrow strings: written out unchanged
     time: np.ndarray
     y: np.ndarray
     u: np.ndarray
@@ -173,7 +173,7 @@ def _line_blocks(path: Path, size: int) -> Iterator[bytes]:
 
 
 def _fast_blocks(path: Path, header: list[str], index: dict[str, int], options: ReadOptions
-                 ) -> Iterator[tuple["pa.StringArray", np.ndarray, np.ndarray, np.ndarray,
+                 ) -> Iterator[tuple[pa.StringArray, np.ndarray, np.ndarray, np.ndarray,
                                      np.ndarray]]:
     """(stamps as text, stamps as numbers, stamps since the first one, y, u) blocks parsed
     by pyarrow; any complaint of pyarrow (or a value that is missing or not finite) is
@@ -211,7 +211,7 @@ def _fast_blocks(path: Path, header: list[str], index: dict[str, int], options: 
         raise DataError(f"{path}: cannot read ({error.strerror or error})") from None
 
 
-def _since_first(stamps: "pa.StringArray", values: np.ndarray, origin):
+def _since_first(stamps: pa.StringArray, values: np.ndarray, origin):
     """The stamps minus the first stamp of the file, computed from the text in decimal
     arithmetic where it fits (epoch stamps keep their sub-microsecond digits, which a
     double of 1.7e9 s has not); else from the doubles.  ``origin`` is the first stamp

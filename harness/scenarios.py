@@ -88,7 +88,8 @@ def _add(s: Scenario) -> None:
 
 
 _add(Scenario(
-    name="6.1-sine", title="6.1 perturbation identification, v(t) = 0.5 sin 2t", kind="perturbation",
+    name="6.1-sine", title="6.1 perturbation identification, v(t) = 0.5 sin 2t",
+    kind="perturbation",
     stop_time=10.0,
     plant={**PLANT_START, "Ps": 0.0, "disturbance": 1, "v_amplitude": 0.5, "v_frequency": 2.0},
     observer={**PAPER_METHOD, **EXACT_NOMINAL, **PAPER_GAINS, "tau": 0.02, "identifier": 0,
@@ -122,8 +123,8 @@ _add(Scenario(
 _add(Scenario(
     name="6.2", title="6.2 time-invariant parameters, LSM", kind="lsm", stop_time=40.0,
     plant={**PLANT_START},
-    observer={**PAPER_METHOD, "b": 1 / J, "c_nominal[1]": 2.0, "c_nominal[2]": 0.1, "c_nominal[3]": 0.1,
-              "c_nominal[4]": 0.0, "c_nominal[5]": 0.0,
+    observer={**PAPER_METHOD, "b": 1 / J, "c_nominal[1]": 2.0, "c_nominal[2]": 0.1,
+              "c_nominal[3]": 0.1, "c_nominal[4]": 0.0, "c_nominal[5]": 0.0,
               "alpha1[1]": 8.0, "alpha2[1]": 24.0, "f_plus[1]": 4.5, "p[1]": 0.2, "tau": 0.002,
               "identifier": 1, "t_id": 1.0, "rho": 1e-3,
               "identify[1]": True, "identify[2]": True, "identify[3]": True},

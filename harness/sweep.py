@@ -68,8 +68,8 @@ method and all its parameter values.  Each run's row is written to runs/ as it
 completes, so an interrupted or killed sweep keeps what it finished; at the end
 the rows go into results.parquet and results.csv (harness.sweep_table).
 Re-running with the same --out skips every run already in the table
-(``--retry-failed`` redoes the failed ones).  A run that fails (an FMU error, a rejected parameter value, a
-NaN metric) is recorded as failed with its message; the sweep goes on.
+(``--retry-failed`` redoes the failed ones).  A run that fails (an FMU error, a rejected
+parameter value, a NaN metric) is recorded as failed with its message; the sweep goes on.
 If the FMUs are rebuilt with different behaviour, sweep into a new DIR.
 
 The spec's shape is checked against a JSON Schema (harness.sweep_schema; print it
@@ -92,11 +92,19 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from .outputs import Outputs, OutputError, write_atomically
+from .outputs import OutputError, Outputs, write_atomically
 from .paths import default_fmu_dir
 from .sweep_lock import OutputLocked, locked_output
-from .sweep_plan import (DEFAULT_FMU_DIR, FMU_FILES, METHODS, Run, SweepSpec, load_spec,
-                         parse_spec, run_key)
+from .sweep_plan import (
+    DEFAULT_FMU_DIR,
+    FMU_FILES,
+    METHODS,
+    Run,
+    SweepSpec,
+    load_spec,
+    parse_spec,
+    run_key,
+)
 from .sweep_report import ProgressLine, headline_metrics, metric_unit, plot_summary, write_summary
 from .sweep_simulation import SimulationPool, prepare, run_in_process, simulate
 from .sweep_spec import CONNECT_TIMEOUT, MAX_WORKERS, ClusterError, SpecError
@@ -177,7 +185,8 @@ def _run_sweep(spec: SweepSpec, out: Path, fmu_dir: Path, *, scheduler, client, 
             plugin_name = f"sto-sweep-fmus-{digest}-{uuid.uuid4().hex[:8]}"
             client.register_plugin(FMUWorkerPlugin(payload, plugin_name), name=plugin_name)
             workers = len(client.scheduler_info().get("workers", {}))
-            counter = ProgressLine(f"sweep {spec.scenario}", len(todo), stream) if progress else None
+            counter = (ProgressLine(f"sweep {spec.scenario}", len(todo), stream) if progress
+                       else None)
             if progress and resumed:
                 stream.write(f"sweep {spec.scenario}: {resumed} of {len(runs)} runs already in "
                              f"{table.path}, running {len(todo)}\n")

@@ -9,7 +9,9 @@ import signal
 import tempfile
 import threading
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
+
+from distributed.diagnostics.plugin import WorkerPlugin
 
 from .sweep_plan import FMU_FILES, Run, SweepSpec
 from .sweep_report import ProgressLine
@@ -17,7 +19,6 @@ from .sweep_simulation import SimulationPool, prepare, simulate
 from .sweep_spec import CONNECT_TIMEOUT, MAX_WORKERS, ClusterError
 from .sweep_table import ResultsTable, result_row
 from .tempdirs import owned_temp_dir, remove_stale
-
 
 
 def fmu_payload(fmu_dir: Path) -> tuple[dict[str, bytes], str]:
@@ -30,13 +31,7 @@ def fmu_payload(fmu_dir: Path) -> tuple[dict[str, bytes], str]:
     return payload, digest.hexdigest()[:12]
 
 
-try:
-    from distributed.diagnostics.plugin import WorkerPlugin as _WorkerPlugin
-except ImportError:  # pragma: no cover - dask is in requirements.txt
-    _WorkerPlugin = object
-
-
-class FMUWorkerPlugin(_WorkerPlugin):
+class FMUWorkerPlugin(WorkerPlugin):
     """Writes the FMUs into the worker's local directory once and keeps the
     worker's pool of co-simulations (used by :func:`_worker_run`)."""
 
@@ -73,7 +68,9 @@ def _worker_run(plugin_name: str, scenario, noise_std: float, seed: int) -> dict
     from distributed import get_worker
 
     worker = get_worker()
-    plugin = worker.plugins[plugin_name]
+    plugin = cast(FMUWorkerPlugin, worker.plugins[plugin_name])
+    if plugin.pool is None:
+        raise RuntimeError(f"worker {worker.name}: the FMU plugin was not set up")
     result = simulate(plugin.pool, scenario, noise_std, seed)
     result["worker"] = str(worker.name)
     return result

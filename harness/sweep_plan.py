@@ -20,9 +20,22 @@ from typing import Any
 from .fmus import Value, Variable, variables_of
 from .paths import default_fmu_dir
 from .sweep_schema import METHODS, check_shape
-from .sweep_spec import (MAX_STOP_TIME, PSEUDO, RandomSampling, Range, SpecError,
-                         check_run_count, convert_value, count, mapping, positive, pseudo_value,
-                         run_count_bound, sampling_seed, value_range)
+from .sweep_spec import (
+    MAX_STOP_TIME,
+    PSEUDO,
+    RandomSampling,
+    Range,
+    SpecError,
+    check_run_count,
+    convert_value,
+    count,
+    mapping,
+    positive,
+    pseudo_value,
+    run_count_bound,
+    sampling_seed,
+    value_range,
+)
 from .sweep_spec import transient as check_transient
 
 DEFAULT_FMU_DIR = default_fmu_dir()

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 import sys
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -81,7 +82,7 @@ def plot_summary(spec: SweepSpec, rows: list[dict[str, Any]], out: Path) -> list
 
     metrics = headline_metrics(spec, rows)
     swept = [p for p in spec.swept if p != "seed"] or spec.swept
-    paths = []
+    paths: list[Path] = []
     if not metrics:
         return paths
     for param in swept:
@@ -133,8 +134,7 @@ def plot_summary(spec: SweepSpec, rows: list[dict[str, Any]], out: Path) -> list
         fig.suptitle(f"{spec.scenario} ({spec.stop_time:g} s, {spec.method}): {n_ok} ok, "
                      f"{len(rows) - n_ok} failed of {len(rows)} runs", fontsize=10)
         path = out / f"sweep_{_filename(param)}.png"
-        write_atomically(path, lambda name: fig.savefig(name, format="png", dpi=100,
-                                                        bbox_inches="tight"))
+        write_atomically(path, partial(fig.savefig, format="png", dpi=100, bbox_inches="tight"))
         paths.append(path)
     return paths
 

@@ -39,7 +39,8 @@ def prepare(spec: SweepSpec, run: Run):
     # Overrides go into the Scenario itself: the metrics read the true and
     # nominal coefficients (plant.Vs, observer.c_nominal[k], ...) from it.
     scenario = dataclasses.replace(base, stop_time=spec.stop_time, transient=spec.transient,
-                                   **parts)
+                                   plant=parts["plant"], controller=parts["controller"],
+                                   observer=parts["observer"])
     return scenario, noise_std, seed
 
 

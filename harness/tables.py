@@ -47,7 +47,7 @@ class CsvStream:
 
     def __init__(self, path: str | Path):
         self.path = Path(path)
-        self._writer = None
+        self._writer: Any = None  # a pyarrow Parquet or CSV writer once the first block came
 
     def write(self, columns: Mapping[str, Any]) -> None:
         import pyarrow.csv as pacsv
@@ -71,7 +71,7 @@ class CsvStream:
             self._writer.close()
             self._writer = None
 
-    def __enter__(self) -> "CsvStream":
+    def __enter__(self) -> CsvStream:
         return self
 
     def __exit__(self, *exc) -> None:

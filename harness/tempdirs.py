@@ -41,7 +41,7 @@ def remove_stale(base: str | os.PathLike | None = None) -> list[Path]:
     """Removes the sto-<kind>-<pid>-* folders in ``base`` (default: the temp
     folder) whose process no longer runs; returns what it removed.  A folder of
     a live process is kept (a reused pid only delays its removal)."""
-    removed = []
+    removed: list[Path] = []
     directory = Path(base) if base is not None else Path(tempfile.gettempdir())
     try:
         entries = list(directory.iterdir())

@@ -32,6 +32,7 @@ import numpy as np
 from .fmus import FMUError
 
 if TYPE_CHECKING:
+    from .fmus import FMUInstance
     from .master import CoSimulation
 
 EXTERNAL_MODEL = 2  # the observer's nominal_model for F and phi as inputs
@@ -82,7 +83,8 @@ class StepHook:
         self._component = ctypes.c_void_p(observer.component)
         self._get = observer.raw_function("fmi2GetReal")
         self._set = observer.raw_function("fmi2SetReal")
-        self._sources = []  # (signal samples or None, fmu, vr)
+        self._sources: list[tuple[np.ndarray | None, FMUInstance | None, int]] = []
+        # (signal samples or None, fmu, vr)
         for source in dynamics.inputs:
             if source.startswith("signal:"):
                 name = source[len("signal:"):]
@@ -122,6 +124,7 @@ class StepHook:
             if samples is not None:
                 u[i] = samples[k]
                 continue
+            assert fmu is not None  # a source is a signal or an FMU's variable
             self._one_vr[0] = vr
             if fmu.raw_function("fmi2GetReal")(ctypes.c_void_p(fmu.component), self._one_vr,
                                                ctypes.c_size_t(1), self._value) >= 3:
@@ -134,7 +137,7 @@ class StepHook:
         n, l = self.dynamics.n, self.dynamics.l
         if self._get(self._component, self._read_vrs, ctypes.c_size_t(2 * n), self._read) >= 3:
             raise self._fail("fmi2GetReal", t)
-        state = np.frombuffer(self._read, dtype=np.float64).copy()
+        state = np.ctypeslib.as_array(self._read).copy()
         F, phi = self.dynamics.function(t, state[:n], state[n:], self._inputs(k, t))
         values = np.concatenate([np.asarray(F, dtype=float).ravel(),
                                  np.asarray(phi, dtype=float).ravel()])

@@ -40,7 +40,7 @@ class SteadyState:
     G: np.ndarray  # RTS: s_k^s = (I - G F) s_k + G s_{k+1}^s
 
     @staticmethod
-    def of(lam: float) -> "SteadyState":
+    def of(lam: float) -> SteadyState:
         prior = solve_discrete_are(F.T, H.T, lam * Q_UNIT, np.array([[1.0]]))
         prior = 0.5 * (prior + prior.T)
         K = prior[:, :1] / (prior[0, 0] + 1.0)

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from harness.scenarios import A_COULOMB, A_GRAVITY, A_VISCOUS, COMMUNICATION_STEP, J, SCENARIOS
+from harness.scenarios import A_COULOMB, A_GRAVITY, A_VISCOUS, COMMUNICATION_STEP, SCENARIOS, J
 
 B_TRUE = 1.0 / J
 C_TRUE = (A_GRAVITY, A_VISCOUS, A_COULOMB)
@@ -69,7 +69,7 @@ class Dataset:
     def step(self) -> float:
         return float(self.t[1] - self.t[0])
 
-    def decimate(self, factor: int) -> "Dataset":
+    def decimate(self, factor: int) -> Dataset:
         """Every factor-th sample: the same trajectory sampled more slowly (not for euler)."""
         s = slice(None, None, factor)
         return Dataset(self.name, self.kind, self.t[s], self.x1[s], self.x2[s], self.acc[s],
@@ -80,7 +80,7 @@ class Dataset:
                  d=self.d, b=self.b, c=np.array(self.c), name=self.name, kind=self.kind)
 
     @staticmethod
-    def load(path: Path) -> "Dataset":
+    def load(path: Path) -> Dataset:
         z = np.load(path)
         return Dataset(str(z["name"]), str(z["kind"]), z["t"], z["x1"], z["x2"], z["acc"],
                        z["u"], z["v"], z["d"], float(z["b"]), tuple(float(c) for c in z["c"]))
@@ -148,13 +148,13 @@ def open_loop_accurate(rate: float, duration: float = OPEN_LOOP_DURATION, *,
                 return [0.0, 0.0]
 
             def event(t, x):  # noqa: ANN001 -- breakaway when the drive beats static friction
-                return abs(drive(t, x_stuck)) - c3
+                return abs(drive(t, x_stuck)) - c3  # noqa: B023 (called in this iteration)
             event.direction = 1
         else:
             s = mode
 
             def rhs(t, x):  # noqa: ANN001
-                return [x[1], drive(t, x[0]) - (c2 + d_of(t)) * x[1] - c3 * s]
+                return [x[1], drive(t, x[0]) - (c2 + d_of(t)) * x[1] - c3 * s]  # noqa: B023 (called in this iteration)
 
             def event(t, x):  # noqa: ANN001 -- velocity reversal
                 return x[1]

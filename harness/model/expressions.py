@@ -8,8 +8,8 @@ names, so no attribute, builtin or module of the process is reachable from a mod
 from __future__ import annotations
 
 import ast
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Callable, Mapping
 
 import sympy
 from sympy.parsing.sympy_parser import auto_number, auto_symbol, parse_expr
@@ -43,7 +43,7 @@ class Symbols:
     constants: dict[str, sympy.Symbol]
 
     @classmethod
-    def of(cls, coordinates, inputs, parameters, constants) -> "Symbols":
+    def of(cls, coordinates, inputs, parameters, constants) -> Symbols:
         """Real symbols; velocities and accelerations are named as written, der(x) and der(x,2)."""
         def real(name: str) -> sympy.Symbol:
             return sympy.Symbol(name, real=True)

@@ -1,9 +1,9 @@
 """The model a file declares: names, parameters, equations and their regressor."""
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Callable, Mapping
 
 import numpy as np
 import sympy

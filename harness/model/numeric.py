@@ -1,7 +1,7 @@
 """Numbers from the symbolic regressor: Y and r over many samples at once (numpy)."""
 from __future__ import annotations
 
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import sympy

@@ -105,7 +105,8 @@ def register_fmu_parameters(sub, parents) -> None:
                    help="sampling period h [s] (0 < h <= 1, the FMU's range)")
     p.add_argument("--f-plus", type=_positive("--f-plus"), default=10.0,
                    help="bound on the model's acceleration error [rad/s^2] (every joint, > 0)")
-    p.add_argument("--coulomb-velocity", type=_finite_non_negative("--coulomb-velocity"), default=0.0,
+    p.add_argument("--coulomb-velocity", type=_finite_non_negative("--coulomb-velocity"),
+                   default=0.0,
                    help="Coulomb friction saturates below this velocity [rad/s] (0: sign)")
     p.add_argument("--min-speed", type=_non_negative, default=None, metavar="V",
                    help="the identifier leaves out joint equations at |q'| < V [rad/s or "

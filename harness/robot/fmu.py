@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import shutil
 from pathlib import Path
+from typing import Any
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
@@ -32,7 +33,7 @@ def fmu_parameters(robot: Robot, unknown: str = "all", h: float = 1e-3, f_plus=1
                    R: float = 0.1, t_id: float = 0.2, torque_scale=None,
                    coulomb_velocity: float = 0.0, pi: np.ndarray | None = None,
                    alpha1=0.0, alpha2=0.0, min_speed: float | None = None,
-                   reversal_margin: float | None = None) -> dict[str, object]:
+                   reversal_margin: float | None = None) -> dict[str, Any]:
     """The RobotObserver parameters for `robot`: name -> scalar or array (the joints'
     rows only; the FMU's other rows keep their start values).
 
@@ -88,7 +89,7 @@ def _elements(name: str, value) -> list[tuple[str, float | int]]:
             for i in range(array.shape[0]) for j in range(array.shape[1])]
 
 
-def start_values(parameters: dict[str, object]) -> dict[str, object]:
+def start_values(parameters: dict[str, Any]) -> dict[str, Any]:
     """fmpy start values of the FMI 2 FMU: one structured name per element (rows beyond
     the robot's joints keep the FMU's start values)."""
     return dict(pair for name, value in parameters.items() for pair in _elements(name, value))
@@ -125,7 +126,7 @@ def read_ssv(path: str | Path) -> dict[str, float | int]:
     return values
 
 
-def run_fmu(fmu: str | Path, parameters: dict[str, object], log: JointLog,
+def run_fmu(fmu: str | Path, parameters: dict[str, Any], log: JointLog,
             statistics_interval: float = 0.0) -> dict[str, np.ndarray]:
     """Replay the log through the RobotObserver FMU (FMI 2, fmpy), one communication step
     per sample: q and u of sample k are set, then doStep(t_k, h).

@@ -28,13 +28,12 @@ import numpy as np
 from scipy.signal import savgol_filter
 
 from .base_parameters import BaseParameters, base_parameters
-from .filtered_regression import filtered_regression, low_pass
 from .consistency import consistent_parameters, write_identified_urdf
+from .filtered_regression import filtered_regression, low_pass
 from .least_squares import Fit, torque_least_squares
 from .native import core_defaults
 from .smoothing import adaptive_velocities
 from .urdf import Robot
-
 
 # a joint keeping fewer of its equations than this share is an error (its friction cannot
 # be identified), fewer than FEW_ROWS a warning

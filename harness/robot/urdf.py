@@ -223,7 +223,8 @@ def read_urdf(path: str | Path, locked: tuple[str, ...] | list[str] = (),
         if not name or name in links:
             raise UrdfError(f"{source}: a link without a name or a duplicate link {name!r}")
         links[name] = link
-    joints, parent_joint = {}, {}
+    joints: dict[str, etree._Element] = {}
+    parent_joint: dict[str, etree._Element] = {}
     for joint in root.findall("joint"):
         name, kind = joint.get("name"), joint.get("type")
         parent, child = joint.find("parent"), joint.find("child")

@@ -22,10 +22,22 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import pytest
-
 from abuse_fmi import (
-    CLOCK_SIZE, DISCARD, ERROR, HEADER_SIZE, MODEL_EXCHANGE, MODELS, NORMAL_STEP,
-    OK, WARNING, Callbacks, Raw, assert_usable_after_reset, forge, isolated, normal_run,
+    CLOCK_SIZE,
+    DISCARD,
+    ERROR,
+    HEADER_SIZE,
+    MODEL_EXCHANGE,
+    MODELS,
+    NORMAL_STEP,
+    OK,
+    WARNING,
+    Callbacks,
+    Raw,
+    assert_usable_after_reset,
+    forge,
+    isolated,
+    normal_run,
     parameter_offset,
 )
 
@@ -801,8 +813,9 @@ def test_ok_status_never_comes_with_non_finite_outputs(model, parameters, output
 
 def test_the_fmus_under_test(observer_fmu):
     """Under tools/abuse/sanitize.sh every test must load the sanitized FMUs."""
-    from abuse_fmi import fmu_dir
     import os
+
+    from abuse_fmi import fmu_dir
     if os.environ.get("STO_EXPECT_SANITIZED") != "1":
         return
     assert observer_fmu.parent == fmu_dir(), "tests/conftest.py's fixtures are not redirected"

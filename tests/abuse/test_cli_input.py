@@ -14,7 +14,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from cli_runner import REPO, cli, refused, shell
 
 INT_CASES = ["4294967298", "-4294967294", "2147483648", "-2147483649", "1.5", "2.000001", "nan",

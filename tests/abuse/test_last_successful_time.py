@@ -11,7 +11,6 @@ from __future__ import annotations
 import ctypes
 
 import pytest
-
 from abuse_fmi import ERROR, MODELS, OK, Raw, isolated
 
 OBS, PEN, CTL, ROBOT = MODELS

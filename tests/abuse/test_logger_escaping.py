@@ -17,9 +17,15 @@ from __future__ import annotations
 import ctypes
 
 import pytest
-
 from abuse_fmi import (
-    ERROR, MODELS, OK, Callbacks, Raw, assert_usable_after_reset, fmi_unescape, isolated,
+    ERROR,
+    MODELS,
+    OK,
+    Callbacks,
+    Raw,
+    assert_usable_after_reset,
+    fmi_unescape,
+    isolated,
     normal_run,
 )
 

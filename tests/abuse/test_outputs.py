@@ -12,7 +12,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from cli_runner import FMU_DIR, REPO, cli, refused
 
 

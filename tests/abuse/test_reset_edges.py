@@ -14,7 +14,6 @@ from __future__ import annotations
 import math
 
 import pytest
-
 from abuse_fmi import MODELS, OK, Raw, isolated
 
 OBS = MODELS[0]

@@ -14,7 +14,6 @@ import math
 import time
 
 import pytest
-
 from abuse_fmi import ERROR, MODELS, OK, Raw, assert_usable_after_reset, isolated
 
 OBS, PEN, CTL, ROBOT = MODELS

@@ -6,8 +6,8 @@ import json
 from pathlib import Path
 
 import pytest
-
 from cli_runner import FMU_DIR, cli, refused
+
 from harness import sweep
 
 BASE = {"scenario": "6.1-sine", "stop_time": 1.2, "points": [{"observer.tau": 0.02}]}

@@ -20,8 +20,8 @@ import time
 from pathlib import Path
 
 import pytest
-
 from cli_runner import FMU_DIR, REPO, cli, refused, shell
+
 from harness import sweep, sweep_plan
 from harness.sweep_spec import MAX_RUNS, SpecError
 
@@ -322,7 +322,7 @@ def test_two_sweeps_into_one_folder_lose_nothing(tmp_path):
     results = [(p.wait(timeout=300), p.stdout.read() + p.stderr.read()) for p in processes]
     codes = sorted(code for code, _ in results)
     assert codes in ([0, 0], [0, 3]), results
-    for code, text in results:
+    for _, text in results:
         assert "Traceback" not in text
     rows = (out / "results.csv").read_text().splitlines()[1:]
     expected = 4 if codes == [0, 0] else 2

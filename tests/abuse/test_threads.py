@@ -13,7 +13,6 @@ import threading
 
 import numpy as np
 import pytest
-
 from abuse_fmi import MODELS, OK, Raw, fmu_dir
 
 THREADS = 4

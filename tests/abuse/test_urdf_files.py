@@ -7,7 +7,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from cli_runner import cli, refused
 
 LINK = ('<link name="{name}"><inertial><origin xyz="{com}"/><mass value="{mass}"/>'

@@ -6,7 +6,7 @@ import ctypes
 from pathlib import Path
 
 import numpy as np
-from fmpy import extract, read_model_description
+from fmpy import calloc, extract, free, read_model_description
 from fmpy.fmi2 import (
     FMU2Slave,
     fmi2CallbackAllocateMemoryTYPE,
@@ -14,7 +14,6 @@ from fmpy.fmi2 import (
     fmi2CallbackFunctions,
     fmi2CallbackLoggerTYPE,
 )
-from fmpy import calloc, free
 
 OK, WARNING, DISCARD, ERROR = 0, 1, 2, 3
 

@@ -8,6 +8,7 @@ import shutil
 import numpy as np
 import pytest
 from fmpy import calloc, extract, free, read_model_description
+from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (
     FMU2Slave,
     fmi2CallbackAllocateMemoryTYPE,
@@ -15,7 +16,6 @@ from fmpy.fmi2 import (
     fmi2CallbackFunctions,
     fmi2CallbackLoggerTYPE,
 )
-from fmpy.fmi1 import FMICallException
 
 J = 1.1 * 0.9**2                    # M L^2 = 0.891 kg.m2
 A_GRAVITY = 1.1 * 9.815 * 0.9 / (2 * J)

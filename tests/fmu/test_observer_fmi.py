@@ -663,7 +663,7 @@ def test_paper_identifier_divergence_is_an_error_with_advice(fmu):
                           booleans={"identify[1]": True},
                           reals={"h": 1e-3, "rho": 1e-6, "tau": 0.0}) == OK
     status, t = OK, 0.0
-    for k in range(50):
+    for _ in range(50):
         assert fmu.set_real({"phi[1]": 10.0}) == OK
         status = fmu.do_step(t, 1e-3)
         if status != OK:

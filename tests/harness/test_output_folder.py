@@ -7,7 +7,7 @@ import signal
 import pytest
 
 from harness import outputs
-from harness.outputs import Outputs, OutputError
+from harness.outputs import OutputError, Outputs
 
 
 def test_files_appear_only_when_the_block_ends(tmp_path):

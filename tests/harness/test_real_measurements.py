@@ -14,9 +14,17 @@ import pytest
 
 from harness.fmus import FMUInstance
 from harness.identify import Recording, identify
-from harness.scenarios import (A_COULOMB, A_GRAVITY, A_VISCOUS, PAPER_METHOD, SCENARIOS, J,
-                               improved_overrides, run_scenario)
 from harness.metrics import score
+from harness.scenarios import (
+    A_COULOMB,
+    A_GRAVITY,
+    A_VISCOUS,
+    PAPER_METHOD,
+    SCENARIOS,
+    J,
+    improved_overrides,
+    run_scenario,
+)
 
 H = 1e-3
 TRUE = {"c_nominal[1]": A_GRAVITY, "c_nominal[2]": A_VISCOUS, "c_nominal[3]": A_COULOMB}

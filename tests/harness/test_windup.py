@@ -13,7 +13,7 @@ import pytest
 
 from harness.fmus import FMUInstance
 from harness.master import CoSimulation, Link, initialize, run
-from harness.scenarios import A_COULOMB, A_GRAVITY, J
+from harness.scenarios import A_GRAVITY, J
 
 H = 1e-4
 EXCITED, QUIET = 20.0, 60.0

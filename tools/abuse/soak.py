@@ -36,7 +36,6 @@ from harness.master import initialize, run  # noqa: E402
 from harness.scenarios import COMMUNICATION_STEP, PROBES, SCENARIOS, build  # noqa: E402
 from harness.values import BadValue, argparse_type, real  # noqa: E402
 
-
 # The first chunks settle the allocator (glibc raises its mmap threshold after the
 # first large temporary array is freed, and keeps later ones on the heap).
 WARMUP_CHUNKS = 3

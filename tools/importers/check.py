@@ -204,7 +204,7 @@ def judged(comparison: Comparison, tolerance: float, seconds: float, extra: str 
     return Outcome(ok, cell, detail, seconds)
 
 
-def evaluate(ref: "mr.Reference | str", times, columns: dict, step: float, tolerance: float,
+def evaluate(ref: mr.Reference | str, times, columns: dict, step: float, tolerance: float,
              seconds: float, extra: str = "") -> Outcome:
     """Compare with the reference, or (no reference: ``ref`` is why) fail after a good run."""
     if isinstance(ref, str):
@@ -234,7 +234,7 @@ def run_fmpy_validate(fmu: Path) -> Outcome:
     return Outcome(True, "ok", "", time.time() - t0)
 
 
-def run_fmpy(fmu: Path, desc: mr.Description, ref: "mr.Reference | str", tolerance: float) -> Outcome:
+def run_fmpy(fmu: Path, desc: mr.Description, ref: mr.Reference | str, tolerance: float) -> Outcome:
     t0 = time.time()
     try:
         times, columns = mr.simulate(fmu, desc)
@@ -268,7 +268,7 @@ class External(threading.Thread):
         self.seconds = time.time() - t0
 
 
-def finish(name: str, job: External, out: Path, ref: "mr.Reference | str", step: float,
+def finish(name: str, job: External, out: Path, ref: mr.Reference | str, step: float,
            tolerance: float) -> Outcome:
     job.join()
     if job.timed_out:

@@ -279,8 +279,8 @@ def make_reference(fmu: Path, csv_out: Path | None = None) -> str:
 class Reference:
     source: str
     header: list[str]
-    times: "object"           # numpy array
-    columns: dict[str, "object"]
+    times: object           # numpy array
+    columns: dict[str, object]
 
 
 def parse_csv(text: str, origin: str):

@@ -7,7 +7,6 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-
 PAYLOAD, TIP = 0.3, np.array([0.0, 0.0, 0.2])
 FRICTION = np.array([[0.05, 0.2], [0.04, 0.1]])
 

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from robot_helpers import FRICTION, multisine_log, payload_link
 
 from harness.cli import main
 from harness.robot.examples import example_urdf
 from harness.robot.fmu import fmu_parameters, read_ssv, start_values, write_ssv
 from harness.robot.urdf import read_urdf
-
-from robot_helpers import FRICTION, multisine_log, payload_link
 
 H = 1e-3
 

@@ -7,13 +7,13 @@ import warnings
 import numpy as np
 import pinocchio as pin
 import pytest
+from robot_helpers import FRICTION, PAYLOAD, multisine_log, payload_link
 
 from harness.cli import main
 from harness.robot.examples import example_urdf
 from harness.robot.pipeline import away_from_reversals, friction_rows
 from harness.robot.urdf import read_urdf
 
-from robot_helpers import FRICTION, PAYLOAD, multisine_log, payload_link
 
 def write_log(path, robot, seconds: float = 12.0, h: float = 1e-3, bits: int = 17):
     """Torques of the true arm along an analytic multi-sine (no integration error)."""

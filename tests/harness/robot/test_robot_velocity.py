@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from robot_helpers import FRICTION, multisine_log, payload_link
 from scipy.linalg import solve_discrete_are
 from scipy.signal import lfilter, ss2tf
 
@@ -16,8 +17,6 @@ from harness.robot.filtered_regression import filtered_regression
 from harness.robot.pipeline import JointLog, friction_rows, observer_velocities
 from harness.robot.smoothing import adaptive_velocities, noise_std
 from harness.robot.urdf import read_urdf
-
-from robot_helpers import FRICTION, multisine_log, payload_link
 
 H, SECONDS, SKIP = 1e-3, 6.0, 500  # the first 0.5 s (convergence) is not scored
 BOUND = 30.0  # [rad/s^2] bounds |q''| of the multi-sine (at most 14)
