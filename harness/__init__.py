@@ -1,20 +1,69 @@
-"""fmpy harness for the SuperTwistingObserver FMU and its closed-loop bench.
+"""fmpy harness for the observer/identifier FMUs: the paper's closed loops, recorded
+logs, serial robots and model files, from a script or the ``sto-harness`` command.
 
-Installed with the package: the three FMUs (``harness.paths.default_fmu_dir()``),
-the ``sto-harness`` command (``python -m harness``) and this Python API:
+The few functions a script needs are importable from here (fmpy style); each is
+loaded on first use, so ``import harness`` stays cheap:
 
-- `harness.scenarios`: the paper's section 6 examples as closed-loop scenarios
-  (``SCENARIOS``, ``run_scenario``), scored by `harness.metrics.score`;
-- `harness.identify`: a recorded log through the observer (``identify`` in memory,
-  ``identify_file`` streaming a CSV of any length), read by `harness.recording`;
-- `harness.compare`: the paper's method against the FMU's defaults;
-- `harness.sweep`: parameter and noise sweeps on Dask (its parts: `harness.sweep_plan`
-  the spec and its runs, `harness.sweep_simulation` one run, `harness.sweep_dask` the
-  cluster, `harness.sweep_table` the results, `harness.sweep_report` summary and figures);
-- `harness.ssp`: the closed loop as an SSP file for other tools;
-- `harness.master` and `harness.fmus`: the co-simulation master and FMU access
-  underneath; `harness.plots`: the figures; `harness.tables`: the CSV files.
+- closed loops: ``SCENARIOS``, ``run_scenario(scenario, fmu_dir)``, ``score``, and
+  ``default_fmu_dir()`` (the FMUs installed with the package, or a checkout's build);
+- recorded logs through the observer FMU: ``identify_file(path, fmu, parameters)``;
+- sweeps: ``load_spec(path)``, ``run_sweep(spec, out)``;
+- model files: ``read_model(path)`` (``ModelFileError`` for a bad file);
+- serial robots: ``read_urdf(path)``, ``read_log(path, n)``, ``identify_robot(robot, log)``,
+  ``fmu_parameters(robot)`` (the RobotObserver FMU's parameters).
 
-FMU log lines of status Warning and worse go to the logging module (logger
-``harness.fmu``); see `harness.messages`.
+Underneath: `harness.master` (the co-simulation master), `harness.fmus` (FMU access),
+`harness.plots`, `harness.tables`, `harness.outputs` (atomic output folders). FMU log
+lines of status Warning and worse go to the logging module (logger ``harness.fmu``);
+see `harness.messages`.
 """
+from __future__ import annotations
+
+from importlib import import_module
+from typing import TYPE_CHECKING, Any
+
+# name -> the module that defines it
+_EXPORTS = {
+    "SCENARIOS": "harness.scenarios",
+    "run_scenario": "harness.scenarios",
+    "score": "harness.metrics",
+    "default_fmu_dir": "harness.paths",
+    "identify_file": "harness.identify",
+    "load_spec": "harness.sweep_plan",
+    "run_sweep": "harness.sweep",
+    "read_model": "harness.model",
+    "ModelFileError": "harness.model",
+    "read_urdf": "harness.robot.urdf",
+    "read_log": "harness.robot.pipeline",
+    "identify_robot": "harness.robot.pipeline",
+    "fmu_parameters": "harness.robot.fmu",
+}
+__all__ = [
+    "SCENARIOS", "ModelFileError", "default_fmu_dir", "fmu_parameters", "identify_file",
+    "identify_robot", "load_spec", "read_log", "read_model", "read_urdf", "run_scenario",
+    "run_sweep", "score",
+]
+
+if TYPE_CHECKING:
+    from harness.identify import identify_file
+    from harness.metrics import score
+    from harness.model import ModelFileError, read_model
+    from harness.paths import default_fmu_dir
+    from harness.robot.fmu import fmu_parameters
+    from harness.robot.pipeline import identify_robot, read_log
+    from harness.robot.urdf import read_urdf
+    from harness.scenarios import SCENARIOS, run_scenario
+    from harness.sweep import run_sweep
+    from harness.sweep_plan import load_spec
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _EXPORTS:
+        raise AttributeError(f"module 'harness' has no attribute {name!r}")
+    value = getattr(import_module(_EXPORTS[name]), name)
+    globals()[name] = value  # the next access is a plain lookup
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
