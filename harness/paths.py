@@ -11,7 +11,7 @@ OBSERVER = "SuperTwistingObserver.fmu"
 
 
 def default_fmu_dir() -> Path:
-    """The folder of the three FMUs when none is given: ``$STO_FMU_DIR`` if set, else
+    """The folder of the FMUs when none is given: ``$STO_FMU_DIR`` if set, else
     the freshly built ``build/fmus`` of a source checkout, else the FMUs installed
     with the package."""
     if os.environ.get("STO_FMU_DIR"):

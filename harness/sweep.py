@@ -319,7 +319,7 @@ def main(argv: list[str] | None = None) -> int:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(parser)
     parser.add_argument("--fmu-dir", default=str(DEFAULT_FMU_DIR),
-                        help="folder with the three FMUs (default: harness.paths."
+                        help="folder with the FMUs (default: harness.paths."
                              "default_fmu_dir())")
     args = parser.parse_args(argv)
     return args.func(args)
