@@ -3,6 +3,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "adaptive_rules.h"
 #include "implicit_twisting.h"
 
 typedef double Matrix3[3][3];
@@ -154,18 +155,6 @@ static inline void weigh(double *mean_square, double *samples, double value, dou
     *mean_square += g * (value - *mean_square);
 }
 
-/* A member by its index: the members, then the zoom members. */
-static inline const AdaptiveMember *member_at(const AdaptiveBank *bank, int i, int index)
-{
-    return index < bank->count ? &bank->member[i][index] : &bank->zoom[i][index - bank->count];
-}
-
-static inline const AdaptiveGains *gains_at(const AdaptiveBank *bank, int i, int index)
-{
-    return index < bank->count ? &bank->gains[index]
-                               : &bank->fine[bank->zoom_index[i][index - bank->count]];
-}
-
 /* The zoom members surround member c on the fine grid: the ones already there
  * keep running, the others start from member c's state and statistics. */
 static void zoom_to(AdaptiveBank *bank, int i, int c)
@@ -279,94 +268,48 @@ static inline double expected_sign(double v_hat, double sigma)
     return sigma > 0.0 ? erf(v_hat / (1.4142135623730951 * sigma)) : sto_sign(v_hat);
 }
 
-/* The selection after a step (see the header): whose velocity is published
- * and whose injection is the published perturbation. */
-typedef struct {
-    int selected, source;
-} AdaptiveSelection;
-
-/* The observer of the smallest mean square of a ranking, or the current one
- * unless the best is smaller by ADAPTIVE_HYSTERESIS.  *best gets the best member. */
-static inline int choose(const AdaptiveBank *bank, int i, int current, int rank, int *best)
+/* One step of DOF i's members and zoom members: each predicts, corrects and
+ * weighs its innovation; the members average their xi for the published
+ * perturbation; at a stride's start (measured given) each is compared with
+ * the measured secants. */
+static void step_members(AdaptiveBank *bank, int i, double y, StoAcceleration a, double h,
+                         double h2, double g, const AdaptiveMeasured *measured, unsigned tick)
 {
-    const AdaptiveMember *members = bank->member[i];
-    *best = 0;
-    for (int j = 1; j < bank->count; ++j)
-        if (members[j].stats.ranking[rank] < members[*best].stats.ranking[rank]) *best = j;
-    const double sta = bank->sta[i].ranking[rank], member = members[*best].stats.ranking[rank];
-    const double now =
-        current == ADAPTIVE_SUPER_TWISTING ? sta : members[current].stats.ranking[rank];
-    const int candidate = member < sta ? *best : ADAPTIVE_SUPER_TWISTING;
-    return (member < sta ? member : sta) < ADAPTIVE_HYSTERESIS * now ? candidate : current;
+    const double gain = bank->gain;
+    for (int j = 0; j < bank->count; ++j) {
+        AdaptiveMember *m = &bank->member[i][j];
+        const AdaptiveGains *gj = &bank->gains[j];
+        const double r = member_step(m, gj, y, a, h, h2);
+        weigh(&m->stats.mean_square, &m->stats.samples, r * r, gain);
+        /* xi averaged over ADAPTIVE_AVERAGING of the member's time constants
+         * 1/omega, in two first-order stages of half that (less noise for the
+         * same delay), at least over tau */
+        const double averaging = gj->publish_gain < g ? gj->publish_gain : g;
+        m->averaged += averaging * (m->xi - m->averaged);
+        m->published += averaging * (m->averaged - m->published);
+        if (measured) track_strides(&m->stats, bank, tick, *measured, m->x2_now, m->published);
+    }
+    for (int s = 0; s < ADAPTIVE_ZOOM; ++s) {
+        if (bank->zoom_index[i][s] < 0) continue;
+        AdaptiveMember *m = &bank->zoom[i][s];
+        const double r = member_step(m, &bank->fine[bank->zoom_index[i][s]], y, a, h, h2);
+        weigh(&m->stats.mean_square, &m->stats.samples, r * r, gain);
+        if (measured) track_strides(&m->stats, bank, tick, *measured, m->x2_now, m->published);
+    }
 }
 
-/* The member of the smallest one-step innovation mean square (count > 0). */
-static inline int quietest_member(const AdaptiveBank *bank, int i)
+/* The zoom members move to the new centre; a selected zoom member stays
+ * selected where its bandwidth still is on the fine grid, else the centre is.
+ * Returns the selection after the move. */
+static int recentre(AdaptiveBank *bank, int i, int centre, int selected)
 {
-    const AdaptiveMember *members = bank->member[i];
-    int best = 0;
-    for (int j = 1; j < bank->count; ++j)
-        if (members[j].stats.mean_square < members[best].stats.mean_square) best = j;
-    return best;
-}
-
-static inline AdaptiveSelection select_members(const AdaptiveBank *bank, int i, int selected,
-                                               int source)
-{
-    const AdaptiveMember *members = bank->member[i];
-    const AdaptiveSelection super_twisting = {ADAPTIVE_SUPER_TWISTING, ADAPTIVE_SUPER_TWISTING};
-    if (bank->count == 0) return super_twisting; /* h > 0.25 s: no member fits */
-    const int saturating = bank->sta_saturation[i] >= ADAPTIVE_SATURATION_LIMIT;
-    if (!saturating) {
-        /* exact data: the deadbeat super-twisting corrector predicts the next
-         * sample far better than any linear member and is kept */
-        const double smallest = members[quietest_member(bank, i)].stats.mean_square;
-        if (bank->sta[i].mean_square < ADAPTIVE_EXACT_RATIO * smallest) return super_twisting;
-    }
-    const AdaptiveStatistics *sta = &bank->sta[i];
-    int best_perturbation;
-    AdaptiveSelection choice = {selected, source};
-    if (sta->velocity_samples > 0.0 && bank->center[i] >= 0) {
-        /* the velocity: the member of the smallest one-step innovation mean
-         * square among the centre and its zoom members (the maximum-likelihood
-         * bandwidth for an unknown noise level), against the super-twisting
-         * observer by the secant ranking */
-        int member = bank->center[i];
-        if (member > 0 && members[member - 1].stats.mean_square < members[member].stats.mean_square)
-            member = member - 1;
-        for (int s = 0; s < ADAPTIVE_ZOOM; ++s)
-            if (bank->zoom_index[i][s] >= 0 &&
-                bank->zoom[i][s].stats.mean_square < member_at(bank, i, member)->stats.mean_square)
-                member = bank->count + s;
-        const double candidate = member_at(bank, i, member)->stats.ranking[ADAPTIVE_RANK_VELOCITY];
-        const double st = sta->ranking[ADAPTIVE_RANK_VELOCITY];
-        if (selected == ADAPTIVE_SUPER_TWISTING)
-            choice.selected = candidate < ADAPTIVE_HYSTERESIS * st ? member : selected;
-        else
-            choice.selected = st < ADAPTIVE_HYSTERESIS * candidate ? ADAPTIVE_SUPER_TWISTING : member;
-    }
-    if (sta->perturbation_samples > 0.0) {
-        choice.source = choose(bank, i, source, ADAPTIVE_RANK_PERTURBATION, &best_perturbation);
-        /* a super-twisting observer whose injection saturates often: the
-         * best member's perturbation */
-        if (choice.source == ADAPTIVE_SUPER_TWISTING && saturating)
-            choice.source = best_perturbation;
-    }
-    return choice;
-}
-
-/* Whose velocity is published at a sample: the selected observer's, but for
- * the super-twisting observer while its injection saturates.  Then the
- * perturbation outruns alpha1 (a nominal model far off, f_plus too small) and
- * its velocity error grows by the excess times h every step (held-out joint
- * C-fast, exact 5 kHz samples: 0.025-0.038 rad/s for 25 ms, three times in the
- * first 2 s, against 3e-5 elsewhere); a linear member has no bound to outrun:
- * the member of the smallest one-step mean square stands in. */
-static inline int stand_in(const AdaptiveBank *bank, int i, int selected, int saturated)
-{
-    if (selected != ADAPTIVE_SUPER_TWISTING || !saturated || !bank->started[i] || bank->count == 0)
-        return selected;
-    return quietest_member(bank, i);
+    const int fine = selected >= bank->count ? bank->zoom_index[i][selected - bank->count] : -1;
+    zoom_to(bank, i, centre);
+    if (selected < bank->count) return selected;
+    selected = centre;
+    for (int z = 0; z < ADAPTIVE_ZOOM; ++z)
+        if (fine >= 0 && bank->zoom_index[i][z] == fine) selected = bank->count + z;
+    return selected;
 }
 
 void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[],
@@ -402,51 +345,12 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                                   trace->z_filtered[i][k]);
                 }
                 integrate_nominal(&bank->secant[i], a_sta, h, h2);
-                for (int j = 0; j < bank->count; ++j) {
-                    AdaptiveMember *m = &members[j];
-                    const AdaptiveGains *gj = &bank->gains[j];
-                    const double r = member_step(m, gj, y[i], a[i], h, h2);
-                    weigh(&m->stats.mean_square, &m->stats.samples, r * r, gain);
-                    /* xi averaged over ADAPTIVE_AVERAGING of the member's time
-                     * constants 1/omega, in two first-order stages of half
-                     * that (less noise for the same delay), at least over tau */
-                    const double averaging = gj->publish_gain < g ? gj->publish_gain : g;
-                    m->averaged += averaging * (m->xi - m->averaged);
-                    m->published += averaging * (m->averaged - m->published);
-                    if (stride_start)
-                        track_strides(&m->stats, bank, tick, measured, m->x2_now, m->published);
-                }
-                for (int s = 0; s < ADAPTIVE_ZOOM; ++s) {
-                    if (bank->zoom_index[i][s] < 0) continue;
-                    AdaptiveMember *m = &bank->zoom[i][s];
-                    const double r = member_step(m, &bank->fine[bank->zoom_index[i][s]], y[i], a[i], h, h2);
-                    weigh(&m->stats.mean_square, &m->stats.samples, r * r, gain);
-                    if (stride_start)
-                        track_strides(&m->stats, bank, tick, measured, m->x2_now, m->published);
-                }
+                step_members(bank, i, y[i], a[i], h, h2, g, stride_start ? &measured : NULL,
+                             tick);
                 if (age >= ADAPTIVE_MIN_SAMPLES) {
-                    /* the centre: the member whose velocity matches the
-                     * secants best (see the header) */
-                    const int c = bank->center[i] < 0 ? 0 : bank->center[i];
-                    int best = c;
-                    for (int j = 0; j < bank->count; ++j)
-                        if (members[j].stats.ranking[ADAPTIVE_RANK_VELOCITY] <
-                            members[best].stats.ranking[ADAPTIVE_RANK_VELOCITY])
-                            best = j;
-                    if (bank->sta[i].velocity_samples > 0.0 &&
-                        (bank->center[i] < 0 ||
-                         members[best].stats.ranking[ADAPTIVE_RANK_VELOCITY] <
-                             ADAPTIVE_HYSTERESIS * members[c].stats.ranking[ADAPTIVE_RANK_VELOCITY])) {
-                        const int fine = selected >= bank->count
-                                             ? bank->zoom_index[i][selected - bank->count] : -1;
-                        zoom_to(bank, i, best);
-                        if (selected >= bank->count) {
-                            selected = best;
-                            for (int z = 0; z < ADAPTIVE_ZOOM; ++z)
-                                if (fine >= 0 && bank->zoom_index[i][z] == fine) selected = bank->count + z;
-                        }
-                    }
-                    const AdaptiveSelection choice = select_members(bank, i, selected, source);
+                    const int centre = adaptive_new_centre(bank, i);
+                    if (centre >= 0) selected = recentre(bank, i, centre, selected);
+                    const AdaptiveSelection choice = adaptive_select(bank, i, selected, source);
                     selected = choice.selected;
                     source = choice.source;
                 }
@@ -463,10 +367,10 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
             }
             trace->z_identify[i][k] =
                 follow == ADAPTIVE_SUPER_TWISTING ? trace->z_eq[i][k] : members[follow].xi;
-            published = stand_in(bank, i, selected, trace->saturated[i][k]);
+            published = adaptive_stand_in(bank, i, selected, trace->saturated[i][k]);
             bank->velocity[i] = published == ADAPTIVE_SUPER_TWISTING
                                     ? trace->velocity[i][k]
-                                    : member_at(bank, i, published)->x2_now;
+                                    : adaptive_member_at(bank, i, published)->x2_now;
             if (selected != ADAPTIVE_SUPER_TWISTING) {
                 /* the published velocity: the selected member's; the
                  * regressors' (the trace): the centre's, the member the
@@ -475,8 +379,8 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                  * different members and b's standard error was 1.55 times
                  * its spread over noise seeds) */
                 const int v = bank->center[i] >= 0 ? bank->center[i] : selected;
-                const AdaptiveMember *m = member_at(bank, i, v);
-                const AdaptiveGains *gs = gains_at(bank, i, v);
+                const AdaptiveMember *m = adaptive_member_at(bank, i, v);
+                const AdaptiveGains *gs = adaptive_gains_at(bank, i, v);
                 trace->velocity[i][k] = m->x2_now;
                 trace->velocity_sign[i][k] =
                     expected_sign(m->x2_now, gs->velocity_std * sqrt(m->stats.mean_square /
@@ -504,14 +408,14 @@ void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank)
         double mean_square = bank->sta[i].mean_square, variance = STA_INNOVATION_VARIANCE;
         bank->bandwidth[i] = 1.0 / h;
         if (published != ADAPTIVE_SUPER_TWISTING && o->primed) {
-            const AdaptiveMember *m = member_at(bank, i, published);
+            const AdaptiveMember *m = adaptive_member_at(bank, i, published);
             implicit_predict(m->z1, m->mid, m->a_mean, m->a_free + o->point[i], o->coulomb[i],
                              m->xi, 0.0, h, &o->x1_hat[i], &o->x2_hat[i]);
-            bank->bandwidth[i] = gains_at(bank, i, published)->omega;
+            bank->bandwidth[i] = adaptive_gains_at(bank, i, published)->omega;
         }
         if (selected != ADAPTIVE_SUPER_TWISTING && o->primed) {
-            mean_square = member_at(bank, i, selected)->stats.mean_square;
-            variance = gains_at(bank, i, selected)->innovation_variance;
+            mean_square = adaptive_member_at(bank, i, selected)->stats.mean_square;
+            variance = adaptive_gains_at(bank, i, selected)->innovation_variance;
         }
         if (bank->perturbation[i] != ADAPTIVE_SUPER_TWISTING && o->primed)
             o->z_eq[i] = bank->member[i][bank->perturbation[i]].xi;

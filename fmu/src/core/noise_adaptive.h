@@ -1,84 +1,53 @@
 /* The noise-adaptive scheme (scheme 3, the default): the implicit
  * super-twisting observer of implicit_twisting.c runs beside a bank of
  * linear observers of the same sampled model, and each DOF publishes the one
- * that predicts its measurements best.
+ * that predicts its measurements best.  The reasoning and the measurements
+ * behind it are in docs/design/observer.md.
  *
  * Why: on exact samples the implicit super-twisting corrector is deadbeat
  * (x1_hat lands on y, the injection is the exact second-difference residual),
  * which no linear filter beats.  On real measurements (noise, encoder
- * quantization, a plant integrated differently from the observer's
- * leapfrog model) its innovation leaves the sliding set h^2 alpha1 at once
- * and the injection saturates to +-alpha1, noise of variance alpha1^2.
- * A linear correction with Kalman gains for the measured noise level is the
- * minimum-variance answer there, and with the nominal model inside it beats
- * model-free differentiators (a constant-acceleration Kalman filter, a
- * Savitzky-Golay filter), which must track the whole acceleration.
+ * quantization, a plant integrated differently from the observer's model)
+ * its injection saturates to +-alpha1, noise of variance alpha1^2; a linear
+ * correction with Kalman gains for the noise level is the minimum-variance
+ * answer there, and with the nominal model inside it beats model-free
+ * differentiators, which must track the whole acceleration.
  *
- * Each linear member uses the implicit scheme's leapfrog prediction with the
+ * Members: each uses the implicit scheme's leapfrog prediction with the
  * injection xi held, x1^- = x1 + h m + h^2 (a_mean + xi), and corrects with
  * the steady-state Kalman gain K of the model [x1, m, xi] (xi a random walk)
  * for one ratio of process to measurement noise, r = y - x1^-:
  *     m  <- m + h (a_mean + xi) + K2 r,   xi <- xi + K3 r,   x1 <- y - (1 - K1) r.
  * The super-twisting corrector in sliding is the member K = (1, 1/h, 1/h^2).
  * The ratios are set by a bandwidth omega (q = omega^6 h^2 per step against
- * R = 1), from 2 rad/s up to 0.5/h, a factor ADAPTIVE_RATIO apart.
+ * R = 1), from ADAPTIVE_LOWEST_BANDWIDTH up to ADAPTIVE_HIGHEST_BANDWIDTH / h,
+ * a factor ADAPTIVE_RATIO apart; ADAPTIVE_ZOOM zoom members run on a grid
+ * ADAPTIVE_FINE times finer below the centre member.
  *
- * Selection of the published velocity: the member of the smallest one-step
- * innovation mean square (exponentially weighted, window ADAPTIVE_WINDOW),
- * which for an unknown noise level is the maximum-likelihood member (multiple-
- * model adaptive estimation: -0.5 (ln S + r^2 / S) maximized over S as well).
- * Members 1.8x apart leave the best one 2-11 % above the best-tuned Kalman
- * filter (model-free robot joints, 17-bit encoders), so ADAPTIVE_ZOOM zoom
- * members run on a grid ADAPTIVE_FINE times finer around the member of the
- * smallest innovation mean square (the centre; ADAPTIVE_CENTER_HYSTERESIS):
- * a new centre starts the zoom members that are not yet there from its own
- * state and statistics.  The published velocity is the smallest innovation
- * mean square among the centre and its zoom members.  The velocity ranking
- * below, which compares velocities with secants of the measurements, decides
- * between that member and the super-twisting observer only: ranking the
- * members by it published members 1.8x too fast on model-free robot joints
- * (the secant's curvature, without a model, favours fast members).
+ * Rankings (all exponentially weighted over ADAPTIVE_WINDOW):
+ * - innovation: each observer's one-step innovation mean square, which for
+ *   an unknown noise level picks the maximum-likelihood member;
+ * - velocity: every stride (ADAPTIVE_SECANT_TIME / ADAPTIVE_SLOTS, at least one
+ *   step) each observer's velocity against the secant of the measurements
+ *   over the ADAPTIVE_SLOTS strides around it, corrected by the nominal
+ *   model's curvature over the span (without it the secant misses the ripple
+ *   a switching controller puts on the velocity);
+ * - perturbation: each observer's published perturbation (a member's xi
+ *   averaged over ADAPTIVE_AVERAGING / omega, the super-twisting injection
+ *   through the tau filter) against the change between two corrected secants
+ *   ADAPTIVE_PERTURBATION_SPANS spans apart minus the nominal model's change.
  *
- * The velocity ranking: every stride (ADAPTIVE_SECANT_TIME /
- * ADAPTIVE_SLOTS, at least one step), each observer's velocity is compared
- * with the secant of the measurements over the ADAPTIVE_SLOTS strides around
- * it, (y_k - y_(k-2D)) / 2D, corrected by the nominal model's curvature over
- * the same span (its mean velocity minus its velocity at the middle, from the
- * nominal acceleration integrated once and twice): without the correction the
- * secant misses the sample-rate ripple that a switching controller puts on
- * the velocity, which every model-based observer follows.  The noise of the
- * secant and the perturbation's curvature are common to all observers, so the
- * smallest exponentially weighted mean square (window ADAPTIVE_WINDOW) ranks
- * their velocity errors; the other observer takes over when its mean square is
- * below ADAPTIVE_HYSTERESIS times the published one's.  The span is a time:
- * a horizon of 16 samples at 10 kHz made the velocity error's share of the
- * criterion 1e-3 of the noise's and picked members 6x too fast.
- *
- * Selection of the published perturbation: each observer's published
- * perturbation (a member's xi averaged over ADAPTIVE_AVERAGING / omega, the
- * super-twisting injection through the tau filter) is compared at every
- * stride with the measured one: the change between two corrected secants
- * ADAPTIVE_PERTURBATION_SPANS spans apart minus the nominal model's change
- * between their middles, over the time between them, which is the mean
- * perturbation over that time (noise 2 sigma / (spans span^2), common to all
- * observers).  The same window and hysteresis choose.  Ranking by the error
- * of a 16-sample prediction of the measurement chose members 2-4x too slow
- * (6.1 sine at noise 1e-5: RMS 0.070 with a 98 ms delay, the best member
- * 0.023); secants one span apart left the noise of the comparison so large
- * at 1e-3 that it ranked too fast members first (RMS 0.33; 4 spans 0.11,
- * 8 spans 0.080, the best member 0.076).
- *
- * On exact data the super-twisting observer stays published
- * as long as its one-sample innovations are far below every member's
- * (ADAPTIVE_EXACT_RATIO) and its injection rarely saturates
- * (ADAPTIVE_SATURATION_LIMIT): there it is deadbeat, and the members' small
- * lag shows over the horizon as little as its O(h^2) model mismatch does.
- * A plant that does not move like the observer's sampled model (explicit
- * Euler with a switching input: the second difference sees the input of one
- * interval, the model the mean of two) keeps its innovations small but
- * saturates its injection every step; a member averages that mismatch out.
- * The measurement noise estimate is the selected member's mean square
- * innovation over its steady-state innovation variance (per unit R).
+ * The rules (adaptive_rules.h, one function each): the centre of the zoom
+ * members is the member of the best velocity ranking (ADAPTIVE_HYSTERESIS to
+ * move); the velocity candidate is the smallest innovation among the centre,
+ * the member below it and the zoom members, and the velocity ranking decides
+ * between it and the super-twisting observer; the perturbation ranking picks
+ * the published perturbation; exact data (the super-twisting innovation below
+ * ADAPTIVE_EXACT_RATIO times every member's while its injection saturates in
+ * fewer than ADAPTIVE_SATURATION_LIMIT of the steps) keeps the super-twisting
+ * observer; while its injection saturates, the quietest member stands in for
+ * its velocity.  The measurement noise estimate is the selected member's
+ * innovation mean square over its steady-state innovation variance.
  *
  * The Coulomb regressor of a linear member is E[sign v | x2_hat] =
  * erf(x2_hat / (sqrt 2 sigma_v)), sigma_v its velocity error for the noise
@@ -89,9 +58,8 @@
  * member's closed-loop filter G, so the regressor must pass the same G
  * (adaptive_shadow_step) for xi = Delta (G phi) to hold; the identifier
  * follows one member, fixed when it starts: the one whose velocity is
- * published then, or the centre if that is a zoom member (its xi; the
- * regressors take the centre's velocity, see adaptive_run; following the
- * perturbation's member instead left 10 kHz 16-bit data at 1.8 % for 0.37 %). */
+ * published then, or the centre if that is a zoom member (the regressors take
+ * the centre's velocity, see adaptive_run). */
 #ifndef NOISE_ADAPTIVE_H
 #define NOISE_ADAPTIVE_H
 
@@ -172,13 +140,13 @@ typedef struct {
     int started[STO_MAX_DOF];            /* the members run (the observer has converged) */
     unsigned waited[STO_MAX_DOF];        /* steps before they started */
     unsigned age[STO_MAX_DOF];           /* steps since they started */
-    int selected[STO_MAX_DOF];           /* whose velocity is chosen (select_members): a
+    int selected[STO_MAX_DOF];           /* whose velocity is chosen (adaptive_select): a
                                           * member index or ADAPTIVE_SUPER_TWISTING */
     int published[STO_MAX_DOF];          /* whose velocity is published at the last sample:
                                           * `selected`, or while the super-twisting injection
                                           * saturates, the member of the smallest one-step
-                                          * mean square (stand_in) */
-    int perturbation[STO_MAX_DOF];       /* whose injection is published (select_members) */
+                                          * mean square (adaptive_stand_in) */
+    int perturbation[STO_MAX_DOF];       /* whose injection is published (adaptive_select) */
     int follow;                          /* the member the identifier follows */
     double z_filtered[STO_MAX_DOF];      /* the published perturbation */
     double sta_filtered[STO_MAX_DOF];    /* the super-twisting injection through the tau filter */

@@ -15,6 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "adaptive_rules.h"
 #include "gains.h"
 #include "identifier.h"
 #include "implicit_twisting.h"
@@ -1019,6 +1020,95 @@ static int pipeline_identifies_a_joint(void)
     return failed;
 }
 
+/* ---- the noise-adaptive bank's selection rules (adaptive_rules.h) ------------------ */
+
+/* Each rule on a crafted bank of three members for DOF 0: the statistics set by
+ * hand, the choice checked against what the rule says. */
+static int adaptive_rules(void)
+{
+    AdaptiveBank *bank = calloc(1, sizeof *bank);
+    if (!bank) return 1;
+    const int ST = ADAPTIVE_SUPER_TWISTING, P = ADAPTIVE_RANK_PERTURBATION,
+              V = ADAPTIVE_RANK_VELOCITY;
+    AdaptiveMember *m = bank->member[0];
+    bank->count = 3;
+    for (int s = 0; s < ADAPTIVE_ZOOM; ++s) bank->zoom_index[0][s] = -1;
+    bank->center[0] = -1;
+    m[0].stats.mean_square = 3.0, m[1].stats.mean_square = 1.0, m[2].stats.mean_square = 2.0;
+    int failed = check(adaptive_quietest_member(bank, 0) == 1, "quietest member: 1 of {3, 1, 2}");
+
+    /* ranking with hysteresis */
+    int best = -1;
+    bank->sta[0].ranking[P] = 1.0;
+    m[0].stats.ranking[P] = 0.95, m[1].stats.ranking[P] = 2.0, m[2].stats.ranking[P] = 3.0;
+    failed += check(adaptive_choose(bank, 0, ST, P, &best) == ST && best == 0,
+                    "0.95 does not beat the super-twisting 1.0 by the hysteresis %g",
+                    ADAPTIVE_HYSTERESIS);
+    m[0].stats.ranking[P] = 0.8;
+    failed += check(adaptive_choose(bank, 0, ST, P, &best) == 0, "0.8 beats 1.0: member 0");
+    failed += check(adaptive_choose(bank, 0, 0, P, &best) == 0, "the current member stays");
+
+    /* exact data and saturation */
+    bank->sta[0].mean_square = 0.1; /* below 0.25 of the quietest member's 1.0 */
+    failed += check(adaptive_exact_data(bank, 0), "exact data: the super-twisting observer kept");
+    const AdaptiveSelection kept = adaptive_select(bank, 0, 1, 2);
+    failed += check(kept.selected == ST && kept.source == ST, "exact data overrides the choice");
+    bank->sta_saturation[0] = 0.2;
+    failed += check(!adaptive_exact_data(bank, 0), "a saturating injection is not exact data");
+    bank->sta[0].ranking[P] = 0.5; /* the super-twisting perturbation ranks best ... */
+    failed += check(adaptive_perturbation_choice(bank, 0, ST) == 0,
+                    "... but saturates: the best member's perturbation (0)");
+    bank->sta_saturation[0] = 0.0;
+    failed += check(adaptive_perturbation_choice(bank, 0, ST) == ST,
+                    "not saturating: the super-twisting perturbation");
+    bank->sta[0].mean_square = 10.0;
+
+    /* the velocity: candidate among the centre, the member below and the zooms */
+    bank->center[0] = 2;
+    failed += check(adaptive_velocity_candidate(bank, 0) == 1,
+                    "the member below the centre has the smaller innovation (1 < 2)");
+    bank->zoom_index[0][0] = 4;
+    bank->zoom[0][0].stats.mean_square = 0.5;
+    failed += check(adaptive_velocity_candidate(bank, 0) == bank->count + 0,
+                    "a zoom member with a smaller innovation (0.5) is the candidate");
+    bank->sta[0].ranking[V] = 1.0;
+    bank->zoom[0][0].stats.ranking[V] = 0.95;
+    failed += check(adaptive_velocity_choice(bank, 0, ST, bank->count) == ST,
+                    "the candidate's secant ranking 0.95 does not beat 1.0 by the hysteresis");
+    bank->zoom[0][0].stats.ranking[V] = 0.5;
+    failed += check(adaptive_velocity_choice(bank, 0, ST, bank->count) == bank->count,
+                    "0.5 does: the zoom member publishes");
+    failed += check(adaptive_velocity_choice(bank, 0, bank->count, bank->count) == bank->count,
+                    "and stays until the super-twisting observer beats it by the hysteresis");
+
+    /* the stand-in while the super-twisting injection saturates */
+    failed += check(adaptive_stand_in(bank, 0, ST, 1) == ST, "members not started: no stand-in");
+    bank->started[0] = 1;
+    failed += check(adaptive_stand_in(bank, 0, ST, 1) == 1, "saturated: the quietest member");
+    failed += check(adaptive_stand_in(bank, 0, ST, 0) == ST, "not saturated: the selection");
+    failed += check(adaptive_stand_in(bank, 0, 2, 1) == 2, "a member selected: itself");
+
+    /* the centre of the zoom members */
+    bank->center[0] = -1;
+    bank->sta[0].velocity_samples = 0.0;
+    m[0].stats.ranking[V] = 3.0, m[1].stats.ranking[V] = 1.0, m[2].stats.ranking[V] = 2.0;
+    failed += check(adaptive_new_centre(bank, 0) == -1, "no secant compared yet: no centre");
+    bank->sta[0].velocity_samples = 1.0;
+    failed += check(adaptive_new_centre(bank, 0) == 1, "the first centre: the best ranked, 1");
+    bank->center[0] = 2;
+    m[1].stats.ranking[V] = 1.9;
+    failed += check(adaptive_new_centre(bank, 0) == -1,
+                    "1.9 does not beat the centre's 2.0 by the hysteresis: kept");
+    m[1].stats.ranking[V] = 1.0;
+    failed += check(adaptive_new_centre(bank, 0) == 1, "1.0 does: the centre moves to 1");
+
+    bank->count = 0;
+    const AdaptiveSelection none = adaptive_select(bank, 0, 1, 1);
+    failed += check(none.selected == ST && none.source == ST, "no member fits: super-twisting");
+    free(bank);
+    return failed;
+}
+
 int main(int argc, char **argv)
 {
     static const struct {
@@ -1040,6 +1130,7 @@ int main(int argc, char **argv)
         {"statistics_job_equals_full_solve", statistics_job_equals_full_solve},
         {"anchor_solve_spread", anchor_solve_spread},
         {"pipeline_identifies_a_joint", pipeline_identifies_a_joint},
+        {"adaptive_rules", adaptive_rules},
     };
     const size_t n_cases = sizeof cases / sizeof cases[0];
     if (argc < 2) {

@@ -1,0 +1,154 @@
+/* The noise-adaptive bank's selection rules (noise_adaptive.h describes the bank),
+ * one function per rule over the bank's statistics, so that each is read and
+ * tested alone (tests/fmu/core/test_core.c, case adaptive_rules).  Header-only;
+ * noise_adaptive.c applies them after every step. */
+#ifndef ADAPTIVE_RULES_H
+#define ADAPTIVE_RULES_H
+
+#include "noise_adaptive.h"
+
+/* The selection after a step: whose velocity is published and whose injection is
+ * the published perturbation (member indices, or ADAPTIVE_SUPER_TWISTING). */
+typedef struct {
+    int selected, source;
+} AdaptiveSelection;
+
+/* A member by its index: the members, then the zoom members. */
+static inline const AdaptiveMember *adaptive_member_at(const AdaptiveBank *bank, int i, int index)
+{
+    return index < bank->count ? &bank->member[i][index] : &bank->zoom[i][index - bank->count];
+}
+
+static inline const AdaptiveGains *adaptive_gains_at(const AdaptiveBank *bank, int i, int index)
+{
+    return index < bank->count ? &bank->gains[index]
+                               : &bank->fine[bank->zoom_index[i][index - bank->count]];
+}
+
+/* The member of the smallest one-step innovation mean square (count > 0). */
+static inline int adaptive_quietest_member(const AdaptiveBank *bank, int i)
+{
+    const AdaptiveMember *members = bank->member[i];
+    int best = 0;
+    for (int j = 1; j < bank->count; ++j)
+        if (members[j].stats.mean_square < members[best].stats.mean_square) best = j;
+    return best;
+}
+
+/* Ranking: the observer of the smallest mean square of a ranking, or the current
+ * one unless the best is smaller by ADAPTIVE_HYSTERESIS.  *best gets the best member. */
+static inline int adaptive_choose(const AdaptiveBank *bank, int i, int current, int rank, int *best)
+{
+    const AdaptiveMember *members = bank->member[i];
+    *best = 0;
+    for (int j = 1; j < bank->count; ++j)
+        if (members[j].stats.ranking[rank] < members[*best].stats.ranking[rank]) *best = j;
+    const double sta = bank->sta[i].ranking[rank], member = members[*best].stats.ranking[rank];
+    const double now =
+        current == ADAPTIVE_SUPER_TWISTING ? sta : members[current].stats.ranking[rank];
+    const int candidate = member < sta ? *best : ADAPTIVE_SUPER_TWISTING;
+    return (member < sta ? member : sta) < ADAPTIVE_HYSTERESIS * now ? candidate : current;
+}
+
+/* Saturation: the super-twisting injection saturates in at least
+ * ADAPTIVE_SATURATION_LIMIT of the steps (the perturbation outruns alpha1). */
+static inline int adaptive_saturating(const AdaptiveBank *bank, int i)
+{
+    return bank->sta_saturation[i] >= ADAPTIVE_SATURATION_LIMIT;
+}
+
+/* Exact data: unless it saturates, the deadbeat super-twisting corrector that
+ * predicts the next sample far better than any linear member is kept. */
+static inline int adaptive_exact_data(const AdaptiveBank *bank, int i)
+{
+    if (adaptive_saturating(bank, i)) return 0;
+    const double smallest = bank->member[i][adaptive_quietest_member(bank, i)].stats.mean_square;
+    return bank->sta[i].mean_square < ADAPTIVE_EXACT_RATIO * smallest;
+}
+
+/* Velocity candidate: the member of the smallest one-step innovation mean square
+ * among the centre, the member below it and the zoom members (the
+ * maximum-likelihood bandwidth for an unknown noise level). */
+static inline int adaptive_velocity_candidate(const AdaptiveBank *bank, int i)
+{
+    const AdaptiveMember *members = bank->member[i];
+    int member = bank->center[i];
+    if (member > 0 && members[member - 1].stats.mean_square < members[member].stats.mean_square)
+        member = member - 1;
+    for (int s = 0; s < ADAPTIVE_ZOOM; ++s)
+        if (bank->zoom_index[i][s] >= 0 &&
+            bank->zoom[i][s].stats.mean_square <
+                adaptive_member_at(bank, i, member)->stats.mean_square)
+            member = bank->count + s;
+    return member;
+}
+
+/* Velocity: the candidate against the super-twisting observer by the secant
+ * ranking, with hysteresis either way. */
+static inline int adaptive_velocity_choice(const AdaptiveBank *bank, int i, int selected,
+                                           int candidate)
+{
+    const double c = adaptive_member_at(bank, i, candidate)->stats.ranking[ADAPTIVE_RANK_VELOCITY];
+    const double st = bank->sta[i].ranking[ADAPTIVE_RANK_VELOCITY];
+    if (selected == ADAPTIVE_SUPER_TWISTING)
+        return c < ADAPTIVE_HYSTERESIS * st ? candidate : selected;
+    return st < ADAPTIVE_HYSTERESIS * c ? ADAPTIVE_SUPER_TWISTING : candidate;
+}
+
+/* Perturbation: the perturbation ranking; a super-twisting observer whose
+ * injection saturates often gives way to the best member's perturbation. */
+static inline int adaptive_perturbation_choice(const AdaptiveBank *bank, int i, int source)
+{
+    int best;
+    const int chosen = adaptive_choose(bank, i, source, ADAPTIVE_RANK_PERTURBATION, &best);
+    return chosen == ADAPTIVE_SUPER_TWISTING && adaptive_saturating(bank, i) ? best : chosen;
+}
+
+/* The rules together, after a step of DOF i. */
+static inline AdaptiveSelection adaptive_select(const AdaptiveBank *bank, int i, int selected,
+                                                int source)
+{
+    const AdaptiveSelection super_twisting = {ADAPTIVE_SUPER_TWISTING, ADAPTIVE_SUPER_TWISTING};
+    if (bank->count == 0) return super_twisting; /* h > 0.25 s: no member fits */
+    if (adaptive_exact_data(bank, i)) return super_twisting;
+    AdaptiveSelection choice = {selected, source};
+    if (bank->sta[i].velocity_samples > 0.0 && bank->center[i] >= 0)
+        choice.selected =
+            adaptive_velocity_choice(bank, i, selected, adaptive_velocity_candidate(bank, i));
+    if (bank->sta[i].perturbation_samples > 0.0)
+        choice.source = adaptive_perturbation_choice(bank, i, source);
+    return choice;
+}
+
+/* Stand-in: whose velocity is published at a sample is the selected observer's,
+ * but for the super-twisting observer while its injection saturates: then the
+ * perturbation outruns alpha1 and its velocity error grows by the excess times
+ * h every step; a linear member has no bound to outrun, so the member of the
+ * smallest one-step mean square stands in. */
+static inline int adaptive_stand_in(const AdaptiveBank *bank, int i, int selected, int saturated)
+{
+    if (selected != ADAPTIVE_SUPER_TWISTING || !saturated || !bank->started[i] || bank->count == 0)
+        return selected;
+    return adaptive_quietest_member(bank, i);
+}
+
+/* Centre: the member whose velocity matches the corrected secants best becomes
+ * the centre of the zoom members when it beats the current centre by
+ * ADAPTIVE_HYSTERESIS (or there is none yet); returns it, or -1 to keep the centre. */
+static inline int adaptive_new_centre(const AdaptiveBank *bank, int i)
+{
+    const AdaptiveMember *members = bank->member[i];
+    const int c = bank->center[i] < 0 ? 0 : bank->center[i];
+    int best = c;
+    for (int j = 0; j < bank->count; ++j)
+        if (members[j].stats.ranking[ADAPTIVE_RANK_VELOCITY] <
+            members[best].stats.ranking[ADAPTIVE_RANK_VELOCITY])
+            best = j;
+    const int due = bank->sta[i].velocity_samples > 0.0 &&
+                    (bank->center[i] < 0 || members[best].stats.ranking[ADAPTIVE_RANK_VELOCITY] <
+                                                ADAPTIVE_HYSTERESIS *
+                                                    members[c].stats.ranking[ADAPTIVE_RANK_VELOCITY]);
+    return due ? best : -1;
+}
+
+#endif
