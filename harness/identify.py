@@ -253,15 +253,6 @@ class _Thinned:
         return {k: np.concatenate([p[k] for p in self.parts]) for k in self.parts[0]}
 
 
-def largest_internal_step(observer_fmu: Path) -> float | None:
-    """The largest h the observer FMU declares (its variable h's max)."""
-    from fmpy import read_model_description
-
-    from .fmus import variables_of
-
-    return variables_of(read_model_description(str(observer_fmu)))["h"].max
-
-
 def default_internal_step(step: float, h_max: float | None) -> float:
     """The observer's h when the user gives none: the sample step itself
     (sub-stepping would hold y constant over a sample, a staircase the observer

@@ -252,14 +252,6 @@ def _near(events: np.ndarray, h: float, margin: float) -> np.ndarray:
     return (upper - lower) > 0
 
 
-def torque_prediction_error(robot: Robot, pi: np.ndarray, q, qd, qdd, u) -> float:
-    """The field's metric: RMS of the torque prediction error over RMS of the torque."""
-    n = robot.n
-    body = robot.rigid_body(link=pi[:10 * n].reshape(n, 10), friction=pi[10 * n:].reshape(n, 2))
-    error = body.inverse_dynamics(q, qd, qdd) - u
-    return float(np.sqrt(np.mean(error ** 2)) / np.sqrt(np.mean(u ** 2)))
-
-
 def write_results(out: Path, robot: Robot, log: JointLog, result: Identification,
                   data_name: str) -> list[Path]:
     """velocities.csv, parameters.csv, identified.urdf, summary.json and a plot."""
