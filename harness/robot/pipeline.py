@@ -55,26 +55,29 @@ class JointLog:
 
     @property
     def step(self) -> float:
-        return float(self.t[1] - self.t[0])
+        """The sampling step: the mean step (robust to the rounding of epoch stamps)."""
+        return float((self.t[-1] - self.t[0]) / (len(self.t) - 1))
 
 
 def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
-             relative_tolerance: float = 1e-6) -> JointLog:
-    """Columns t, q1..qn, u1..un (or the names `mapping` gives them), evenly sampled."""
+             relative_tolerance: float = 0.01) -> JointLog:
+    """Columns t, q1..qn, u1..un (or the names `mapping` gives them), evenly sampled:
+    every step within `relative_tolerance` of the mean step (a logger's jitter, the
+    rounding of epoch time stamps), the samples then taken as evenly spaced.  Read in
+    chunks, so that a long log takes little more than its numbers' memory."""
     path, mapping = Path(path), dict(mapping or {})
     wanted = ["t"] + [f"q{i}" for i in range(1, n + 1)] + [f"u{i}" for i in range(1, n + 1)]
     try:
         with path.open(newline="", encoding="utf-8-sig") as handle:
-            rows = list(csv.reader(handle))
+            header = [name.strip() for name in next(csv.reader(handle), [])]
     except OSError as error:
         raise LogError(f"{path}: cannot open ({error.strerror or error})") from None
     except (UnicodeDecodeError, csv.Error) as error:
         raise LogError(f"{path}: not a readable UTF-8 CSV file ({error})") from None
-    if not rows:
+    if not header:
         raise LogError(f"{path}: empty file")
-    header = [name.strip() for name in rows[0]]
     positions = [k for k in header if k.startswith("q") and k[1:].isdigit()]
-    indices = []
+    columns = []
     for name in wanted:
         column = mapping.get(name, name)
         if column not in header:
@@ -82,26 +85,71 @@ def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
                     f"joints" if positions and len(positions) != n else "")
             raise LogError(f"{path}: no column {column!r} (needed: {', '.join(wanted)}; "
                            f"found: {', '.join(header)}){hint}")
-        indices.append(header.index(column))
+        columns.append(column)
     if len(positions) > n and not mapping:
         raise LogError(f"{path}: {len(positions)} position columns for a robot of {n} joints")
-    data = np.empty((len(rows) - 1, len(indices)))
-    for line, row in enumerate(rows[1:], start=2):
-        try:
-            data[line - 2] = [float(row[k]) for k in indices]
-        except (ValueError, IndexError):
-            raise LogError(f"{path} line {line}: a missing or non-numeric value") from None
-        if not np.all(np.isfinite(data[line - 2])):
-            bad = [wanted[k] for k in range(len(wanted)) if not np.isfinite(data[line - 2, k])]
-            raise LogError(f"{path} line {line}: {', '.join(bad)} is NaN or infinite")
+    data = _read_columns(path, header, columns, wanted)
     if len(data) < 10:
         raise LogError(f"{path}: {len(data)} samples; identification needs many more")
     t = data[:, 0]
     steps = np.diff(t)
-    if not np.all(steps > 0) or np.ptp(steps) > relative_tolerance * steps.mean() + 1e-12:
-        raise LogError(f"{path}: t must increase by a constant step (steps from "
-                       f"{steps.min():g} to {steps.max():g} s)")
+    mean = (t[-1] - t[0]) / (len(t) - 1)
+    if not np.all(steps > 0):
+        line = int(np.argmax(~(steps > 0))) + 3
+        raise LogError(f"{path} line {line}: t does not increase ({t[line - 3]:.17g}, then "
+                       f"{t[line - 2]:.17g})")
+    worst = int(np.argmax(np.abs(steps - mean)))
+    if abs(steps[worst] - mean) > relative_tolerance * mean:
+        raise LogError(f"{path} line {worst + 3}: a step of {steps[worst]:.6g} s where the mean "
+                       f"step is {mean:.6g} s; the samples must be evenly spaced within "
+                       f"{100 * relative_tolerance:g} % (a gap, or a clock that jitters more: "
+                       "resample the log first)")
     return JointLog(t, data[:, 1:1 + n], data[:, 1 + n:])
+
+
+def _read_columns(path: Path, header: list[str], columns: list[str],
+                  roles: list[str]) -> np.ndarray:
+    """The columns as floats, (N, len(columns)), read in chunks by pandas' C parser
+    (the memory of the numbers and one chunk); a missing, non-numeric or non-finite
+    value is a LogError naming its line and role."""
+    import pandas as pd
+
+    indices = [header.index(column) for column in columns]
+    order = np.argsort(indices)  # pandas returns the used columns in file order
+    chunks = []
+    try:
+        reader = pd.read_csv(path, header=None, skiprows=1, usecols=indices, dtype=float,
+                             engine="c", chunksize=1 << 17)
+        for chunk in reader:
+            block = np.empty((len(chunk), len(indices)))
+            block[:, order] = chunk.to_numpy()
+            chunks.append(block)
+    except (ValueError, pd.errors.ParserError) as error:
+        line, role = _first_bad_value(path, indices, roles)
+        raise LogError(f"{path} line {line}: {role} is not a number ({error})") from None
+    data = np.concatenate(chunks) if chunks else np.empty((0, len(indices)))
+    del chunks
+    bad = ~np.isfinite(data)
+    if bad.any():
+        row = int(np.argmax(bad.any(axis=1)))
+        which = [roles[k] for k in range(len(roles)) if bad[row, k]]
+        raise LogError(f"{path} line {row + 2}: {', '.join(which)} is NaN, infinite or "
+                       "missing")
+    return data
+
+
+def _first_bad_value(path: Path, indices: list[int], roles: list[str]) -> tuple[int, str]:
+    """(line, role) of the first value that is not a number (only when reading failed)."""
+    with path.open(newline="", encoding="utf-8-sig", errors="replace") as handle:
+        rows = csv.reader(handle)
+        next(rows, None)
+        for line, row in enumerate(rows, start=2):
+            for index, role in zip(indices, roles):
+                try:
+                    float(row[index])
+                except (ValueError, IndexError):
+                    return line, role
+    return 0, "a value"
 
 
 def _odd(count: int) -> int:
