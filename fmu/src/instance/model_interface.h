@@ -81,6 +81,33 @@ typedef struct {
     void *context;
 } ModelLogger;
 
+/* How one field (or array) of the model data block that is not a variable
+ * of the table is checked in a restored state (ModelDescriptor.state_fields). */
+typedef enum {
+    FIELD_DERIVED,  /* set by initialize from the parameters alone: equal to a fresh initialize's */
+    FIELD_INT,      /* int elements in [min, max] */
+    FIELD_UNSIGNED, /* unsigned elements in [min, max] */
+    FIELD_REAL,     /* doubles in [min, max]; a NAN bound is a finite one, an infinite
+                     * bound admits that infinity */
+    FIELD_REALS,    /* every 8-byte word in the field that no earlier entry covers is a
+                     * finite double (a struct of doubles and listed ints) */
+    FIELD_ANY       /* doubles that may hold NaN in a state the model wrote (a factor's
+                     * unused entries): only ever multiplied, never an index or a count */
+} FieldCheck;
+
+typedef struct StateField {
+    const char *name;
+    size_t offset, size;
+    FieldCheck check;
+    double min, max;
+} StateField;
+
+/* STATE_FIELD(ModelData, obs.primed, FIELD_INT, 0, 1) */
+#define STATE_FIELD(type, field, kind, lo, hi) \
+    {#field, offsetof(type, field), sizeof(((type *)0)->field), kind, lo, hi}
+#define DERIVED_FIELD(type, field) STATE_FIELD(type, field, FIELD_DERIVED, 0, 0)
+#define REAL_FIELDS(type, field) STATE_FIELD(type, field, FIELD_REALS, 0, 0)
+
 typedef struct {
     const char *model_name;
     const char *model_identifier;
@@ -112,11 +139,21 @@ typedef struct {
      * outputs that are not read straight from the state, and check them (a
      * diverged state).  May log; MODEL_ERROR if the outputs cannot be trusted. */
     ModelStatus (*communication_point)(void *data, double t, const ModelLogger *log);
-    /* Optional (NULL: nothing to check): consistency of a deserialized data
-     * block's internal state beyond the parameter ranges the layer checks
-     * (array counts, indices), so that a forged state cannot index out of
-     * bounds.  May log; MODEL_ERROR refuses the state. */
-    ModelStatus (*check_restored)(const void *data, const ModelLogger *log);
+    /* A deserialized state that can step again is checked field by field
+     * before it is accepted (the checksum only detects accidents: anyone can
+     * recompute it).  The layer checks the variables of the table, re-runs
+     * initialize on a copy of the state and checks each entry of state_fields
+     * against it; every 8-byte word of the data block that no variable or
+     * entry covers must be a finite double.  So every field that is not a
+     * double must be listed, with its range or as derived. */
+    const struct StateField *state_fields;
+    size_t n_state_fields;
+    /* Optional (NULL: nothing more): the invariants between fields that the
+     * table cannot state (indices below a count held in another field).
+     * `initialized` is the state's own parameters and inputs through
+     * initialize.  May log; MODEL_ERROR refuses the state. */
+    ModelStatus (*check_restored)(const void *data, const void *initialized,
+                                  const ModelLogger *log);
 } ModelDescriptor;
 
 /* Every model has the parameter max_internal_steps, at the same value

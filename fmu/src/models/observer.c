@@ -731,25 +731,60 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
     return MODEL_OK;
 }
 
-/* A deserialized state: every count and index the step loops trust must fit
- * its array (a state saved before initialization has zero counts). */
-static ModelStatus check_restored(const void *data, const ModelLogger *log)
+/* A deserialized state, field by field (model_interface.h): what initialize
+ * derives from the parameters must be what it derives from the state's own;
+ * the counters the steps move must lie in their ranges; every double not
+ * listed must be finite. */
+#define D(field) DERIVED_FIELD(ObserverData, field)
+#define I(field, lo, hi) STATE_FIELD(ObserverData, field, FIELD_INT, lo, hi)
+#define U(field) STATE_FIELD(ObserverData, field, FIELD_UNSIGNED, 0, 4294967295.0)
+static const StateField STATE_FIELDS[] = {
+    D(m), D(selected), D(slot_velocity), D(slot_velocity_sign), D(slot_input),
+    D(identifier_gain), I(reset_seen, 0, 1),
+    D(obs.n), D(obs.h), D(obs.h_squared), D(obs.inverse_h_squared), D(obs.alpha1),
+    D(obs.alpha2), D(obs.filter_gain), D(obs.rate_gain), D(obs.scheme), I(obs.primed, 0, 1),
+    I(obs.reversal_age, -1, IMPLICIT_REVERSAL_SAMPLES - 1),
+    I(obs.smooth_samples, 0, IMPLICIT_SMOOTH_SAMPLES),
+    D(bank.count), D(bank.gain), D(bank.stride), D(bank.span), D(bank.velocity_gain),
+    D(bank.start_limit), D(bank.gains), D(bank.fine),
+    I(bank.zoom_index, -1, (ADAPTIVE_MAX_MEMBERS - 1) * ADAPTIVE_FINE),
+    I(bank.center, -1, ADAPTIVE_MAX_MEMBERS - 1), I(bank.started, 0, 1), U(bank.waited),
+    U(bank.age), I(bank.selected, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS + ADAPTIVE_ZOOM - 1),
+    I(bank.published, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS + ADAPTIVE_ZOOM - 1),
+    I(bank.perturbation, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS - 1),
+    I(bank.follow, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS - 1),
+    D(id.kind), D(id.rows), D(id.m), D(id.h), D(id.h_log_r),
+    D(info.rows), D(info.m), D(info.drift), D(info.h), D(info.rho), D(info.lambda),
+    D(info.one_minus_lambda_rho), D(info.forgetting_rate), D(info.anchor_interval),
+    I(info.anchor_age, 0, INFO_ANCHOR_MAX_INTERVAL), STATE_FIELD(ObserverData, info.reference_factor, FIELD_ANY, 0, 0), D(info.reference_lambda),
+    D(info.reference_pull), D(info.rest_lambda), D(info.rest_pull), D(info.skip_threshold),
+    D(info.batch_gain), D(info.power_gain), I(info.std_age, 0, INFO_STD_INTERVAL),
+    D(info.blocks.rows), D(info.blocks.m), D(info.blocks.pairs), D(info.blocks.first),
+    D(info.blocks.second), D(info.blocks.stage_gain_per_second),
+    /* the doubles, named by their struct */
+    REAL_FIELDS(ObserverData, obs), REAL_FIELDS(ObserverData, bank), REAL_FIELDS(ObserverData, id),
+    REAL_FIELDS(ObserverData, info.blocks), REAL_FIELDS(ObserverData, info),
+};
+#undef D
+#undef I
+#undef U
+
+/* What the field table cannot state: the bank's indices below its member count. */
+static ModelStatus check_restored(const void *data, const void *initialized,
+                                  const ModelLogger *log)
 {
     const ObserverData *d = data;
-    const int regressors = d->nominal_model == NOMINAL_JOINT ? JOINT_BASIS_SIZE + 1 : d->l;
-    int ok = d->obs.n >= 0 && d->obs.n <= MAX_N && d->m >= 0 && d->m <= regressors &&
-             d->id.rows >= 0 && d->id.rows <= ID_MAX_ROWS && d->id.m >= 0 &&
-             d->id.m <= ID_MAX_REGRESSORS && d->info.rows >= 0 && d->info.rows <= ID_MAX_ROWS &&
-             d->info.m >= 0 && d->info.m <= ID_MAX_REGRESSORS &&
-             (!d->info.drift || d->info.m <= ID_MAX_REGRESSORS / 2) &&
-             (d->obs.n == 0 || d->obs.n == d->n) && adaptive_valid(&d->bank, d->n);
-    ok = ok && d->slot_velocity >= 0 && d->slot_velocity <= MAX_L && d->slot_velocity_sign >= 0 &&
-         d->slot_velocity_sign <= MAX_L;
-    for (int j = 0; ok && j < d->m; ++j) ok = d->selected[j] >= 0 && d->selected[j] < regressors;
-    if (!ok) {
-        log->log(log->context, MODEL_ERROR,
-                 "deserialized FMU state: the observer's internal counts are inconsistent "
-                 "(n = %d, observer n = %d, m = %d); state refused", d->n, d->obs.n, d->m);
+    (void)initialized;
+    if (!adaptive_valid(&d->bank, d->n)) {
+        log->log(log->context, MODEL_ERROR, "deserialized FMU state: an index of bank (center, "
+                 "zoom_index, selected, published, perturbation or follow) is not one of its %d "
+                 "members; state refused", d->bank.count);
+        return MODEL_ERROR;
+    }
+    if (d->info.anchor_age > d->info.anchor_interval) {
+        log->log(log->context, MODEL_ERROR, "deserialized FMU state: info.anchor_age = %d exceeds "
+                 "info.anchor_interval = %d; state refused", d->info.anchor_age,
+                 d->info.anchor_interval);
         return MODEL_ERROR;
     }
     return MODEL_OK;
@@ -771,5 +806,7 @@ const ModelDescriptor MODEL_DESCRIPTOR = {
     .max_internal_steps = max_internal_steps,
     .advance = advance,
     .communication_point = communication_point,
+    .state_fields = STATE_FIELDS,
+    .n_state_fields = sizeof STATE_FIELDS / sizeof STATE_FIELDS[0],
     .check_restored = check_restored,
 };
