@@ -577,6 +577,20 @@ Status instance_do_step(Instance *inst, const char *function, double t, double H
                              "max_internal_steps (value reference %u) before initialization",
                              function, t, t_end, (unsigned long long)(k_end - clock->steps), h,
                              (unsigned long long)limit, (unsigned)MAX_INTERNAL_STEPS_VR);
+    /* The same refusal by the work it would take: the step count alone lets an
+     * expensive configuration (a 7-joint robot with its identifier) run for minutes. */
+    const uint64_t steps = k_end - clock->steps;
+    const double cost = MD.work_per_step(inst->data), budget = MD.max_work(inst->data);
+    if ((double)steps * cost > budget) {
+        const double most = floor(budget / cost);
+        return instance_fail(inst, "%s: the step from %.17g to %.17g needs %llu internal steps "
+                             "of h = %g at work_per_step = %g work units each, %.4g units, more "
+                             "than the work budget max_work = %.4g; take communication steps "
+                             "of at most %.0f internal steps (%g s) or raise the parameter "
+                             "max_work (value reference %u) before initialization", function, t,
+                             t_end, (unsigned long long)steps, h, cost, (double)steps * cost,
+                             budget, most, most * h, (unsigned)MAX_WORK_VR);
+    }
     /* Called even when the step reaches no grid point (H < h): the model sees
      * every communication step's inputs (a rising edge of a discrete input
      * held for one short step is never lost). */
@@ -658,7 +672,7 @@ Status instance_free_state(Instance *inst, const char *function, void **state)
 /* Serialized layout (native byte order; valid for the same binary):
  *   magic[8] (the API's) | u32 version | u32 reserved | u64 total size |
  *   u64 hash of the GUID | u64 checksum of everything after it | Clock | model data */
-#define STATE_VERSION 1u
+#define STATE_VERSION 2u /* 2: the work budget variables in every model */
 typedef struct {
     char magic[8];
     uint32_t version;

@@ -125,10 +125,16 @@ typedef struct {
     /* The fixed internal step h of this instance (valid after initialize). */
     double (*internal_step)(const void *data);
     /* The most internal steps one doStep may take (the model's parameter
-     * max_internal_steps, MODEL_MAX_INTERNAL_STEPS_VARIABLE): the layer refuses
-     * a longer communication step before doing any work, so that no call runs
-     * for hours and cannot be cancelled. */
+     * max_internal_steps, MAX_INTERNAL_STEPS_VARIABLE) ... */
     uint64_t (*max_internal_steps)(const void *data);
+    /* ... and the work budget of one doStep (the parameter max_work) and the
+     * model's estimate of the work of one internal step (the calculated parameter
+     * work_per_step, from the configuration; valid after initialize), both in work
+     * units (WORK_VARIABLES).  The layer refuses a communication step over either
+     * limit before doing any work, so that no call runs for minutes and cannot
+     * be cancelled. */
+    double (*max_work)(const void *data);
+    double (*work_per_step)(const void *data);
     /* The internal steps k = k_first .. k_end - 1 of one communication step,
      * step k going from start_time + k h to start_time + (k + 1) h with the
      * inputs held.  One call per communication step, so that the model can
@@ -164,9 +170,34 @@ typedef struct {
     {.name = "max_internal_steps", .vr = MAX_INTERNAL_STEPS_VR, .type = TYPE_INTEGER,             \
      PARAM(.offset = (field_offset), .start = MAX_INTERNAL_STEPS_DEFAULT, .min = 1,               \
            .max = 2147483647,                                                                     \
-           .description = "Most internal steps one doStep may take (10^7: about 0.1 to 2 "       \
-                          "s of work); a longer communication step is refused with an error "    \
-                          "before any work. Raise it for longer steps (docs/observer.md, Limits)")}
+           .description = "Most internal steps one doStep may take; a longer communication "    \
+                          "step is refused with an error before any work (the work budget "      \
+                          "max_work bounds it too). Raise it for longer steps (docs/observer.md, " \
+                          "Limits)")}
+
+/* Every model has the parameter max_work and the calculated parameter
+ * work_per_step, at the same value references.  A work unit is about a
+ * nanosecond of one core of a 2020s x86-64 machine: each model's
+ * work_per_step is an upper bound of its measured time per internal step in
+ * its configuration (docs/observer.md, Limits), so the default budget of 10^9
+ * units bounds one doStep to about a second. */
+#define MAX_WORK_VR 121
+#define WORK_PER_STEP_VR 122
+#define MAX_WORK_DEFAULT 1e9
+#define WORK_VARIABLES(max_work_offset, work_per_step_offset)                                     \
+    {.name = "max_work", .vr = MAX_WORK_VR, .type = TYPE_REAL,                                     \
+     PARAM(.offset = (max_work_offset), .start = MAX_WORK_DEFAULT, .min = 0.0, .max = NAN,        \
+           .min_exclusive = true,                                                                 \
+           .description = "Work budget of one doStep in work units (about a nanosecond of "      \
+                          "one core each): a communication step whose internal steps times "      \
+                          "work_per_step exceed it is refused with an error before any work "     \
+                          "(10^9: about 1 s). Raise it for longer steps (docs/observer.md, "      \
+                          "Limits)")},                                                            \
+    {.name = "work_per_step", .vr = WORK_PER_STEP_VR, .type = TYPE_REAL,                           \
+     CALC(.offset = (work_per_step_offset),                                                       \
+          .description = "Work units of one internal step in this configuration (the "           \
+                         "model's estimate; the budget max_work allows max_work / "               \
+                         "work_per_step internal steps per doStep)")}
 
 /* Each model file defines exactly one of these (read-only, not state). */
 extern const ModelDescriptor MODEL_DESCRIPTOR;

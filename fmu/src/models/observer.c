@@ -43,8 +43,10 @@ typedef struct {
     double tau_identifier;
     int model_feedback;
     int max_internal_steps;
+    double max_work;
     /* calculated parameters */
     double alpha1_used[MAX_N], alpha2_used[MAX_N];
+    double work_per_step;
     /* inputs */
     double y[MAX_N], u, F[MAX_N], phi[MAX_L];
     int identifier_reset;
@@ -261,6 +263,7 @@ static const ModelVariable VARIABLES[] = {
      .description = "Scheme 3: bandwidth of the published observer (1/h: the super-twisting "
                     "observer)")},
     MAX_INTERNAL_STEPS_VARIABLE(OFF(max_internal_steps)),
+    WORK_VARIABLES(OFF(max_work), OFF(work_per_step)),
 };
 
 /* theta_hat from the identified corrections.  Built-in joint: the injection
@@ -411,6 +414,24 @@ static void update_model(ObserverData *d)
             fmax(d->obs.coulomb_learned[0] + coulomb_before - coulomb, -coulomb);
 }
 
+/* Work units (about ns, model_interface.h) of one internal step: upper bounds
+ * of the time measured per configuration (docs/observer.md, Limits): the
+ * observer per DOF (scheme 3: the bank of linear observers beside it), the
+ * identifier's sums over its d (2m with MFF's drift model) regressors and rows,
+ * and under scheme 3 the regressors' pass through the followed member's filter. */
+static double step_work(const ObserverData *d)
+{
+    const double n = d->n, m = d->m;
+    double work = d->scheme == STO_SCHEME_PAPER      ? 10.0 * n
+                  : d->scheme == STO_SCHEME_IMPLICIT ? 15.0 * n
+                                                     : 600.0 + 50.0 * n;
+    if (d->identifier != IDENTIFIER_OFF) {
+        const double dim = d->info.drift && d->identifier_form == FORM_INFORMATION ? 2.0 * m : m;
+        work += 100.0 + 8.0 * dim * (n + dim) + (d->scheme == STO_SCHEME_ADAPTIVE ? 50.0 * m : 0.0);
+    }
+    return work;
+}
+
 static ModelStatus initialize(void *data, double start_time, const ModelLogger *log)
 {
     (void)start_time;
@@ -483,12 +504,17 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     update_model(d);
     memset(d->model_shadow, 0, sizeof d->model_shadow);
     d->model_z = 0.0;
+    d->work_per_step = step_work(d);
     d->reset_seen = d->identifier_reset;
     publish_estimates(d);
     return status;
 }
 
 static double internal_step(const void *data) { return ((const ObserverData *)data)->h; }
+
+static double max_work(const void *data) { return ((const ObserverData *)data)->max_work; }
+
+static double work_per_step(const void *data) { return ((const ObserverData *)data)->work_per_step; }
 
 static uint64_t max_internal_steps(const void *data)
 {
@@ -804,6 +830,8 @@ const ModelDescriptor MODEL_DESCRIPTOR = {
     .initialize = initialize,
     .internal_step = internal_step,
     .max_internal_steps = max_internal_steps,
+    .max_work = max_work,
+    .work_per_step = work_per_step,
     .advance = advance,
     .communication_point = communication_point,
     .state_fields = STATE_FIELDS,

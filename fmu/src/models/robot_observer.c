@@ -43,8 +43,10 @@ typedef struct {
     int base_columns[MAX_P];
     double base_nominal[MAX_P];
     int max_internal_steps;
+    double max_work;
     /* calculated parameters */
     double alpha1_used[MAX_N], alpha2_used[MAX_N];
+    double work_per_step;
     /* inputs */
     double q[MAX_N], u[MAX_N];
     int identifier_reset;
@@ -176,6 +178,7 @@ static const ModelVariable VARIABLES[] = {
      PARAM(.offset = OFF(base_nominal), .start = 0.0, UNBOUNDED,
      .description = "The base parameters of the nominal model (the estimates start here)")},
     MAX_INTERNAL_STEPS_VARIABLE(OFF(max_internal_steps)),
+    WORK_VARIABLES(OFF(max_work), OFF(work_per_step)),
     {.name = "alpha1_used", .vr = 500, .rows = MAX_N, .type = TYPE_REAL,
      CALC(.offset = OFF(alpha1_used), .unit = "rad/s2",
      .description = "alpha1 in use (given, or from Theorem 3.1)")},
@@ -343,6 +346,17 @@ static void publish_estimates(RobotData *d)
     d->converged = d->obs.steps > 0.0 && ro_converged(&d->obs);
 }
 
+/* Work units (about ns, model_interface.h) of one internal step: upper bounds
+ * of the time measured for 1-7 joints and 2n-12n parameters (docs/robots.md):
+ * the corrector and the forward dynamics per joint, then the identifier's rank-n
+ * update of its p-parameter sums (structural zeros skipped) and the statistics
+ * job's fixed slice. */
+static double step_work(const RobotData *d)
+{
+    const double n = d->n, p = d->base_count;
+    return 400.0 * n + (d->identifier ? 1000.0 + n * p * (p + 3.0) / 6.0 : 0.0);
+}
+
 static ModelStatus initialize(void *data, double start_time, const ModelLogger *log)
 {
     (void)start_time;
@@ -375,11 +389,16 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     sj_init(&d->statistics, d->identifier ? d->base_count : 1,
             sj_interval_steps(d->statistics_interval, d->h), SJ_BUDGET);
     d->statistics_seen = 0.0;
+    d->work_per_step = step_work(d);
     publish_estimates(d);
     return MODEL_OK;
 }
 
 static double internal_step(const void *data) { return ((const RobotData *)data)->h; }
+
+static double max_work(const void *data) { return ((const RobotData *)data)->max_work; }
+
+static double work_per_step(const void *data) { return ((const RobotData *)data)->work_per_step; }
 
 static uint64_t max_internal_steps(const void *data)
 {
@@ -509,6 +528,8 @@ const ModelDescriptor MODEL_DESCRIPTOR = {
     .initialize = initialize,
     .internal_step = internal_step,
     .max_internal_steps = max_internal_steps,
+    .max_work = max_work,
+    .work_per_step = work_per_step,
     .advance = advance,
     .communication_point = communication_point,
     .state_fields = STATE_FIELDS,
