@@ -100,12 +100,12 @@ LONG = [(ROBOT, robot(7, 1, 14), 1e4), (ROBOT, robot(7, 1, 84), 1e4), (ROBOT, {}
 def _long_step_refused(model: str, parameters: dict, H: float):
     f = Raw(model)
     assert f.initialize(parameters) <= 1, f.messages()
-    h, work = f.get_real(["h", "work_per_step"])[1]
-    steps = round(H / h)
-    assert steps <= 10**7  # within max_internal_steps: only the budget refuses it
     start = time.perf_counter()
     assert f.do_step(0.0, H) == ERROR, "accepted"
     assert time.perf_counter() - start < QUICK
+    h, work = f.get_real(["h", "work_per_step"])[1]  # getters stay allowed in the Error state
+    steps = round(H / h)
+    assert steps <= 10**7  # within max_internal_steps: only the budget refuses it
     errors = f.errors()
     assert f"needs {steps} internal steps of h = {h:g} at work_per_step = {work:g}" in errors
     assert f"{steps * work:.4g} units, more than the work budget max_work = 1e+09" in errors
