@@ -173,6 +173,10 @@ CONFIGURATIONS = [
     (ROBOT, {**SETUP[ROBOT], "identifier": 0}),
     (ROBOT, {**SETUP[ROBOT], "statistics_interval": 0.0, "min_speed": 0.0,
              "reversal_margin": 0.0}),
+    (ROBOT, {**SETUP[ROBOT], "identifier": 2, "n": 7, "base_count": 84,
+             **{f"f_plus[{i}]": 1000.0 for i in range(3, 8)},
+             **{f"base_columns[{k + 1}]": k for k in range(84)}}),
+    (OBS, {"identifier": 2, "nominal_model": 2, "n": 2, "l": 4, "mff_drift": True}),
     ("Pendulum", {}), ("TwistingController", {}),
 ]
 
@@ -186,7 +190,7 @@ def _outputs(f: Raw) -> list[float]:
 
 
 @pytest.mark.parametrize("model, parameters", CONFIGURATIONS,
-                         ids=[f"{m}-{'-'.join(f'{k}={v}' for k, v in p.items())}"
+                         ids=[f"{m}-{'-'.join(f'{k}={v}' for k, v in p.items())}"[:90]
                               for m, p in CONFIGURATIONS])
 def test_fmi2_states_the_fmu_wrote_are_accepted_and_continue_exactly(model, parameters):
     def run():
