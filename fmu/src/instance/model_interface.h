@@ -87,8 +87,8 @@ typedef enum {
     FIELD_DERIVED,  /* set by initialize from the parameters alone: equal to a fresh initialize's */
     FIELD_INT,      /* int elements in [min, max] */
     FIELD_UNSIGNED, /* unsigned elements in [min, max] */
-    FIELD_REAL,     /* doubles in [min, max]; a NAN bound is a finite one, an infinite
-                     * bound admits that infinity */
+    FIELD_REAL,     /* doubles in [min, max] (a NAN bound: any finite value on that side;
+                     * an infinite bound admits that infinity) */
     FIELD_REALS,    /* every 8-byte word in the field that no earlier entry covers is a
                      * finite double (a struct of doubles and listed ints) */
     FIELD_ANY       /* doubles that may hold NaN in a state the model wrote (a factor's
