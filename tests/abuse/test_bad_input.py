@@ -545,7 +545,7 @@ for m in MODELS:
             ("oversized-by-1", lambda d: d + b"\0", "wrong size"),
             ("oversized-x2", lambda d: d + d, "wrong size"),
             ("flip-magic", flip(0), "not a serialized FMU state (bad magic)"),
-            ("flip-version", flip(8, 3), "format version 9, expected 1"),
+            ("flip-version", flip(8, 3), "format version 10, expected 2"),
             ("flip-size-field", flip(16, 1), "state of another FMU or build"),
             ("flip-guid-hash", flip(24, 7), "state of another FMU or build"),
             ("flip-checksum", flip(32), "checksum mismatch (corrupted state)"),

@@ -546,7 +546,7 @@ def test_serialized_state_continues_in_another_instance_and_bad_buffers_are_reje
         rejected(bytes(flipped), "checksum mismatch (corrupted state)")
     version = bytearray(good)
     version[8] ^= 0x01  # the format version follows the 8-byte magic
-    rejected(bytes(version), "format version 0, expected 1")
+    rejected(bytes(version), "format version 3, expected 2")
     guid = bytearray(good)
     guid[24] ^= 0x01  # the GUID hash follows magic, version, reserved and size
     rejected(bytes(guid), "state of another FMU or build")

@@ -4,7 +4,7 @@
 
 fuzz_deserialize/<model>/: valid serialized states of each FMU (after
 initialization and after some steps, with identification on for the
-observer) in each of the target's four modes.  fuzz_calls/: call sequences in
+observer) in the target's modes 0-3, and forged-field patches (mode 4).  fuzz_calls/: call sequences in
 fuzz_calls.c's encoding (a normal life, FMU states, resets, bad values).
 The serialized states are valid for the build they came from; for another
 build they are still useful seeds (the fuzzer mutates them anyway)."""
@@ -30,7 +30,8 @@ def write(folder: Path, data: bytes) -> None:
 def states(model: str) -> list[bytes]:
     parameters = {"SuperTwistingObserver": {"identifier": 1, "identifier_start": 0},
                   "Pendulum": {"damping": 1, "disturbance": 1},
-                  "TwistingController": {}}[model]
+                  "TwistingController": {},
+                  "RobotObserver": {"f_plus[1]": 1000.0, "f_plus[2]": 1000.0}}[model]
     f = Raw(model, "seed")
     assert f.initialize(parameters) == OK, f.messages()
     out = []
@@ -80,6 +81,11 @@ def main() -> None:
             write(folder, bytes([3]) + state)
             write(folder, bytes([2]) + state[:40])
             write(folder, bytes([1]) + bytes([0, 8, 3, 1, 2, 3]))  # a patch of the payload
+        # mode 4, forged fields: (kind, field hi, field lo, element, value) per patch; kind 0
+        # the model's field table, 1 the clock, 2 a variable
+        for field in range(0, 48, 3):
+            write(folder, bytes([4, 0, 0, field, 0, 200 + field % 28]))
+        write(folder, bytes([4, 0, 0, 2, 0, 255, 0, 0, 3, 0, 70, 2, 0, 1, 0, 0]))
     for sequence in CALLS:
         write(CORPUS / "fuzz_calls", bytes(sequence))
     print(f"seeds in {CORPUS}: {sum(1 for p in CORPUS.rglob('*') if p.is_file())}")

@@ -346,18 +346,3 @@ void op_communicate(ObserverPipeline *p, ObserverEstimates *out)
     publish(p, out);
     update_model(p);
 }
-
-int op_state_valid(const ObserverPipeline *p)
-{
-    const int regressors = p->nominal_model == OP_NOMINAL_JOINT ? JOINT_BASIS_SIZE + 1 : p->l;
-    int ok = p->obs.n >= 0 && p->obs.n <= MAX_N && p->m >= 0 && p->m <= regressors &&
-             p->id.rows >= 0 && p->id.rows <= ID_MAX_ROWS && p->id.m >= 0 &&
-             p->id.m <= ID_MAX_REGRESSORS && p->info.rows >= 0 && p->info.rows <= ID_MAX_ROWS &&
-             p->info.m >= 0 && p->info.m <= ID_MAX_REGRESSORS &&
-             (!p->info.drift || p->info.m <= ID_MAX_REGRESSORS / 2) &&
-             (p->obs.n == 0 || p->obs.n == p->n) && adaptive_valid(&p->bank, p->n);
-    ok = ok && p->slot_velocity >= 0 && p->slot_velocity <= MAX_L && p->slot_velocity_sign >= 0 &&
-         p->slot_velocity_sign <= MAX_L;
-    for (int j = 0; ok && j < p->m; ++j) ok = p->selected[j] >= 0 && p->selected[j] < regressors;
-    return ok;
-}

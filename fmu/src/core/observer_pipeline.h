@@ -115,9 +115,4 @@ void op_run(ObserverPipeline *p, const ObserverInputs *in, double start_time, ui
  * the model the observer predicts with brought up to date. */
 void op_communicate(ObserverPipeline *p, ObserverEstimates *out);
 
-/* Whether a state restored from bytes keeps every count and index the step
- * loops trust within its array (a state saved before initialization has zero
- * counts). */
-int op_state_valid(const ObserverPipeline *p);
-
 #endif

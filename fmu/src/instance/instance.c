@@ -6,6 +6,7 @@
 #endif
 #include "instance.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -315,7 +316,7 @@ static int data_valid(const Instance *inst, const char *function, const void *da
         if (var->causality != CAUSALITY_PARAMETER && var->causality != CAUSALITY_INPUT) continue;
         for (size_t e = 0; e < model_variable_count(var); ++e) {
             const double value = element_value(data, var, e);
-            if (!in_range(var, value)) {
+            if (var->type == TYPE_BOOLEAN ? value != 0.0 && value != 1.0 : !in_range(var, value)) {
                 char name[64];
                 element_name(var, e, name, sizeof name);
                 instance_log(inst, STATUS_ERROR, "%s: %s = %g in the state is not finite or out "
@@ -576,6 +577,20 @@ Status instance_do_step(Instance *inst, const char *function, double t, double H
                              "max_internal_steps (value reference %u) before initialization",
                              function, t, t_end, (unsigned long long)(k_end - clock->steps), h,
                              (unsigned long long)limit, (unsigned)MAX_INTERNAL_STEPS_VR);
+    /* The same refusal by the work it would take: the step count alone lets an
+     * expensive configuration (a 7-joint robot with its identifier) run for minutes. */
+    const uint64_t steps = k_end - clock->steps;
+    const double cost = MD.work_per_step(inst->data), budget = MD.max_work(inst->data);
+    if ((double)steps * cost > budget) {
+        const double most = floor(budget / cost);
+        return instance_fail(inst, "%s: the step from %.17g to %.17g needs %llu internal steps "
+                             "of h = %g at work_per_step = %g work units each, %.4g units, more "
+                             "than the work budget max_work = %.4g; take communication steps "
+                             "of at most %.0f internal steps (%g s) or raise the parameter "
+                             "max_work (value reference %u) before initialization", function, t,
+                             t_end, (unsigned long long)steps, h, cost, (double)steps * cost,
+                             budget, most, most * h, (unsigned)MAX_WORK_VR);
+    }
     /* Called even when the step reaches no grid point (H < h): the model sees
      * every communication step's inputs (a rising edge of a discrete input
      * held for one short step is never lost). */
@@ -657,7 +672,7 @@ Status instance_free_state(Instance *inst, const char *function, void **state)
 /* Serialized layout (native byte order; valid for the same binary):
  *   magic[8] (the API's) | u32 version | u32 reserved | u64 total size |
  *   u64 hash of the GUID | u64 checksum of everything after it | Clock | model data */
-#define STATE_VERSION 1u
+#define STATE_VERSION 2u /* 2: the work budget variables in every model */
 typedef struct {
     char magic[8];
     uint32_t version;
@@ -706,6 +721,171 @@ Status instance_serialize(Instance *inst, const char *function, const void *stat
     return STATUS_OK;
 }
 
+/* ---- restored model data ----------------------------------------------------
+ * A serialized state is native bytes behind an unkeyed checksum: anyone can
+ * patch a field and recompute it.  So the data block is accepted only if it
+ * is one that this FMU could have written itself, field by field. */
+
+static void silent_log(void *context, ModelStatus status, const char *format, ...)
+{
+    (void)context, (void)status, (void)format;
+}
+
+/* Before initialization only the setters have written: the block must be the
+ * start values with the variables' values (built the same way, byte for byte). */
+static int unstarted_data_valid(const Instance *inst, const char *function,
+                                const unsigned char *data)
+{
+    unsigned char *fresh = malloc(MD.data_size);
+    if (!fresh) {
+        instance_log(inst, STATUS_ERROR, "%s: out of memory", function);
+        return 0;
+    }
+    apply_start_values(fresh);
+    for (size_t v = 0; v < MD.n_variables; ++v) {
+        const ModelVariable *var = &MD.variables[v];
+        const size_t element = var->type == TYPE_REAL ? sizeof(double) : sizeof(int);
+        memcpy(fresh + var->offset, data + var->offset, model_variable_count(var) * element);
+    }
+    size_t at = 0;
+    while (at < MD.data_size && fresh[at] == data[at]) ++at;
+    free(fresh);
+    if (at == MD.data_size) return 1;
+    instance_log(inst, STATUS_ERROR, "%s: the state is one before initialization, but its "
+                 "internal data (byte %zu of %zu) is not the start state; state refused",
+                 function, at, MD.data_size);
+    return 0;
+}
+
+static void mark(unsigned char *covered, size_t offset, size_t size)
+{
+    memset(covered + offset, 1, size);
+}
+
+/* Every 8-byte word of [offset, offset + size) that nothing covers is a finite
+ * double (a word that holds part of a listed int is its padding).  Logs the first
+ * offender by the field's name and byte. */
+static int reals_valid(const Instance *inst, const char *function, const unsigned char *data,
+                       unsigned char *covered, const char *name, size_t offset, size_t size)
+{
+    for (size_t at = offset + (8 - offset % 8) % 8; at + 8 <= offset + size; at += 8) {
+        int free_word = 1;
+        for (size_t b = 0; b < 8; ++b) free_word &= !covered[at + b];
+        if (!free_word) continue;
+        double value;
+        memcpy(&value, data + at, sizeof value);
+        if (!isfinite(value)) {
+            instance_log(inst, STATUS_ERROR, "%s: %s (its byte %zu) = %g in the state is not "
+                         "finite; state refused", function, name, at - offset, value);
+            return 0;
+        }
+        mark(covered, at, 8);
+    }
+    return 1;
+}
+
+static int field_valid(const Instance *inst, const char *function, const StateField *f,
+                       const unsigned char *data, const unsigned char *initialized,
+                       unsigned char *covered)
+{
+    const size_t width = f->check == FIELD_REAL ? sizeof(double) : sizeof(int);
+    if (f->offset > MD.data_size || f->size > MD.data_size - f->offset ||
+        (f->check <= FIELD_REAL && f->size % width != 0)) {
+        instance_log(inst, STATUS_ERROR, "%s: the model's field table is wrong at %s", function,
+                     f->name);
+        return 0;
+    }
+    if (f->check == FIELD_REALS)
+        return reals_valid(inst, function, data, covered, f->name, f->offset, f->size);
+    mark(covered, f->offset, f->size);
+    if (f->check == FIELD_ANY) return 1;
+    if (f->check == FIELD_DERIVED) {
+        if (memcmp(data + f->offset, initialized + f->offset, f->size) == 0) return 1;
+        instance_log(inst, STATUS_ERROR, "%s: %s in the state is not what initialization derives "
+                     "from the state's own parameters; state refused", function, f->name);
+        return 0;
+    }
+    const double lo = isnan(f->min) ? -DBL_MAX : f->min, hi = isnan(f->max) ? DBL_MAX : f->max;
+    for (size_t e = 0; e < f->size / width; ++e) {
+        double value;
+        const unsigned char *at = data + f->offset + e * width;
+        if (f->check == FIELD_REAL) {
+            memcpy(&value, at, sizeof value);
+        } else if (f->check == FIELD_INT) {
+            int i;
+            memcpy(&i, at, sizeof i);
+            value = i;
+        } else {
+            unsigned u;
+            memcpy(&u, at, sizeof u);
+            value = u;
+        }
+        if (!(value >= lo && value <= hi)) {
+            char index[32] = "";
+            if (f->size > width) snprintf(index, sizeof index, " (element %zu)", e);
+            instance_log(inst, STATUS_ERROR, "%s: %s%s = %.17g in the state is out of its range "
+                         "[%.17g, %.17g]; state refused", function, f->name, index, value, lo, hi);
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* A state that can step again: the variables of the table (calculated
+ * parameters as initialization derives them, outputs finite), the model's
+ * field table, every other word a finite double, then the model's own
+ * invariants.  The state's parameters go through initialize on a copy. */
+static int stepping_data_valid(Instance *inst, const char *function, const Clock *clock,
+                               const unsigned char *data)
+{
+    unsigned char *initialized = malloc(MD.data_size);
+    unsigned char *covered = calloc(MD.data_size, 1);
+    int ok = initialized && covered;
+    if (!ok) instance_log(inst, STATUS_ERROR, "%s: out of memory", function);
+    ModelLogger silent = {silent_log, NULL};
+    if (ok) {
+        memcpy(initialized, data, MD.data_size);
+        ok = MD.initialize(initialized, clock->start_time, &silent) != MODEL_ERROR;
+        if (!ok)
+            instance_log(inst, STATUS_ERROR, "%s: the state's parameters do not initialize; "
+                         "state refused", function);
+    }
+    for (size_t v = 0; ok && v < MD.n_variables; ++v) {
+        const ModelVariable *var = &MD.variables[v];
+        const size_t count = model_variable_count(var);
+        const size_t bytes = count * (var->type == TYPE_REAL ? sizeof(double) : sizeof(int));
+        mark(covered, var->offset, bytes);
+        for (size_t e = 0; ok && e < count; ++e) {
+            const double value = element_value(data, var, e);
+            const double derived = element_value(initialized, var, e);
+            char name[64];
+            element_name(var, e, name, sizeof name);
+            if (var->causality == CAUSALITY_CALCULATED_PARAMETER &&
+                memcmp(&value, &derived, sizeof value) != 0) {
+                instance_log(inst, STATUS_ERROR, "%s: %s = %g in the state is not what "
+                             "initialization derives from the state's own parameters (%g); "
+                             "state refused", function, name, value, derived);
+                ok = 0;
+            } else if (var->causality == CAUSALITY_OUTPUT &&
+                       (var->type == TYPE_BOOLEAN ? value != 0.0 && value != 1.0
+                                                  : !isfinite(value))) {
+                instance_log(inst, STATUS_ERROR, "%s: the output %s = %g in the state is not "
+                             "%s; state refused", function, name, value,
+                             var->type == TYPE_BOOLEAN ? "a Boolean" : "finite");
+                ok = 0;
+            }
+        }
+    }
+    for (size_t f = 0; ok && f < MD.n_state_fields; ++f)
+        ok = field_valid(inst, function, &MD.state_fields[f], data, initialized, covered);
+    if (ok) ok = reals_valid(inst, function, data, covered, "the model data", 0, MD.data_size);
+    ModelLogger logger = model_logger(inst);
+    if (ok && MD.check_restored) ok = MD.check_restored(data, initialized, &logger) != MODEL_ERROR;
+    free(covered);
+    free(initialized);
+    return ok;
+}
+
 Status instance_deserialize(Instance *inst, const char *function, const unsigned char *bytes,
                             size_t size, void **state)
 {
@@ -725,14 +905,29 @@ Status instance_deserialize(Instance *inst, const char *function, const unsigned
     const unsigned char *payload = bytes + sizeof header;
     if (header.checksum != fnv1a(payload, snapshot_size(), FNV_OFFSET))
         return instance_fail(inst, "%s: checksum mismatch (corrupted state)", function);
+    if (header.reserved != 0)
+        return instance_fail(inst, "%s: reserved header field %u is not 0", function,
+                             (unsigned)header.reserved);
     Clock clock;
     memcpy(&clock, payload, sizeof clock);
     if (!(clock.state & inst->api->restorable_states) || (clock.state & (clock.state - 1)))
         return instance_fail(inst, "%s: invalid instance state in buffer", function);
+    if (clock.stop_time_defined > 1u ||
+        (clock.stop_time_defined && !(clock.stop_time >= clock.start_time)))
+        return instance_fail(inst, "%s: inconsistent stop time in the state (defined = %u, "
+                             "stopTime = %g, startTime = %g)", function,
+                             (unsigned)clock.stop_time_defined, clock.stop_time, clock.start_time);
     const unsigned char *data = payload + offsetof(Snapshot, data);
     if (!data_valid(inst, function, data)) return instance_escalate(inst, STATUS_ERROR);
-    ModelLogger logger = model_logger(inst);
-    if (MD.check_restored && MD.check_restored(data, &logger) == MODEL_ERROR)
+    if ((clock.state & inst->api->unstarted_states) &&
+        (clock.steps != 0 || clock.comm_time != clock.start_time))
+        return instance_fail(inst, "%s: a state before initialization with %llu steps taken "
+                             "(time %g, start %g); state refused", function,
+                             (unsigned long long)clock.steps, clock.comm_time, clock.start_time);
+    if ((clock.state & inst->api->unstarted_states) && !unstarted_data_valid(inst, function, data))
+        return instance_escalate(inst, STATUS_ERROR);
+    if ((clock.state & inst->api->stepping_states) &&
+        !stepping_data_valid(inst, function, &clock, data))
         return instance_escalate(inst, STATUS_ERROR);
     /* The clock must be where its step count says: comm_time = start + steps h
      * (within a step); otherwise the next doStep could run ~2^53 steps. */

@@ -38,6 +38,10 @@ typedef struct {
     uint32_t instantiated_state;     /* the state after instantiation and reset */
     uint32_t error_state;            /* where an error leaves the instance */
     uint32_t restorable_states;      /* states a deserialized FMU state may carry */
+    uint32_t unstarted_states;       /* before initialization: the model data is the start
+                                      * values plus what the setters wrote */
+    uint32_t stepping_states;        /* from which doStep runs the model: a restored model
+                                      * state must be whole (every field checked) */
     uint32_t parameter_states;       /* states in which fixed parameters may be set */
     bool array_references;           /* FMI 3: one value reference per array */
     bool c_bool;                     /* booleans are C bool (FMI 3), not int (FMI 2) */

@@ -81,6 +81,33 @@ typedef struct {
     void *context;
 } ModelLogger;
 
+/* How one field (or array) of the model data block that is not a variable
+ * of the table is checked in a restored state (ModelDescriptor.state_fields). */
+typedef enum {
+    FIELD_DERIVED,  /* set by initialize from the parameters alone: equal to a fresh initialize's */
+    FIELD_INT,      /* int elements in [min, max] */
+    FIELD_UNSIGNED, /* unsigned elements in [min, max] */
+    FIELD_REAL,     /* doubles in [min, max] (a NAN bound: any finite value on that side;
+                     * an infinite bound admits that infinity) */
+    FIELD_REALS,    /* every 8-byte word in the field that no earlier entry covers is a
+                     * finite double (a struct of doubles and listed ints) */
+    FIELD_ANY       /* doubles that may hold NaN in a state the model wrote (a factor's
+                     * unused entries): only ever multiplied, never an index or a count */
+} FieldCheck;
+
+typedef struct StateField {
+    const char *name;
+    size_t offset, size;
+    FieldCheck check;
+    double min, max;
+} StateField;
+
+/* STATE_FIELD(ModelData, obs.primed, FIELD_INT, 0, 1) */
+#define STATE_FIELD(type, field, kind, lo, hi) \
+    {#field, offsetof(type, field), sizeof(((type *)0)->field), kind, lo, hi}
+#define DERIVED_FIELD(type, field) STATE_FIELD(type, field, FIELD_DERIVED, 0, 0)
+#define REAL_FIELDS(type, field) STATE_FIELD(type, field, FIELD_REALS, 0, 0)
+
 typedef struct {
     const char *model_name;
     const char *model_identifier;
@@ -98,10 +125,16 @@ typedef struct {
     /* The fixed internal step h of this instance (valid after initialize). */
     double (*internal_step)(const void *data);
     /* The most internal steps one doStep may take (the model's parameter
-     * max_internal_steps, MODEL_MAX_INTERNAL_STEPS_VARIABLE): the layer refuses
-     * a longer communication step before doing any work, so that no call runs
-     * for hours and cannot be cancelled. */
+     * max_internal_steps, MAX_INTERNAL_STEPS_VARIABLE) ... */
     uint64_t (*max_internal_steps)(const void *data);
+    /* ... and the work budget of one doStep (the parameter max_work) and the
+     * model's estimate of the work of one internal step (the calculated parameter
+     * work_per_step, from the configuration; valid after initialize), both in work
+     * units (WORK_VARIABLES).  The layer refuses a communication step over either
+     * limit before doing any work, so that no call runs for minutes and cannot
+     * be cancelled. */
+    double (*max_work)(const void *data);
+    double (*work_per_step)(const void *data);
     /* The internal steps k = k_first .. k_end - 1 of one communication step,
      * step k going from start_time + k h to start_time + (k + 1) h with the
      * inputs held.  One call per communication step, so that the model can
@@ -112,11 +145,21 @@ typedef struct {
      * outputs that are not read straight from the state, and check them (a
      * diverged state).  May log; MODEL_ERROR if the outputs cannot be trusted. */
     ModelStatus (*communication_point)(void *data, double t, const ModelLogger *log);
-    /* Optional (NULL: nothing to check): consistency of a deserialized data
-     * block's internal state beyond the parameter ranges the layer checks
-     * (array counts, indices), so that a forged state cannot index out of
-     * bounds.  May log; MODEL_ERROR refuses the state. */
-    ModelStatus (*check_restored)(const void *data, const ModelLogger *log);
+    /* A deserialized state that can step again is checked field by field
+     * before it is accepted (the checksum only detects accidents: anyone can
+     * recompute it).  The layer checks the variables of the table, re-runs
+     * initialize on a copy of the state and checks each entry of state_fields
+     * against it; every 8-byte word of the data block that no variable or
+     * entry covers must be a finite double.  So every field that is not a
+     * double must be listed, with its range or as derived. */
+    const struct StateField *state_fields;
+    size_t n_state_fields;
+    /* Optional (NULL: nothing more): the invariants between fields that the
+     * table cannot state (indices below a count held in another field).
+     * `initialized` is the state's own parameters and inputs through
+     * initialize.  May log; MODEL_ERROR refuses the state. */
+    ModelStatus (*check_restored)(const void *data, const void *initialized,
+                                  const ModelLogger *log);
 } ModelDescriptor;
 
 /* Every model has the parameter max_internal_steps, at the same value
@@ -127,9 +170,34 @@ typedef struct {
     {.name = "max_internal_steps", .vr = MAX_INTERNAL_STEPS_VR, .type = TYPE_INTEGER,             \
      PARAM(.offset = (field_offset), .start = MAX_INTERNAL_STEPS_DEFAULT, .min = 1,               \
            .max = 2147483647,                                                                     \
-           .description = "Most internal steps one doStep may take (10^7: about 0.1 to 2 "       \
-                          "s of work); a longer communication step is refused with an error "    \
-                          "before any work. Raise it for longer steps (docs/observer.md, Limits)")}
+           .description = "Most internal steps one doStep may take; a longer communication "    \
+                          "step is refused with an error before any work (the work budget "      \
+                          "max_work bounds it too). Raise it for longer steps (docs/observer.md, " \
+                          "Limits)")}
+
+/* Every model has the parameter max_work and the calculated parameter
+ * work_per_step, at the same value references.  A work unit is about a
+ * nanosecond of one core of a 2020s x86-64 machine: each model's
+ * work_per_step is an upper bound of its measured time per internal step in
+ * its configuration (docs/observer.md, Limits), so the default budget of 10^9
+ * units bounds one doStep to about a second. */
+#define MAX_WORK_VR 121
+#define WORK_PER_STEP_VR 122
+#define MAX_WORK_DEFAULT 1e9
+#define WORK_VARIABLES(max_work_offset, work_per_step_offset)                                     \
+    {.name = "max_work", .vr = MAX_WORK_VR, .type = TYPE_REAL,                                     \
+     PARAM(.offset = (max_work_offset), .start = MAX_WORK_DEFAULT, .min = 0.0, .max = NAN,        \
+           .min_exclusive = true,                                                                 \
+           .description = "Work budget of one doStep in work units (about a nanosecond of "      \
+                          "one core each): a communication step whose internal steps times "      \
+                          "work_per_step exceed it is refused with an error before any work "     \
+                          "(10^9: about 1 s). Raise it for longer steps (docs/observer.md, "      \
+                          "Limits)")},                                                            \
+    {.name = "work_per_step", .vr = WORK_PER_STEP_VR, .type = TYPE_REAL,                           \
+     CALC(.offset = (work_per_step_offset),                                                       \
+          .description = "Work units of one internal step in this configuration (the "           \
+                         "model's estimate; the budget max_work allows max_work / "               \
+                         "work_per_step internal steps per doStep)")}
 
 /* Each model file defines exactly one of these (read-only, not state). */
 extern const ModelDescriptor MODEL_DESCRIPTOR;

@@ -20,8 +20,10 @@ typedef struct {
     int start_from_measurement;
     double x1_hat_start[MAX_N], x2_hat_start[MAX_N];
     int max_internal_steps;
+    double max_work;
     /* calculated parameters */
     double alpha1_used[MAX_N], alpha2_used[MAX_N];
+    double work_per_step;
     /* inputs */
     ObserverInputs in;
     int identifier_reset;
@@ -206,6 +208,7 @@ static const ModelVariable VARIABLES[] = {
      .description = "Scheme 3: bandwidth of the published observer (1/h: the super-twisting "
                     "observer)")},
     MAX_INTERNAL_STEPS_VARIABLE(OFF(max_internal_steps)),
+    WORK_VARIABLES(OFF(max_work), OFF(work_per_step)),
 };
 
 static ModelStatus complete_gains(ObserverData *d, const ModelLogger *log)
@@ -259,6 +262,24 @@ static ModelStatus complete_gains(ObserverData *d, const ModelLogger *log)
     return status;
 }
 
+/* Work units (about ns, model_interface.h) of one internal step: upper bounds
+ * of the time measured per configuration (docs/observer.md, Limits): the
+ * observer per DOF (scheme 3: the bank of linear observers beside it), the
+ * identifier's sums over its d (2m with MFF's drift model) regressors and rows,
+ * and under scheme 3 the regressors' pass through the followed member's filter. */
+static double step_work(const ObserverPipeline *p)
+{
+    const double n = p->n, m = p->m;
+    double work = p->scheme == STO_SCHEME_PAPER      ? 10.0 * n
+                  : p->scheme == STO_SCHEME_IMPLICIT ? 15.0 * n
+                                                     : 600.0 + 50.0 * n;
+    if (p->identifier != IDENTIFIER_OFF) {
+        const double dim = p->info.drift && p->identifier_form == OP_FORM_INFORMATION ? 2.0 * m : m;
+        work += 100.0 + 8.0 * dim * (n + dim) + (p->scheme == STO_SCHEME_ADAPTIVE ? 50.0 * m : 0.0);
+    }
+    return work;
+}
+
 static ModelStatus initialize(void *data, double start_time, const ModelLogger *log)
 {
     (void)start_time;
@@ -290,11 +311,16 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
                  "mff_drift = false", ID_MAX_REGRESSORS, p->m);
         return MODEL_ERROR;
     }
+    d->work_per_step = step_work(p);
     d->reset_seen = d->identifier_reset;
     return status;
 }
 
 static double internal_step(const void *data) { return ((const ObserverData *)data)->pipe.h; }
+
+static double max_work(const void *data) { return ((const ObserverData *)data)->max_work; }
+
+static double work_per_step(const void *data) { return ((const ObserverData *)data)->work_per_step; }
 
 static uint64_t max_internal_steps(const void *data)
 {
@@ -361,16 +387,65 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
     return MODEL_OK;
 }
 
-/* A deserialized state: every count and index the step loops trust must fit
- * its array (a state saved before initialization has zero counts). */
-static ModelStatus check_restored(const void *data, const ModelLogger *log)
+/* A deserialized state, field by field (model_interface.h): what initialize
+ * derives from the parameters must be what it derives from the state's own;
+ * the counters the steps move must lie in their ranges; every double not
+ * listed must be finite. */
+#define D(field) DERIVED_FIELD(ObserverData, field)
+#define I(field, lo, hi) STATE_FIELD(ObserverData, field, FIELD_INT, lo, hi)
+#define U(field) STATE_FIELD(ObserverData, field, FIELD_UNSIGNED, 0, 4294967295.0)
+static const StateField STATE_FIELDS[] = {
+    D(pipe.m), D(pipe.selected), D(pipe.slot_velocity), D(pipe.slot_velocity_sign),
+    D(pipe.slot_input), D(pipe.identifier_gain), I(pipe.identifier_active, 0, 1),
+    I(reset_seen, 0, 1), D(pipe.obs.n), D(pipe.obs.h), D(pipe.obs.h_squared),
+    D(pipe.obs.inverse_h_squared), D(pipe.obs.alpha1), D(pipe.obs.alpha2), D(pipe.obs.filter_gain),
+    D(pipe.obs.rate_gain), D(pipe.obs.scheme), I(pipe.obs.primed, 0, 1),
+    I(pipe.obs.reversal_age, -1, IMPLICIT_REVERSAL_SAMPLES - 1),
+    I(pipe.obs.smooth_samples, 0, IMPLICIT_SMOOTH_SAMPLES), D(pipe.bank.count), D(pipe.bank.gain),
+    D(pipe.bank.stride), D(pipe.bank.span), D(pipe.bank.velocity_gain), D(pipe.bank.start_limit),
+    D(pipe.bank.gains), D(pipe.bank.fine),
+    I(pipe.bank.zoom_index, -1, (ADAPTIVE_MAX_MEMBERS - 1) * ADAPTIVE_FINE),
+    I(pipe.bank.center, -1, ADAPTIVE_MAX_MEMBERS - 1), I(pipe.bank.started, 0, 1),
+    U(pipe.bank.waited), U(pipe.bank.age),
+    I(pipe.bank.selected, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS + ADAPTIVE_ZOOM - 1),
+    I(pipe.bank.published, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS + ADAPTIVE_ZOOM - 1),
+    I(pipe.bank.perturbation, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS - 1),
+    I(pipe.bank.follow, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS - 1), D(pipe.id.kind),
+    D(pipe.id.rows), D(pipe.id.m), D(pipe.id.h), D(pipe.id.h_log_r), D(pipe.info.rows),
+    D(pipe.info.m), D(pipe.info.drift), D(pipe.info.h), D(pipe.info.rho), D(pipe.info.lambda),
+    D(pipe.info.one_minus_lambda_rho), D(pipe.info.forgetting_rate), D(pipe.info.anchor_interval),
+    I(pipe.info.anchor_age, 0, INFO_ANCHOR_MAX_INTERVAL),
+    STATE_FIELD(ObserverData, pipe.info.reference_factor, FIELD_ANY, 0, 0),
+    D(pipe.info.reference_lambda), D(pipe.info.reference_pull), D(pipe.info.rest_lambda),
+    D(pipe.info.rest_pull), D(pipe.info.skip_threshold), D(pipe.info.batch_gain),
+    D(pipe.info.power_gain), I(pipe.info.std_age, 0, INFO_STD_INTERVAL), D(pipe.info.blocks.rows),
+    D(pipe.info.blocks.m), D(pipe.info.blocks.pairs), D(pipe.info.blocks.first),
+    D(pipe.info.blocks.second), D(pipe.info.blocks.stage_gain_per_second),
+    /* the doubles, named by their struct */
+    REAL_FIELDS(ObserverData, pipe.obs), REAL_FIELDS(ObserverData, pipe.bank),
+    REAL_FIELDS(ObserverData, pipe.id), REAL_FIELDS(ObserverData, pipe.info.blocks),
+    REAL_FIELDS(ObserverData, pipe.info),
+};
+#undef D
+#undef I
+#undef U
+
+/* What the field table cannot state: the bank's indices below its member count. */
+static ModelStatus check_restored(const void *data, const void *initialized,
+                                  const ModelLogger *log)
 {
     const ObserverData *d = data;
-    if (!op_state_valid(&d->pipe)) {
-        log->log(log->context, MODEL_ERROR,
-                 "deserialized FMU state: the observer's internal counts are inconsistent "
-                 "(n = %d, observer n = %d, m = %d); state refused", d->pipe.n, d->pipe.obs.n,
-                 d->pipe.m);
+    (void)initialized;
+    if (!adaptive_valid(&d->pipe.bank, d->pipe.n)) {
+        log->log(log->context, MODEL_ERROR, "deserialized FMU state: an index of bank (center, "
+                 "zoom_index, selected, published, perturbation or follow) is not one of its %d "
+                 "members; state refused", d->pipe.bank.count);
+        return MODEL_ERROR;
+    }
+    if (d->pipe.info.anchor_age > d->pipe.info.anchor_interval) {
+        log->log(log->context, MODEL_ERROR, "deserialized FMU state: info.anchor_age = %d exceeds "
+                 "info.anchor_interval = %d; state refused", d->pipe.info.anchor_age,
+                 d->pipe.info.anchor_interval);
         return MODEL_ERROR;
     }
     return MODEL_OK;
@@ -390,7 +465,11 @@ const ModelDescriptor MODEL_DESCRIPTOR = {
     .initialize = initialize,
     .internal_step = internal_step,
     .max_internal_steps = max_internal_steps,
+    .max_work = max_work,
+    .work_per_step = work_per_step,
     .advance = advance,
     .communication_point = communication_point,
+    .state_fields = STATE_FIELDS,
+    .n_state_fields = sizeof STATE_FIELDS / sizeof STATE_FIELDS[0],
     .check_restored = check_restored,
 };

@@ -44,8 +44,10 @@ typedef struct {
     int base_columns[MAX_P];
     double base_nominal[MAX_P];
     int max_internal_steps;
+    double max_work;
     /* calculated parameters */
     double alpha1_used[MAX_N], alpha2_used[MAX_N];
+    double work_per_step;
     /* inputs */
     double q[MAX_N], u[MAX_N];
     int identifier_reset;
@@ -178,6 +180,7 @@ static const ModelVariable VARIABLES[] = {
      PARAM(.offset = OFF(base_nominal), .start = 0.0, UNBOUNDED,
      .description = "The base parameters of the nominal model (the estimates start here)")},
     MAX_INTERNAL_STEPS_VARIABLE(OFF(max_internal_steps)),
+    WORK_VARIABLES(OFF(max_work), OFF(work_per_step)),
     {.name = "alpha1_used", .vr = 500, .rows = MAX_N, .type = TYPE_REAL,
      CALC(.offset = OFF(alpha1_used), .unit = "rad/s2",
      .description = "alpha1 in use (given, or from Theorem 3.1)")},
@@ -345,6 +348,17 @@ static void publish_estimates(RobotData *d)
     d->converged = d->obs.steps > 0.0 && ro_converged(&d->obs);
 }
 
+/* Work units (about ns, model_interface.h) of one internal step: upper bounds
+ * of the time measured for 1-7 joints and 2n-12n parameters (docs/robots.md):
+ * the corrector and the forward dynamics per joint, then the identifier's rank-n
+ * update of its p-parameter sums (structural zeros skipped) and the statistics
+ * job's fixed slice. */
+static double step_work(const RobotData *d)
+{
+    const double n = d->n, p = d->base_count;
+    return 400.0 * n + (d->identifier ? 1000.0 + n * p * (p + 3.0) / 6.0 : 0.0);
+}
+
 static ModelStatus initialize(void *data, double start_time, const ModelLogger *log)
 {
     (void)start_time;
@@ -377,11 +391,16 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     sj_init(&d->statistics, d->identifier ? d->base_count : 1,
             sj_interval_steps(d->statistics_interval, d->h), SJ_BUDGET);
     d->statistics_seen = 0.0;
+    d->work_per_step = step_work(d);
     publish_estimates(d);
     return MODEL_OK;
 }
 
 static double internal_step(const void *data) { return ((const RobotData *)data)->h; }
+
+static double max_work(const void *data) { return ((const RobotData *)data)->max_work; }
+
+static double work_per_step(const void *data) { return ((const RobotData *)data)->work_per_step; }
 
 static uint64_t max_internal_steps(const void *data)
 {
@@ -436,31 +455,59 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
     return MODEL_OK;
 }
 
-/* A deserialized state: every count and index the step trusts must fit. */
-static ModelStatus check_restored(const void *data, const ModelLogger *log)
+/* A deserialized state, field by field (model_interface.h): the robot model and
+ * every size, index list and constant that initialize derives from the
+ * parameters must be what it derives from the state's own; the counters the
+ * steps move must lie in their ranges; every double not listed must be finite. */
+#define D(field) DERIVED_FIELD(RobotData, field)
+#define I(field, lo, hi) STATE_FIELD(RobotData, field, FIELD_INT, lo, hi)
+#define R(field, lo, hi) STATE_FIELD(RobotData, field, FIELD_REAL, lo, hi)
+static const StateField STATE_FIELDS[] = {
+    D(model), I(reset_seen, 0, 1), R(failures_seen, 0.0, NAN), R(statistics_seen, 0.0, NAN),
+    D(obs.n), D(obs.h), D(obs.h_squared), D(obs.inverse_h_squared), D(obs.filter_gain),
+    D(obs.rate_gain), D(obs.alpha1), D(obs.alpha2), I(obs.primed, 0, 1),
+    R(obs.steps, 0.0, NAN), R(obs.model_failures, 0.0, NAN),
+    D(regression.gain), D(regression.min_speed), D(regression.margin_samples),
+    D(regression.reversals), D(regression.pi_nominal), I(regression.have_previous, 0, 1),
+    I(regression.have_older, 0, 1), I(regression.started, 0, 1),
+    I(regression.settled, 0, 2147483647), R(regression.weight, 0.0, 1.0),
+    D(id.rows), D(id.p), D(id.columns), D(id.runs), D(id.run_start), D(id.run_end),
+    D(id.weight), D(id.h), D(id.rho), D(id.lambda), D(id.one_minus_lambda_rho),
+    I(id.anchor_age, 0, 2147483647), I(id.anchor_unit, 0, RRI_MAX_PARAMETERS + 2),
+    I(id.anchor_failed, 0, 1), D(id.batch_samples), I(id.batch_age, 0, RRI_MAX_BATCH_SAMPLES),
+    D(id.batch_lambda), D(id.reference_lambda), D(id.reference_pull), D(id.rest_lambda),
+    D(id.rest_pull), D(id.skip_threshold), D(id.gap_limit),
+    D(statistics.p), D(statistics.interval), D(statistics.budget),
+    R(statistics.since, 0.0, NAN), I(statistics.stage, SJ_IDLE, SJ_EIGEN),
+    I(statistics.index, 0, RRI_MAX_PARAMETERS > STATS_EIGEN_ITERATIONS ? RRI_MAX_PARAMETERS
+                                                                   : STATS_EIGEN_ITERATIONS),
+    R(statistics.completed, 0.0, NAN), R(statistics.age, 0.0, INFINITY),
+    /* the doubles, named by their struct */
+    REAL_FIELDS(RobotData, obs), REAL_FIELDS(RobotData, regression), REAL_FIELDS(RobotData, id),
+    REAL_FIELDS(RobotData, statistics),
+};
+#undef D
+#undef I
+#undef R
+
+/* What the field table cannot state: positions below a count held in another field. */
+static ModelStatus check_restored(const void *data, const void *initialized,
+                                  const ModelLogger *log)
 {
     const RobotData *d = data;
-    const int columns = RB_PARAMETERS_PER_JOINT * d->n;
-    int ok = d->obs.n >= 0 && d->obs.n <= MAX_N && (d->obs.n == 0 || d->obs.n == d->n) &&
-             (d->obs.n == 0 || d->model.n == d->n) && d->id.rows >= 0 &&
-             (d->id.rows == 0 || d->id.rows == d->n) && d->id.p >= 0 && d->id.p <= columns;
-    for (int k = 0; ok && k < d->id.p; ++k)
-        ok = d->id.columns[k] >= 0 && d->id.columns[k] < columns;
-    ok = ok && d->id.anchor_unit >= 0 && d->id.anchor_unit <= d->id.p + 2;
+    (void)initialized;
     const StatisticsJob *job = &d->statistics;
-    /* the statistics job's stage and the column or iteration within it */
-    ok = ok && job->p >= 0 && job->p <= (d->id.p > 0 ? d->id.p : 1) &&
-         job->stage >= SJ_IDLE && job->stage <= SJ_EIGEN &&
-         (job->stage == SJ_IDLE || job->stage == SJ_ESTIMATE ||
-          (job->index >= 0 && job->index < (job->stage == SJ_EIGEN ? STATS_EIGEN_ITERATIONS
-                                                                   : job->p)));
-    for (int i = 0; ok && d->obs.n && i < d->n; ++i)
-        ok = d->model.type[i] == RB_REVOLUTE || d->model.type[i] == RB_PRISMATIC;
-    if (!ok) {
-        log->log(log->context, MODEL_ERROR,
-                 "deserialized FMU state: the robot observer's internal counts are inconsistent "
-                 "(n = %d, observer n = %d, identifier p = %d); state refused", d->n, d->obs.n,
-                 d->id.p);
+    const int index_limit = job->stage == SJ_EIGEN ? STATS_EIGEN_ITERATIONS : job->p;
+    if (d->id.anchor_unit > d->id.p + 2 || (d->identifier && d->id.batch_age >= d->id.batch_samples)) {
+        log->log(log->context, MODEL_ERROR, "deserialized FMU state: id.anchor_unit = %d or "
+                 "id.batch_age = %d is out of range for p = %d, batch_samples = %d; state refused",
+                 d->id.anchor_unit, d->id.batch_age, d->id.p, d->id.batch_samples);
+        return MODEL_ERROR;
+    }
+    if (job->stage != SJ_IDLE && job->stage != SJ_ESTIMATE && job->index >= index_limit) {
+        log->log(log->context, MODEL_ERROR, "deserialized FMU state: statistics.index = %d is "
+                 "out of range for its stage %d (below %d); state refused", job->index,
+                 job->stage, index_limit);
         return MODEL_ERROR;
     }
     return MODEL_OK;
@@ -480,7 +527,11 @@ const ModelDescriptor MODEL_DESCRIPTOR = {
     .initialize = initialize,
     .internal_step = internal_step,
     .max_internal_steps = max_internal_steps,
+    .max_work = max_work,
+    .work_per_step = work_per_step,
     .advance = advance,
     .communication_point = communication_point,
+    .state_fields = STATE_FIELDS,
+    .n_state_fields = sizeof STATE_FIELDS / sizeof STATE_FIELDS[0],
     .check_restored = check_restored,
 };

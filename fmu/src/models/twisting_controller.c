@@ -19,6 +19,7 @@
 typedef struct {
     double h, k1, k2, A1, w1, p1, A2, w2, p2; /* parameters */
     int max_internal_steps;
+    double max_work, work_per_step;
     double theta, omega;                      /* inputs */
     double u, theta_d, omega_d;               /* outputs */
 } ControllerData;
@@ -55,6 +56,7 @@ static const ModelVariable VARIABLES[] = {
     {.name = "omega_d", .vr = 202, .type = TYPE_REAL, OUTPUT(.offset = OFF(omega_d),
      .unit = "rad/s", .description = "Reference angular velocity (analytic derivative)")},
     MAX_INTERNAL_STEPS_VARIABLE(OFF(max_internal_steps)),
+    WORK_VARIABLES(OFF(max_work), OFF(work_per_step)),
 };
 
 static double sign_of(double x) { return (x > 0.0) - (x < 0.0); }
@@ -69,11 +71,17 @@ static void control(ControllerData *c, double t)
 static ModelStatus initialize(void *data, double start_time, const ModelLogger *log)
 {
     (void)log;
+    /* only the last internal step's sample is computed (advance): no work per step */
+    ((ControllerData *)data)->work_per_step = 0.0;
     control(data, start_time);
     return MODEL_OK;
 }
 
 static double internal_step(const void *data) { return ((const ControllerData *)data)->h; }
+
+static double max_work(const void *data) { return ((const ControllerData *)data)->max_work; }
+
+static double work_per_step(const void *data) { return ((const ControllerData *)data)->work_per_step; }
 
 /* The control law is a function of the time and the held inputs: only the
  * last internal step's sample is ever seen. */
@@ -109,6 +117,8 @@ const ModelDescriptor MODEL_DESCRIPTOR = {
     .initialize = initialize,
     .internal_step = internal_step,
     .max_internal_steps = max_internal_steps,
+    .max_work = max_work,
+    .work_per_step = work_per_step,
     .advance = advance,
     .communication_point = communication_point,
 };
