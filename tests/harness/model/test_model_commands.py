@@ -260,3 +260,17 @@ def test_two_equations_one_with_a_zero_known_side(tmp_path, capsys):
     result = json.loads((tmp_path / "validate" / "validation.json").read_text())
     first, second = result["relative_error"]["per_equation"]
     assert first < 0.01 and second is None and result["relative_error"]["pooled"] < 0.01
+
+
+def test_a_model_that_explains_little_is_written_but_not_trusted(tmp_path, capsys):
+    """Friction left out of EMPS: the inertia and offset reconstruct the force with a
+    relative error of 69 % (measured): exit status 1, the files written."""
+    text = "\n".join(line for line in EMPS_TEXT.splitlines()
+                     if not line.startswith(("Fv ", "Fc "))).replace(
+        "M*der(x,2) + Fv*der(x) + Fc*sign(der(x)) + OF", "M*der(x,2) + OF")
+    model = tmp_path / "inertia_only.toml"
+    model.write_text(text)
+    out = tmp_path / "out"
+    code = main(["identify", str(ESTIMATION), "--model", str(model), "--out", str(out)])
+    assert code == 1 and "explains little" in capsys.readouterr().err
+    assert list(_parameters(out)) == ["M", "OF"]
