@@ -72,10 +72,18 @@ class Derivatives:
 def derivatives(log: ModelLog, settings: ZeroPhase) -> Derivatives:
     """Steps 1 and 2 of the pipeline over the whole log."""
     q = settings.low_pass(log.q)
-    qd = np.gradient(q, settings.step, axis=0)
-    qdd = np.gradient(qd, settings.step, axis=0)
+    qd = _above_rounding(np.gradient(q, settings.step, axis=0), q, settings.step)
+    qdd = _above_rounding(np.gradient(qd, settings.step, axis=0), q, settings.step ** 2)
     inputs = settings.low_pass(log.inputs) if log.inputs.shape[1] else log.inputs
     return Derivatives(q, qd, qdd, inputs)
+
+
+def _above_rounding(derivative: np.ndarray, q: np.ndarray, scale: float) -> np.ndarray:
+    """``derivative`` with the values a position at rest gets from rounding alone set to
+    0: otherwise sign(der(x)) of a coordinate that never moves is +-1 at random, a
+    column that looks excited."""
+    floor = 64 * np.finfo(float).eps * np.max(np.abs(q), axis=0) / scale
+    return np.where(np.abs(derivative) > floor, derivative, 0.0)
 
 
 @dataclass(frozen=True)

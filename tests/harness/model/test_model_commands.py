@@ -204,6 +204,14 @@ def test_an_unknown_the_log_never_excites(tmp_path, capsys):
     assert code == 2 and "does not excite K (excitation 0)" in err
 
 
+def test_a_log_in_which_the_machine_never_moves(tmp_path, capsys):
+    columns = _emps_columns()
+    columns["qm"][:] = 0.1
+    code, err = _run(capsys, tmp_path, _write_csv(tmp_path / "log.csv", columns))
+    assert code == 2 and "does not excite M (excitation 0), Fv (excitation 0), Fc " \
+        "(excitation 0)" in err
+
+
 def test_two_unknowns_the_log_cannot_tell_apart(tmp_path, capsys):
     text = EMPS_TEXT.replace("+ OF = gtau*vir", "+ OF + OF2 = gtau*vir").replace(
         'OF = { nominal = 0, unit = "N" }',
