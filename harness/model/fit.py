@@ -95,7 +95,9 @@ def fit(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float = RIDGE,
     return Fit(theta, sandwich, classical, excitation(Y, weights), rms, rows)
 
 
-def _solve(Y, r, nominal, scales, weights, ridge):
+def _solve(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, scales: np.ndarray,
+           weights: np.ndarray, ridge: float
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The regularized normal equations in the normalized unknowns phi = scales * theta."""
     Z = _weighted(Y, weights) / scales[None, None, :]
     rw = r / weights[None, :]
