@@ -4,6 +4,8 @@
     identify DATA.csv --out DIR [--columns t=time,y=theta,u=tau] [--param NAME=VALUE ...]
                                                 offline identification of a recorded log
     identify DATA.csv --robot ROBOT.urdf --out DIR   a serial robot (harness.robot)
+    identify LOG --model MODEL.toml --out DIR   a model file's unknowns from a log (CSV, .mat)
+    validate LOG --model MODEL.toml --out DIR   a model file's input reconstruction error
     robot-fmu-parameters ROBOT.urdf --out FILE.ssv   the RobotObserver FMU's parameters
     demo [--out DIR]                            the closed-loop demonstration (reproduce + compare)
     compare --out DIR                           paper method vs the improved defaults
@@ -135,6 +137,17 @@ LOG_OPTIONS = {"identifier": ("--identifier", "lsm"), "param": ("--param", []),
 
 
 def cmd_identify(args) -> int:
+    if args.model:  # a model file: harness.model.commands
+        given = [option for dest, (option, default) in LOG_OPTIONS.items()
+                 if getattr(args, dest) != default]
+        given += ["--robot"] if args.robot else []
+        given += ["--columns"] if args.columns else []
+        if given:
+            raise InputError(f"harness identify: {', '.join(given)} not available with "
+                             f"--model (the model file's [columns] maps the log); leave "
+                             f"{'them' if len(given) > 1 else 'it'} out")
+        from .model.commands import identify_command as identify_model
+        return identify_model(args)
     if args.robot:  # a serial robot from its URDF: harness.robot
         from .robot.cli import identify_command
         given = [option for dest, (option, default) in LOG_OPTIONS.items()
@@ -304,7 +317,10 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Feeds a recorded experiment through the observer FMU and "
                        "writes estimates.csv, estimates.json and identification.png.")
     p.add_argument("data", help="CSV file with a header row naming the time, position and "
-                   "input columns")
+                   "input columns (with --model also a MATLAB .mat file)")
+    p.add_argument("--model", metavar="MODEL.toml",
+                   help="a model file (docs/model_files.md): identify its unknowns from the "
+                        "log; writes parameters.csv, identified.toml, estimates.csv and a plot")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     p.add_argument("--identifier", choices=["off", "lsm", "mff"],
                    default=LOG_OPTIONS["identifier"][1],
@@ -348,6 +364,8 @@ def build_parser() -> argparse.ArgumentParser:
     from .robot.cli import register_fmu_parameters
     register_fmu_parameters(sub, parents=[common])
     register_sweep(sub, parents=[common])
+    from .model.commands import register_validate
+    register_validate(sub, parents=[common])
     return parser
 
 

@@ -1,0 +1,141 @@
+"""A measured log for a model file: time, positions and inputs, by the model's [columns].
+
+CSV files (a header row naming the columns) and MATLAB files (``scipy.io.loadmat``,
+one vector per variable) are read; every problem raises :class:`LogFileError`, whose
+message starts with the file's path and names the column or line.
+"""
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .model import Model
+from .reader import TIME
+
+#: A sampling step may differ from the median step by this fraction (clock jitter).
+STEP_TOLERANCE = 0.01
+
+
+class LogFileError(ValueError):
+    """A log that cannot be used for the model; the command line maps it to exit status 2."""
+
+
+@dataclass(frozen=True)
+class ModelLog:
+    """The samples of one log, in the units of the model file."""
+
+    source: str
+    t: np.ndarray        # (N,) [s]
+    q: np.ndarray        # (N, coordinates)
+    inputs: np.ndarray   # (N, inputs)
+
+    @property
+    def step(self) -> float:
+        """The sampling step [s] (the median step; the steps are checked to be even)."""
+        return float(np.median(np.diff(self.t)))
+
+    @property
+    def samples(self) -> int:
+        return int(self.t.shape[0])
+
+
+def read_log(path: str | Path, model: Model) -> ModelLog:
+    """The time, coordinate and input columns of ``path`` that ``model.columns`` names."""
+    path = Path(path)
+    names = [TIME, *model.coordinates, *model.inputs]
+    wanted = {name: model.column(name) for name in names}
+    if path.suffix.lower() == ".mat":
+        columns = _read_mat(path, list(wanted.values()))
+    else:
+        columns = _read_csv(path, list(wanted.values()))
+    lengths = {len(v) for v in columns.values()}
+    if len(lengths) != 1:
+        sizes = ", ".join(f"{k} {len(v)}" for k, v in columns.items())
+        raise LogFileError(f"{path}: the columns have different lengths ({sizes})")
+    for name, column in wanted.items():
+        bad = np.flatnonzero(~np.isfinite(columns[column]))
+        if bad.size:
+            raise LogFileError(f"{path}: column {column!r} ({name}) has {bad.size} NaN or "
+                               f"infinite value(s), the first at sample {bad[0] + 1}")
+    t = columns[wanted[TIME]]
+    _check_time(path, wanted[TIME], t)
+    q = np.column_stack([columns[wanted[c]] for c in model.coordinates])
+    u = (np.column_stack([columns[wanted[u]] for u in model.inputs]) if model.inputs
+         else np.empty((len(t), 0)))
+    return ModelLog(str(path), t, q, u)
+
+
+def _check_time(path: Path, column: str, t: np.ndarray) -> None:
+    if len(t) < 3:
+        raise LogFileError(f"{path}: {len(t)} samples; identification needs many more")
+    steps = np.diff(t)
+    if not np.all(steps > 0):
+        first = int(np.flatnonzero(steps <= 0)[0])
+        raise LogFileError(f"{path}: time column {column!r} does not increase at sample "
+                           f"{first + 2} ({t[first]:g} then {t[first + 1]:g})")
+    median = float(np.median(steps))
+    if np.max(np.abs(steps - median)) > STEP_TOLERANCE * median:
+        raise LogFileError(f"{path}: time column {column!r} is not evenly sampled (steps "
+                           f"from {steps.min():g} to {steps.max():g} s, median {median:g}); "
+                           "resample the log to a constant step first")
+
+
+def _missing(path: Path, column: str, available: list[str]) -> LogFileError:
+    return LogFileError(f"{path}: no column {column!r} (the model's [columns] maps a name to "
+                        f"it; the log has: {', '.join(available) or 'nothing'})")
+
+
+def _read_mat(path: Path, wanted: list[str]) -> dict[str, np.ndarray]:
+    import scipy.io
+
+    try:
+        data = scipy.io.loadmat(str(path))
+    except FileNotFoundError:
+        raise LogFileError(f"{path}: no such file") from None
+    except NotImplementedError:  # MATLAB v7.3 files are HDF5
+        raise LogFileError(f"{path}: a MATLAB v7.3 (HDF5) file; save it with -v7 or as "
+                           "CSV") from None
+    except (OSError, ValueError, TypeError) as exc:
+        raise LogFileError(f"{path}: not a readable MATLAB file ({exc})") from None
+    available = sorted(k for k in data if not k.startswith("__"))
+    out = {}
+    for column in wanted:
+        if column not in data:
+            raise _missing(path, column, available)
+        value = np.asarray(data[column])
+        if value.dtype.kind not in "fiub" or value.ndim > 2 or min(value.shape, default=0) > 1:
+            raise LogFileError(f"{path}: variable {column!r} is not a numeric vector (shape "
+                               f"{value.shape}, type {value.dtype})")
+        out[column] = value.astype(float).ravel()
+    return out
+
+
+def _read_csv(path: Path, wanted: list[str]) -> dict[str, np.ndarray]:
+    try:
+        with path.open(newline="", encoding="utf-8-sig") as handle:
+            rows = list(csv.reader(handle))
+    except OSError as exc:
+        raise LogFileError(f"{path}: cannot be read ({exc.strerror or exc})") from None
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise LogFileError(f"{path}: not a readable UTF-8 CSV file ({exc})") from None
+    if not rows:
+        raise LogFileError(f"{path}: empty file")
+    header = [name.strip() for name in rows[0]]
+    body = [row for row in rows[1:] if row]
+    out = {}
+    for column in wanted:
+        if column not in header:
+            raise _missing(path, column, header)
+        k = header.index(column)
+        values = np.empty(len(body))
+        for line, row in enumerate(body):
+            try:
+                values[line] = float(row[k])
+            except (ValueError, IndexError):
+                raise LogFileError(f"{path} line {line + 2}: column {column!r} has a missing "
+                                   "or non-numeric value") from None
+        out[column] = values
+    return out

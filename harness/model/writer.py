@@ -1,0 +1,48 @@
+"""A model file written back: the same model with new nominal values (identified.toml)."""
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+
+import numpy as np
+
+from .model import Model
+
+
+def _string(text: str) -> str:
+    """A TOML basic string (JSON's escapes are TOML's)."""
+    return json.dumps(text, ensure_ascii=False)
+
+
+def _number(value: float) -> str:
+    return repr(float(value))
+
+
+def model_toml(model: Model, values: Sequence[float] | np.ndarray,
+               std_errors: Sequence[float] | np.ndarray | None = None,
+               header: Sequence[str] = ()) -> str:
+    """The TOML text of ``model`` with ``values`` (in the order of its parameters) as the
+    nominal values; the standard errors, if given, as comments. ``read_model`` reads it
+    back to the same model."""
+    lines = [f"# {line}" for line in header]
+    lines += ["[model]", f"coordinates = [{', '.join(_string(c) for c in model.coordinates)}]",
+              f"inputs = [{', '.join(_string(u) for u in model.inputs)}]",
+              "equations = [", *(f"    {_string(e.text)}," for e in model.equations), "]", "",
+              "[parameters]"]
+    width = max(len(p.name) for p in model.parameters)
+    for k, p in enumerate(model.parameters):
+        entry = (f"{p.name:<{width}} = {{ nominal = {_number(values[k])}, "
+                 f"unit = {_string(p.unit)} }}")
+        if std_errors is not None:
+            entry += f"   # std error {float(std_errors[k]):.3g}"
+        lines.append(entry)
+    if model.constants:
+        lines += ["", "[constants]"]
+        lines += [f"{k.name} = {{ value = {_number(k.value)}, unit = {_string(k.unit)} }}"
+                  for k in model.constants]
+    if model.units:
+        lines += ["", "[units]"]
+        lines += [f"{name} = {_string(unit)}" for name, unit in model.units.items()]
+    lines += ["", "[columns]"]
+    lines += [f"{name} = {_string(column)}" for name, column in model.columns.items()]
+    return "\n".join(lines) + "\n"
