@@ -25,7 +25,7 @@ DATA_TYPES = {
 DATA_OFFSET = HEADER_SIZE + CLOCK_SIZE  # the model data follows the header and the clock
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _layout(model: str, fields: tuple[str, ...]) -> dict[str, tuple[int, int]]:
     source, data_type = DATA_TYPES[model]
     src = REPO / "fmu" / "src"

@@ -19,7 +19,6 @@ import sys
 from pathlib import Path
 
 import pytest
-
 from abuse_fmi import ERROR, OK, REPO, Raw, assert_usable_after_reset, forge, isolated
 from state_layout import field_location
 

@@ -20,7 +20,6 @@ import sys
 import time
 
 import pytest
-
 from abuse_fmi import ERROR, MODELS, OK, REPO, Raw, assert_usable_after_reset, isolated
 
 sys.path.insert(0, str(REPO / "tests"))
