@@ -16,6 +16,8 @@ import numpy as np
 import pytest
 from cli_runner import REPO, cli, refused, shell
 
+pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
+
 INT_CASES = ["4294967298", "-4294967294", "2147483648", "-2147483649", "1.5", "2.000001", "nan",
              "inf", "-inf", "1e400", "1e20", "99999999999999999999999"]
 

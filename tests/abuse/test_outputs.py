@@ -14,6 +14,8 @@ import numpy as np
 import pytest
 from cli_runner import FMU_DIR, REPO, cli, refused
 
+pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
+
 
 def recording(path: Path, n: int = 2000) -> Path:
     t = 1e-3 * np.arange(n)

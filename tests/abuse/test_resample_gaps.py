@@ -10,6 +10,8 @@ import numpy as np
 import pytest
 from cli_runner import cli, refused
 
+pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
+
 
 def gapped(path: Path, gap: float, n: int = 1000, step: float = 1e-3) -> Path:
     t = np.concatenate([step * np.arange(n), step * n + gap + step * np.arange(n)])

@@ -11,6 +11,8 @@ from harness.robot.examples import example_urdf
 from harness.robot.pipeline import LogError, read_log
 from harness.robot.urdf import read_urdf
 
+pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
+
 
 @pytest.fixture(scope="module")
 def arm():

@@ -8,6 +8,8 @@ from pathlib import Path
 import pytest
 from cli_runner import cli, refused
 
+pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
+
 
 @pytest.fixture(scope="module")
 def urdf() -> Path:

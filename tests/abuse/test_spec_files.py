@@ -9,6 +9,8 @@ from pathlib import Path
 import pytest
 from cli_runner import cli, refused
 
+pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
+
 
 def dry_run(spec: Path, tmp_path: Path) -> tuple[int, str]:
     return cli(["sweep", str(spec), "--out", str(tmp_path / "out"), "--dry-run"])

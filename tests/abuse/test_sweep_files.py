@@ -10,6 +10,8 @@ from cli_runner import FMU_DIR, cli, refused
 
 from harness import sweep
 
+pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
+
 BASE = {"scenario": "6.1-sine", "stop_time": 1.2, "points": [{"observer.tau": 0.02}]}
 
 

@@ -25,6 +25,8 @@ from cli_runner import FMU_DIR, REPO, cli, refused, shell
 from harness import sweep, sweep_plan
 from harness.sweep_spec import MAX_RUNS, SpecError
 
+pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
+
 STOP = 1.2
 BASE = {"scenario": "6.1-sine", "stop_time": STOP}
 BIG = int("9" * 400)

@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 from cli_runner import cli, refused
 
+pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
+
 LINK = ('<link name="{name}"><inertial><origin xyz="{com}"/><mass value="{mass}"/>'
         '<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>')
 JOINT = ('<joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/>'

@@ -55,12 +55,11 @@ export ASAN_OPTIONS=detect_leaks=0:abort_on_error=0:halt_on_error=1:exitcode=86:
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1:exitcode=87
 start=$(date +%s)
 status=0
-# tests/abuse/test_cli_input.py and test_sweep_input.py drive the harness command line
-# (matplotlib, dask), not the FMUs' C code beyond what the other tests call, and
-# matplotlib's C++ extension aborts under a preloaded libasan (__cxa_throw CHECK).
-LD_PRELOAD=$LIBASAN "$PY" -m pytest -q -p sanitized_fmus -p no:cacheprovider \
-    --ignore=tests/fmu/test_binaries.py --ignore=tests/abuse/test_cli_input.py \
-    --ignore=tests/abuse/test_sweep_input.py \
+# The tests marked cli drive the harness command line (matplotlib, dask), not the
+# FMUs' C code beyond what the other tests call, and matplotlib's C++ extension
+# aborts under a preloaded libasan (__cxa_throw CHECK).
+LD_PRELOAD=$LIBASAN "$PY" -m pytest -q -p sanitized_fmus -p no:cacheprovider -m "not cli" \
+    --ignore=tests/fmu/test_binaries.py \
     tests/abuse tests/fmu tests/harness/test_master.py "$@" || status=$?
 log "sanitized tests: exit status $status ($(( $(date +%s) - start )) s)"
 [ "$status" -eq 0 ] || die "tests failed or a sanitizer reported an error (see above)"
