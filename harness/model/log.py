@@ -6,12 +6,12 @@ message starts with the file's path and names the column or line.
 """
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ..csv_columns import CsvColumnError, read_columns, read_header
 from .model import Model
 from .reader import TIME
 
@@ -115,27 +115,11 @@ def _read_mat(path: Path, wanted: list[str]) -> dict[str, np.ndarray]:
 
 def _read_csv(path: Path, wanted: list[str]) -> dict[str, np.ndarray]:
     try:
-        with path.open(newline="", encoding="utf-8-sig") as handle:
-            rows = list(csv.reader(handle))
-    except OSError as exc:
-        raise LogFileError(f"{path}: cannot be read ({exc.strerror or exc})") from None
-    except (UnicodeDecodeError, csv.Error) as exc:
-        raise LogFileError(f"{path}: not a readable UTF-8 CSV file ({exc})") from None
-    if not rows:
-        raise LogFileError(f"{path}: empty file")
-    header = [name.strip() for name in rows[0]]
-    body = [row for row in rows[1:] if row]
-    out = {}
-    for column in wanted:
-        if column not in header:
-            raise _missing(path, column, header)
-        k = header.index(column)
-        values = np.empty(len(body))
-        for line, row in enumerate(body):
-            try:
-                values[line] = float(row[k])
-            except (ValueError, IndexError):
-                raise LogFileError(f"{path} line {line + 2}: column {column!r} has a missing "
-                                   "or non-numeric value") from None
-        out[column] = values
-    return out
+        header = read_header(path)
+        for column in wanted:
+            if column not in header:
+                raise _missing(path, column, header)
+        data = read_columns(path, header, wanted, [f"column {c!r}" for c in wanted])
+    except CsvColumnError as error:
+        raise LogFileError(str(error)) from None
+    return {column: data[:, k].copy() for k, column in enumerate(wanted)}

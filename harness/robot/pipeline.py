@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 from scipy.signal import savgol_filter
 
+from ..csv_columns import CsvColumnError, read_columns, read_header
 from .base_parameters import BaseParameters, base_parameters
 from .consistency import consistent_parameters, write_identified_urdf
 from .filtered_regression import filtered_regression, low_pass
@@ -68,14 +69,9 @@ def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
     path, mapping = Path(path), dict(mapping or {})
     wanted = ["t"] + [f"q{i}" for i in range(1, n + 1)] + [f"u{i}" for i in range(1, n + 1)]
     try:
-        with path.open(newline="", encoding="utf-8-sig") as handle:
-            header = [name.strip() for name in next(csv.reader(handle), [])]
-    except OSError as error:
-        raise LogError(f"{path}: cannot open ({error.strerror or error})") from None
-    except (UnicodeDecodeError, csv.Error) as error:
-        raise LogError(f"{path}: not a readable UTF-8 CSV file ({error})") from None
-    if not header:
-        raise LogError(f"{path}: empty file")
+        header = read_header(path)
+    except CsvColumnError as error:
+        raise LogError(str(error)) from None
     positions = [k for k in header if k.startswith("q") and k[1:].isdigit()]
     columns = []
     for name in wanted:
@@ -88,7 +84,16 @@ def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
         columns.append(column)
     if len(positions) > n and not mapping:
         raise LogError(f"{path}: {len(positions)} position columns for a robot of {n} joints")
-    data = _read_columns(path, header, columns, wanted)
+    try:
+        data = read_columns(path, header, columns, wanted)
+    except CsvColumnError as error:
+        raise LogError(str(error)) from None
+    bad = ~np.isfinite(data)
+    if bad.any():
+        row = int(np.argmax(bad.any(axis=1)))
+        which = [wanted[k] for k in range(len(wanted)) if bad[row, k]]
+        raise LogError(f"{path} line {row + 2}: {', '.join(which)} is NaN, infinite or "
+                       "missing")
     if len(data) < 10:
         raise LogError(f"{path}: {len(data)} samples; identification needs many more")
     t = data[:, 0]
@@ -105,51 +110,6 @@ def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
                        f"{100 * relative_tolerance:g} % (a gap, or a clock that jitters more: "
                        "resample the log first)")
     return JointLog(t, data[:, 1:1 + n], data[:, 1 + n:])
-
-
-def _read_columns(path: Path, header: list[str], columns: list[str],
-                  roles: list[str]) -> np.ndarray:
-    """The columns as floats, (N, len(columns)), read in chunks by pandas' C parser
-    (the memory of the numbers and one chunk); a missing, non-numeric or non-finite
-    value is a LogError naming its line and role."""
-    import pandas as pd
-
-    indices = [header.index(column) for column in columns]
-    order = np.argsort(indices)  # pandas returns the used columns in file order
-    chunks = []
-    try:
-        reader = pd.read_csv(path, header=None, skiprows=1, usecols=indices, dtype=float,
-                             engine="c", chunksize=1 << 17)
-        for chunk in reader:
-            block = np.empty((len(chunk), len(indices)))
-            block[:, order] = chunk.to_numpy()
-            chunks.append(block)
-    except (ValueError, pd.errors.ParserError) as error:
-        line, role = _first_bad_value(path, indices, roles)
-        raise LogError(f"{path} line {line}: {role} is not a number ({error})") from None
-    data = np.concatenate(chunks) if chunks else np.empty((0, len(indices)))
-    del chunks
-    bad = ~np.isfinite(data)
-    if bad.any():
-        row = int(np.argmax(bad.any(axis=1)))
-        which = [roles[k] for k in range(len(roles)) if bad[row, k]]
-        raise LogError(f"{path} line {row + 2}: {', '.join(which)} is NaN, infinite or "
-                       "missing")
-    return data
-
-
-def _first_bad_value(path: Path, indices: list[int], roles: list[str]) -> tuple[int, str]:
-    """(line, role) of the first value that is not a number (only when reading failed)."""
-    with path.open(newline="", encoding="utf-8-sig", errors="replace") as handle:
-        rows = csv.reader(handle)
-        next(rows, None)
-        for line, row in enumerate(rows, start=2):
-            for index, role in zip(indices, roles):
-                try:
-                    float(row[index])
-                except (ValueError, IndexError):
-                    return line, role
-    return 0, "a value"
 
 
 def _odd(count: int) -> int:

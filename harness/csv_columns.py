@@ -1,0 +1,67 @@
+"""Numeric columns of a CSV log with a header row, as every log reader of the harness
+takes them (the robots' and the model files'): read in chunks by pandas' C parser, so
+that a long log takes little more than its numbers' memory; a problem raises
+:class:`CsvColumnError` naming the file, and the line where there is one."""
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+
+CHUNK_ROWS = 1 << 17
+
+
+class CsvColumnError(ValueError):
+    """A CSV log that cannot be read as numbers; the message names the file and line."""
+
+
+def read_header(path: Path) -> list[str]:
+    """The column names of the first row (a UTF-8 byte-order mark allowed)."""
+    try:
+        with path.open(newline="", encoding="utf-8-sig") as handle:
+            header = [name.strip() for name in next(csv.reader(handle), [])]
+    except OSError as error:
+        raise CsvColumnError(f"{path}: cannot open ({error.strerror or error})") from None
+    except (UnicodeDecodeError, csv.Error) as error:
+        raise CsvColumnError(f"{path}: not a readable UTF-8 CSV file ({error})") from None
+    if not header:
+        raise CsvColumnError(f"{path}: empty file")
+    return header
+
+
+def read_columns(path: Path, header: list[str], columns: list[str],
+                 roles: list[str]) -> np.ndarray:
+    """The named columns as floats, (N, len(columns)); `roles` names each in messages.
+    A value that is not a number is named with its line; NaN, infinite or empty values
+    are left as NaN for the caller to judge."""
+    import pandas as pd
+
+    indices = [header.index(column) for column in columns]
+    order = np.argsort(indices)  # pandas returns the used columns in file order
+    chunks = []
+    try:
+        reader = pd.read_csv(path, header=None, skiprows=1, usecols=indices, dtype=float,
+                             engine="c", chunksize=CHUNK_ROWS)
+        for chunk in reader:
+            block = np.empty((len(chunk), len(indices)))
+            block[:, order] = chunk.to_numpy()
+            chunks.append(block)
+    except (ValueError, pd.errors.ParserError) as error:
+        line, role = _first_bad_value(path, indices, roles)
+        raise CsvColumnError(f"{path} line {line}: {role} is not a number ({error})") from None
+    return np.concatenate(chunks) if chunks else np.empty((0, len(indices)))
+
+
+def _first_bad_value(path: Path, indices: list[int], roles: list[str]) -> tuple[int, str]:
+    """(line, role) of the first value that is not a number (only when reading failed)."""
+    with path.open(newline="", encoding="utf-8-sig", errors="replace") as handle:
+        rows = csv.reader(handle)
+        next(rows, None)
+        for line, row in enumerate(rows, start=2):
+            for index, role in zip(indices, roles):
+                try:
+                    float(row[index])
+                except (ValueError, IndexError):
+                    return line, role
+    return 0, "a value"
