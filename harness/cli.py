@@ -6,6 +6,7 @@
     identify DATA.csv --robot ROBOT.urdf --out DIR   a serial robot (harness.robot)
     identify LOG --model MODEL.toml --out DIR   a model file's unknowns from a log (CSV, .mat)
     validate LOG --model MODEL.toml --out DIR   a model file's input reconstruction error
+    validate LOG --robot ROBOT.urdf --out DIR   a URDF's torque prediction error (harness.robot)
     robot-fmu-parameters ROBOT.urdf --out FILE.ssv   the RobotObserver FMU's parameters
     demo [--out DIR]                            the closed-loop demonstration (reproduce + compare)
     compare --out DIR                           paper method vs the improved defaults

@@ -1,0 +1,104 @@
+"""`python -m harness validate LOG --robot ROBOT.urdf --out DIR`: how well a URDF (the
+maker's, or an identify run's identified.urdf) predicts the torques of a log.
+
+The positions pass the same zero-phase Savitzky-Golay filter as the identification
+(`savitzky_golay`: q, q', q'' and the measured torques alike), the URDF's inverse
+dynamics with its friction predicts the torques, and the score is the field's: the
+RMS of the prediction error over the RMS of the measured torque, per joint and pooled
+over the joints, the filter's edges left out."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from .pipeline import JointLog, LogError, savitzky_golay
+from .urdf import Robot
+
+OUTPUT_NAMES = ("validation.json", "validation.png")
+
+
+def torque_errors(robot: Robot, log: JointLog, window: float
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, float], float]:
+    """(t, measured, predicted torques, relative error per joint, pooled) on the samples
+    a window away from the log's ends."""
+    q, qd, qdd, u = savitzky_golay(log, window)
+    edge = int(np.ceil(window / log.step))
+    inside = slice(edge, len(log.t) - edge)
+    if inside.stop - inside.start < 10:
+        raise LogError(f"the log ({log.t[-1] - log.t[0]:g} s) is too short for a "
+                       f"{window:g} s window")
+    predicted = robot.rigid_body().inverse_dynamics(q[inside], qd[inside], qdd[inside])
+    measured = u[inside]
+    error = predicted - measured
+    per_joint = {}
+    for i, name in enumerate(robot.joint_names):
+        scale = float(np.sqrt(np.mean(measured[:, i] ** 2)))
+        per_joint[name] = (float(np.sqrt(np.mean(error[:, i] ** 2))) / scale if scale > 0
+                           else float("nan"))
+    pooled = float(np.linalg.norm(error) / np.linalg.norm(measured))
+    return log.t[inside], measured, predicted, per_joint, pooled
+
+
+def write_validation(out: Path, urdf: str, data: str, window: float, t: np.ndarray,
+                     measured: np.ndarray, predicted: np.ndarray, per_joint: dict[str, float],
+                     pooled: float) -> None:
+    """validation.json and validation.png (measured and predicted torques per joint)."""
+    (out / "validation.json").write_text(json.dumps({
+        "urdf": urdf, "log": data,
+        "relative_error": {"per_joint": per_joint, "pooled": pooled},
+        "definition": "RMS of (predicted - measured torque) over RMS of the measured torque, "
+                      "per joint and pooled over the joints; zero-phase Savitzky-Golay "
+                      "derivatives of q and the same filter on the measured torque (which "
+                      "smooths its Coulomb steps), the window's edges left out",
+        "window": window, "samples": int(len(t)),
+    }, indent=2) + "\n", encoding="utf-8")
+    from matplotlib.figure import Figure
+
+    n = measured.shape[1]
+    fig = Figure(figsize=(9, 1.8 * n + 0.8), layout="constrained")
+    axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
+    for i, (ax, name) in enumerate(zip(axes, per_joint)):
+        ax.plot(t, measured[:, i], lw=0.8, color="k", label="measured")
+        ax.plot(t, predicted[:, i], lw=0.8, color="C1", label="predicted")
+        ax.set_ylabel(f"{name}\n{100 * per_joint[name]:.1f} %", fontsize=8)
+    axes[0].legend(loc="upper right", fontsize=8)
+    axes[-1].set_xlabel("t [s]")
+    fig.suptitle(f"{Path(urdf).name} on {Path(data).name}: pooled {100 * pooled:.2f} %",
+                 fontsize=10)
+    fig.savefig(out / "validation.png", dpi=100)
+
+
+def validate_command(args) -> int:
+    """`validate LOG --robot URDF --out DIR`: exit 0, or 2 for bad input."""
+    import sys
+
+    from ..outputs import Outputs
+    from .pipeline import read_log
+    from .urdf import UrdfError, read_urdf
+
+    mapping = {}
+    for item in filter(None, (part.strip() for part in args.columns.split(","))):
+        name, _, column = item.partition("=")
+        if not column.strip():
+            print(f"harness validate: --columns item {item!r} is not ROLE=COLUMN",
+                  file=sys.stderr)
+            return 2
+        mapping[name.strip()] = column.strip()
+    try:
+        with Outputs(args.out, "validate", inputs=[args.data, args.robot],
+                     names=OUTPUT_NAMES) as outputs:
+            robot = read_urdf(args.robot, locked=tuple(args.lock))
+            log = read_log(args.data, robot.n, mapping)
+            t, measured, predicted, per_joint, pooled = torque_errors(robot, log, args.window)
+            write_validation(outputs.staging, args.robot, args.data, args.window, t,
+                             measured, predicted, per_joint, pooled)
+    except (UrdfError, LogError) as error:
+        print(f"harness validate: {error}", file=sys.stderr)
+        return 2
+    print(f"wrote {', '.join(str(p) for p in outputs.written)}")
+    for name, relative in per_joint.items():
+        print(f"  {name}: relative torque error {100 * relative:.3f} %")
+    print(f"  pooled: {100 * pooled:.3f} %")
+    return 0

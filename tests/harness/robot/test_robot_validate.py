@@ -1,0 +1,73 @@
+"""`python -m harness validate LOG --robot URDF --out DIR`: the torque prediction error
+of a URDF on a log, per joint and pooled, and clear errors for bad input."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from robot_helpers import FRICTION, multisine_log, payload_link
+
+from harness.cli import main
+from harness.robot.examples import example_urdf
+from harness.robot.urdf import read_urdf
+from harness.robot.validate import write_validation
+
+
+@pytest.fixture(scope="module")
+def arm():
+    path, _ = example_urdf("double_pendulum")
+    return path, read_urdf(path)
+
+
+def _log(path, truth, seconds: float = 8.0):
+    t, q, _, _, tau = multisine_log(truth, seconds, 1e-3)
+    np.savetxt(path, np.column_stack([t, q, tau]), delimiter=",", header="t,q1,q2,u1,u2",
+               comments="", fmt="%.17g")
+    return path
+
+
+def test_the_true_model_predicts_and_a_wrong_one_does_not(tmp_path, arm, capsys):
+    urdf, robot = arm
+    truth = robot.rigid_body(link=payload_link(robot.arrays()["link"]), friction=FRICTION)
+    data = _log(tmp_path / "log.csv", truth)
+    # the URDF without the payload and friction: a wrong model
+    assert main(["validate", str(data), "--robot", str(urdf), "--out", str(tmp_path / "v")]) == 0
+    report = json.loads((tmp_path / "v" / "validation.json").read_text())
+    wrong = report["relative_error"]["pooled"]
+    assert set(report["relative_error"]["per_joint"]) == set(robot.joint_names)
+    assert 0.3 < wrong < 1.0, wrong  # measured 0.61
+    assert (tmp_path / "v" / "validation.png").stat().st_size > 1000
+    assert "pooled" in capsys.readouterr().out
+    # the true parameters written as a URDF: what is left is the filter's, mostly its
+    # smoothing of the measured torque's Coulomb steps at the reversals (1.8 %)
+    from harness.robot.consistency import write_identified_urdf
+    pi = np.concatenate([payload_link(robot.arrays()["link"]).ravel(), FRICTION.ravel()])
+    true_urdf = tmp_path / "true.urdf"
+    write_identified_urdf(robot, pi, true_urdf, "the true arm")
+    assert main(["validate", str(data), "--robot", str(true_urdf),
+                 "--out", str(tmp_path / "t")]) == 0
+    right = json.loads((tmp_path / "t" / "validation.json").read_text())
+    assert right["relative_error"]["pooled"] < min(0.025, wrong / 10)
+
+
+@pytest.mark.parametrize("arguments, message", [
+    (["--robot", "missing.urdf"], "missing.urdf"),
+    (["--robot", "URDF", "--columns", "q1"], "is not ROLE=COLUMN"),
+    (["--model", "m.toml", "--lock", "j"], "go with --robot"),
+])
+def test_bad_input_exits_2_naming_it(tmp_path, arm, capsys, arguments, message):
+    urdf, robot = arm
+    data = _log(tmp_path / "log.csv", robot.rigid_body(), seconds=1.0)
+    arguments = [str(urdf) if a == "URDF" else a for a in arguments]
+    assert main(["validate", str(data), *arguments, "--out", str(tmp_path / "o")]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_the_report_names_its_definition(tmp_path):
+    t = np.linspace(0, 1, 11)
+    u = np.ones((11, 1))
+    write_validation(tmp_path, "r.urdf", "l.csv", 0.05, t, u, 1.1 * u, {"j": 0.1}, 0.1)
+    report = json.loads((tmp_path / "validation.json").read_text())
+    assert report["relative_error"] == {"per_joint": {"j": 0.1}, "pooled": 0.1}
+    assert "RMS of (predicted - measured torque)" in report["definition"]
