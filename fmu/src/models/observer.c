@@ -514,7 +514,10 @@ static double internal_step(const void *data) { return ((const ObserverData *)da
 
 static double max_work(const void *data) { return ((const ObserverData *)data)->max_work; }
 
-static double work_per_step(const void *data) { return ((const ObserverData *)data)->work_per_step; }
+static double work_per_step(const void *data)
+{
+    return ((const ObserverData *)data)->work_per_step;
+}
 
 static uint64_t max_internal_steps(const void *data)
 {
@@ -775,14 +778,16 @@ static const StateField STATE_FIELDS[] = {
     D(bank.start_limit), D(bank.gains), D(bank.fine),
     I(bank.zoom_index, -1, (ADAPTIVE_MAX_MEMBERS - 1) * ADAPTIVE_FINE),
     I(bank.center, -1, ADAPTIVE_MAX_MEMBERS - 1), I(bank.started, 0, 1), U(bank.waited),
-    U(bank.age), I(bank.selected, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS + ADAPTIVE_ZOOM - 1),
+    U(bank.age),
+    I(bank.selected, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS + ADAPTIVE_ZOOM - 1),
     I(bank.published, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS + ADAPTIVE_ZOOM - 1),
     I(bank.perturbation, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS - 1),
     I(bank.follow, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS - 1),
     D(id.kind), D(id.rows), D(id.m), D(id.h), D(id.h_log_r),
     D(info.rows), D(info.m), D(info.drift), D(info.h), D(info.rho), D(info.lambda),
     D(info.one_minus_lambda_rho), D(info.forgetting_rate), D(info.anchor_interval),
-    I(info.anchor_age, 0, INFO_ANCHOR_MAX_INTERVAL), STATE_FIELD(ObserverData, info.reference_factor, FIELD_ANY, 0, 0), D(info.reference_lambda),
+    I(info.anchor_age, 0, INFO_ANCHOR_MAX_INTERVAL),
+    STATE_FIELD(ObserverData, info.reference_factor, FIELD_ANY, 0, 0), D(info.reference_lambda),
     D(info.reference_pull), D(info.rest_lambda), D(info.rest_pull), D(info.skip_threshold),
     D(info.batch_gain), D(info.power_gain), I(info.std_age, 0, INFO_STD_INTERVAL),
     D(info.blocks.rows), D(info.blocks.m), D(info.blocks.pairs), D(info.blocks.first),
