@@ -65,6 +65,7 @@ for target in "${TARGETS[@]}"; do
         rm -rf "$corpus" && mkdir -p "$corpus"
         seeds=tools/abuse/corpus/$target
         [ -d "$seeds/$id" ] && seeds=$seeds/$id
+        [ -d "$seeds" ] || die "no seed corpus $seeds (commit one: a few inputs as files)"
         log "$target on $id for $SECONDS_EACH s (seeds: $(find "$seeds" -maxdepth 1 -type f | wc -l))"
         status=0
         ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 UBSAN_OPTIONS=print_stacktrace=1 \

@@ -266,7 +266,7 @@ static void solve_estimate(const InformationIdentifier *id, int n,
 
 static void refresh_anchor(InformationIdentifier *id)
 {
-    double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
+    double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS] = {{0.0}}; /* the upper triangle is copied */
     const int n = dimension(id);
     id->anchor_age = 0;
     if (cholesky(id, n, L) == 0) solve_estimate(id, n, L, id->anchor); /* else keep it */

@@ -320,7 +320,10 @@ static double internal_step(const void *data) { return ((const ObserverData *)da
 
 static double max_work(const void *data) { return ((const ObserverData *)data)->max_work; }
 
-static double work_per_step(const void *data) { return ((const ObserverData *)data)->work_per_step; }
+static double work_per_step(const void *data)
+{
+    return ((const ObserverData *)data)->work_per_step;
+}
 
 static uint64_t max_internal_steps(const void *data)
 {
@@ -415,7 +418,6 @@ static const StateField STATE_FIELDS[] = {
     D(pipe.info.m), D(pipe.info.drift), D(pipe.info.h), D(pipe.info.rho), D(pipe.info.lambda),
     D(pipe.info.one_minus_lambda_rho), D(pipe.info.forgetting_rate), D(pipe.info.anchor_interval),
     I(pipe.info.anchor_age, 0, INFO_ANCHOR_MAX_INTERVAL),
-    STATE_FIELD(ObserverData, pipe.info.reference_factor, FIELD_ANY, 0, 0),
     D(pipe.info.reference_lambda), D(pipe.info.reference_pull), D(pipe.info.rest_lambda),
     D(pipe.info.rest_pull), D(pipe.info.skip_threshold), D(pipe.info.batch_gain),
     D(pipe.info.power_gain), I(pipe.info.std_age, 0, INFO_STD_INTERVAL), D(pipe.info.blocks.rows),

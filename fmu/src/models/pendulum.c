@@ -189,7 +189,10 @@ static double internal_step(const void *data) { return ((const PendulumData *)da
 
 static double max_work(const void *data) { return ((const PendulumData *)data)->max_work; }
 
-static double work_per_step(const void *data) { return ((const PendulumData *)data)->work_per_step; }
+static double work_per_step(const void *data)
+{
+    return ((const PendulumData *)data)->work_per_step;
+}
 
 static uint64_t max_internal_steps(const void *data)
 {

@@ -400,7 +400,10 @@ static double internal_step(const void *data) { return ((const RobotData *)data)
 
 static double max_work(const void *data) { return ((const RobotData *)data)->max_work; }
 
-static double work_per_step(const void *data) { return ((const RobotData *)data)->work_per_step; }
+static double work_per_step(const void *data)
+{
+    return ((const RobotData *)data)->work_per_step;
+}
 
 static uint64_t max_internal_steps(const void *data)
 {
@@ -498,7 +501,8 @@ static ModelStatus check_restored(const void *data, const void *initialized,
     (void)initialized;
     const StatisticsJob *job = &d->statistics;
     const int index_limit = job->stage == SJ_EIGEN ? STATS_EIGEN_ITERATIONS : job->p;
-    if (d->id.anchor_unit > d->id.p + 2 || (d->identifier && d->id.batch_age >= d->id.batch_samples)) {
+    if (d->id.anchor_unit > d->id.p + 2 ||
+        (d->identifier && d->id.batch_age >= d->id.batch_samples)) {
         log->log(log->context, MODEL_ERROR, "deserialized FMU state: id.anchor_unit = %d or "
                  "id.batch_age = %d is out of range for p = %d, batch_samples = %d; state refused",
                  d->id.anchor_unit, d->id.batch_age, d->id.p, d->id.batch_samples);

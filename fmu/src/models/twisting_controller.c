@@ -81,7 +81,10 @@ static double internal_step(const void *data) { return ((const ControllerData *)
 
 static double max_work(const void *data) { return ((const ControllerData *)data)->max_work; }
 
-static double work_per_step(const void *data) { return ((const ControllerData *)data)->work_per_step; }
+static double work_per_step(const void *data)
+{
+    return ((const ControllerData *)data)->work_per_step;
+}
 
 /* The control law is a function of the time and the held inputs: only the
  * last internal step's sample is ever seen. */
