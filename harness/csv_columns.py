@@ -16,21 +16,51 @@ class CsvColumnError(ValueError):
     """A CSV log that cannot be read as numbers; the message names the file and line."""
 
 
-def read_header(path: Path) -> list[str]:
-    """The column names of the first row (a UTF-8 byte-order mark allowed)."""
+class Header(list):
+    """The column names of a CSV file; for a file without a header row (its first row
+    all numbers) the column numbers "1", "2", ... and `present` False."""
+
+    present: bool = True
+
+
+def read_header(path: Path) -> Header:
+    """The column names of the first row (a UTF-8 byte-order mark allowed), or the
+    column numbers of a file whose first row is already data."""
     try:
         with path.open(newline="", encoding="utf-8-sig") as handle:
-            header = [name.strip() for name in next(csv.reader(handle), [])]
+            first = [name.strip() for name in next(csv.reader(handle), [])]
     except OSError as error:
         raise CsvColumnError(f"{path}: cannot open ({error.strerror or error})") from None
     except (UnicodeDecodeError, csv.Error) as error:
         raise CsvColumnError(f"{path}: not a readable UTF-8 CSV file ({error})") from None
-    if not header:
+    if not first:
         raise CsvColumnError(f"{path}: empty file")
-    return header
+    if all(_is_number(field) for field in first):
+        header = Header(str(k + 1) for k in range(len(first)))
+        header.present = False
+        return header
+    return Header(first)
 
 
-def read_columns(path: Path, header: list[str], columns: list[str],
+def column_of(header: Header, column: str) -> str | None:
+    """The header's name for `column`: a name, or a column number (1 = the first column)
+    where no column has that name; None if there is neither."""
+    if column in header:
+        return column
+    if column.isdigit() and 1 <= int(column) <= len(header):
+        return header[int(column) - 1]
+    return None
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def read_columns(path: Path, header: Header, columns: list[str],
                  roles: list[str]) -> np.ndarray:
     """The named columns as floats, (N, len(columns)); `roles` names each in messages.
     A value that is not a number is named with its line; NaN, infinite or empty values
@@ -41,24 +71,26 @@ def read_columns(path: Path, header: list[str], columns: list[str],
     order = np.argsort(indices)  # pandas returns the used columns in file order
     chunks = []
     try:
-        reader = pd.read_csv(path, header=None, skiprows=1, usecols=indices, dtype=float,
-                             engine="c", chunksize=CHUNK_ROWS)
+        reader = pd.read_csv(path, header=None, skiprows=1 if header.present else 0,
+                             usecols=indices, dtype=float, engine="c", chunksize=CHUNK_ROWS)
         for chunk in reader:
             block = np.empty((len(chunk), len(indices)))
             block[:, order] = chunk.to_numpy()
             chunks.append(block)
     except (ValueError, pd.errors.ParserError) as error:
-        line, role = _first_bad_value(path, indices, roles)
+        line, role = _first_bad_value(path, indices, roles, header.present)
         raise CsvColumnError(f"{path} line {line}: {role} is not a number ({error})") from None
     return np.concatenate(chunks) if chunks else np.empty((0, len(indices)))
 
 
-def _first_bad_value(path: Path, indices: list[int], roles: list[str]) -> tuple[int, str]:
+def _first_bad_value(path: Path, indices: list[int], roles: list[str],
+                     has_header: bool) -> tuple[int, str]:
     """(line, role) of the first value that is not a number (only when reading failed)."""
     with path.open(newline="", encoding="utf-8-sig", errors="replace") as handle:
         rows = csv.reader(handle)
-        next(rows, None)
-        for line, row in enumerate(rows, start=2):
+        if has_header:
+            next(rows, None)
+        for line, row in enumerate(rows, start=2 if has_header else 1):
             for index, role in zip(indices, roles):
                 try:
                     float(row[index])

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..csv_columns import CsvColumnError, read_columns, read_header
+from ..csv_columns import CsvColumnError, column_of, read_columns, read_header
 from .model import Model
 from .reader import TIME
 
@@ -116,10 +116,12 @@ def _read_mat(path: Path, wanted: list[str]) -> dict[str, np.ndarray]:
 def _read_csv(path: Path, wanted: list[str]) -> dict[str, np.ndarray]:
     try:
         header = read_header(path)
-        for column in wanted:
-            if column not in header:
+        named = [column_of(header, column) for column in wanted]  # names or column numbers
+        for column, name in zip(wanted, named):
+            if name is None:
                 raise _missing(path, column, header)
-        data = read_columns(path, header, wanted, [f"column {c!r}" for c in wanted])
+        data = read_columns(path, header, [str(name) for name in named],
+                            [f"column {c!r}" for c in wanted])
     except CsvColumnError as error:
         raise LogFileError(str(error)) from None
     return {column: data[:, k].copy() for k, column in enumerate(wanted)}

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 from scipy.signal import savgol_filter
 
-from ..csv_columns import CsvColumnError, read_columns, read_header
+from ..csv_columns import CsvColumnError, column_of, read_columns, read_header
 from .base_parameters import BaseParameters, base_parameters
 from .consistency import consistent_parameters, write_identified_urdf
 from .filtered_regression import filtered_regression, low_pass
@@ -62,7 +62,8 @@ class JointLog:
 
 def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
              relative_tolerance: float = 0.01) -> JointLog:
-    """Columns t, q1..qn, u1..un (or the names `mapping` gives them), evenly sampled:
+    """Columns t, q1..qn, u1..un (or the names or 1-based column numbers `mapping` gives
+    them; a file without a header row has them in that order), evenly sampled:
     every step within `relative_tolerance` of the mean step (a logger's jitter, the
     rounding of epoch time stamps), the samples then taken as evenly spaced.  Read in
     chunks, so that a long log takes little more than its numbers' memory."""
@@ -72,18 +73,27 @@ def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
         header = read_header(path)
     except CsvColumnError as error:
         raise LogError(str(error)) from None
+    if not header.present and not mapping:
+        # no header row: the columns in the roles' order, t, q1..qn, u1..un
+        if len(header) != len(wanted):
+            raise LogError(f"{path}: no header row and {len(header)} columns; a robot of {n} "
+                           f"joints needs {len(wanted)} (t, q1..q{n}, u1..u{n}) or --columns "
+                           "with column numbers")
+        mapping = {role: str(k + 1) for k, role in enumerate(wanted)}
     positions = [k for k in header if k.startswith("q") and k[1:].isdigit()]
     columns = []
     for name in wanted:
-        column = mapping.get(name, name)
-        if column not in header:
+        column = column_of(header, mapping.get(name, name))
+        if column is None:
             hint = (f"; the file has {len(positions)} position columns but the robot has {n} "
                     f"joints" if positions and len(positions) != n else "")
-            raise LogError(f"{path}: no column {column!r} (needed: {', '.join(wanted)}; "
-                           f"found: {', '.join(header)}){hint}")
+            found = ", ".join(header) if header.present else f"{len(header)} unnamed columns"
+            raise LogError(f"{path}: no column {mapping.get(name, name)!r} (needed: "
+                           f"{', '.join(wanted)}; found: {found}){hint}")
         columns.append(column)
     if len(positions) > n and not mapping:
         raise LogError(f"{path}: {len(positions)} position columns for a robot of {n} joints")
+    first_line = 2 if header.present else 1
     try:
         data = read_columns(path, header, columns, wanted)
     except CsvColumnError as error:
@@ -92,23 +102,24 @@ def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
     if bad.any():
         row = int(np.argmax(bad.any(axis=1)))
         which = [wanted[k] for k in range(len(wanted)) if bad[row, k]]
-        raise LogError(f"{path} line {row + 2}: {', '.join(which)} is NaN, infinite or "
-                       "missing")
+        raise LogError(f"{path} line {row + first_line}: {', '.join(which)} is NaN, "
+                       "infinite or missing")
     if len(data) < 10:
         raise LogError(f"{path}: {len(data)} samples; identification needs many more")
     t = data[:, 0]
     steps = np.diff(t)
     mean = (t[-1] - t[0]) / (len(t) - 1)
     if not np.all(steps > 0):
-        line = int(np.argmax(~(steps > 0))) + 3
-        raise LogError(f"{path} line {line}: t does not increase ({t[line - 3]:.17g}, then "
-                       f"{t[line - 2]:.17g})")
+        line = int(np.argmax(~(steps > 0))) + first_line + 1
+        before = line - first_line - 1  # the sample before the step
+        raise LogError(f"{path} line {line}: t does not increase ({t[before]:.17g}, then "
+                       f"{t[before + 1]:.17g})")
     worst = int(np.argmax(np.abs(steps - mean)))
     if abs(steps[worst] - mean) > relative_tolerance * mean:
-        raise LogError(f"{path} line {worst + 3}: a step of {steps[worst]:.6g} s where the mean "
-                       f"step is {mean:.6g} s; the samples must be evenly spaced within "
-                       f"{100 * relative_tolerance:g} % (a gap, or a clock that jitters more: "
-                       "resample the log first)")
+        raise LogError(f"{path} line {worst + first_line + 1}: a step of {steps[worst]:.6g} s "
+                       f"where the mean step is {mean:.6g} s; the samples must be evenly "
+                       f"spaced within {100 * relative_tolerance:g} % (a gap, or a clock that "
+                       "jitters more: resample the log first)")
     return JointLog(t, data[:, 1:1 + n], data[:, 1 + n:])
 
 

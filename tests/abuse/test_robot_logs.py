@@ -63,3 +63,26 @@ def test_a_word_in_a_number_column_is_named_with_its_line(tmp_path, arm, capsys)
     path.write_text("\n".join(lines) + "\n")
     assert main(["identify", str(path), "--robot", str(urdf), "--out", str(tmp_path / "o")]) == 2
     assert "line 51: q1 is not a number" in capsys.readouterr().err
+
+
+def test_a_file_without_a_header_has_the_roles_in_order(tmp_path):
+    path = _log(tmp_path / "plain.csv", np.arange(6000) * 1e-3)
+    path.write_text("\n".join(path.read_text().splitlines()[1:]) + "\n")  # the header gone
+    log = read_log(path, 2)
+    assert log.q.shape == (6000, 2) and log.t[0] == 0.0
+    with pytest.raises(LogError, match="no header row and 5 columns; a robot of 3 joints"):
+        read_log(path, 3)
+
+
+def test_columns_by_number_in_the_robots_own_order(tmp_path):
+    t = np.arange(6000) * 1e-3
+    path = _log(tmp_path / "log.csv", t)
+    plain = read_log(path, 2)
+    # the robot's own order: u2, q2, t, u1, q1, without a header row
+    rows = np.loadtxt(path, delimiter=",", skiprows=1)[:, [4, 2, 0, 3, 1]]
+    shuffled = tmp_path / "shuffled.csv"
+    np.savetxt(shuffled, rows, delimiter=",", fmt="%.17g")
+    log = read_log(shuffled, 2, {"t": "3", "q1": "5", "q2": "2", "u1": "4", "u2": "1"})
+    assert np.array_equal(log.q, plain.q) and np.array_equal(log.u, plain.u)
+    with pytest.raises(LogError, match="no column '9'"):
+        read_log(shuffled, 2, {"t": "9", "q1": "5", "q2": "2", "u1": "4", "u2": "1"})
