@@ -53,17 +53,27 @@ def _finite_non_negative(name: str):
     return argparse_type(real, name, low=0.0)
 
 
+def column_mapping(text: str, command: str) -> dict[str, str] | None:
+    """--columns ROLE=COLUMN,... (roles t, q1..qn, u1..un; a column by name or 1-based
+    number) as a mapping, or None after saying which item is malformed."""
+    mapping = {}
+    for item in filter(None, (part.strip() for part in text.split(","))):
+        name, _, column = item.partition("=")
+        if not column.strip():
+            print(f"harness {command}: --columns item {item!r} is not ROLE=COLUMN",
+                  file=sys.stderr)
+            return None
+        mapping[name.strip()] = column.strip()
+    return mapping
+
+
 def identify_command(args) -> int:
     from ..outputs import Outputs
     from .pipeline import OUTPUT_NAMES, LogError, identify_robot, read_log, write_results
     from .urdf import UrdfError, read_urdf
-    mapping = {}  # --columns (harness/cli.py) with the roles t, q1..qn, u1..un
-    for item in filter(None, (part.strip() for part in args.columns.split(","))):
-        name, _, column = item.partition("=")
-        if not column.strip():
-            print(f"harness identify: --columns item {item!r} is not ROLE=COLUMN", file=sys.stderr)
-            return 2
-        mapping[name.strip()] = column.strip()
+    mapping = column_mapping(args.columns, "identify")
+    if mapping is None:
+        return 2
     try:
         with Outputs(args.out, "identify", inputs=[args.data, args.robot],
                      names=OUTPUT_NAMES) as outputs:

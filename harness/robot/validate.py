@@ -75,17 +75,13 @@ def validate_command(args) -> int:
     import sys
 
     from ..outputs import Outputs
+    from .cli import column_mapping
     from .pipeline import read_log
     from .urdf import UrdfError, read_urdf
 
-    mapping = {}
-    for item in filter(None, (part.strip() for part in args.columns.split(","))):
-        name, _, column = item.partition("=")
-        if not column.strip():
-            print(f"harness validate: --columns item {item!r} is not ROLE=COLUMN",
-                  file=sys.stderr)
-            return 2
-        mapping[name.strip()] = column.strip()
+    mapping = column_mapping(args.columns, "validate")
+    if mapping is None:
+        return 2
     try:
         with Outputs(args.out, "validate", inputs=[args.data, args.robot],
                      names=OUTPUT_NAMES) as outputs:
