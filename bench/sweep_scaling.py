@@ -30,7 +30,8 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from harness import sweep, sweep_dask  # noqa: E402
+from harness import sweep  # noqa: E402
+from harness.sweep import cluster as sweep_dask  # noqa: E402
 
 FMU_DIR = REPO / "build" / "fmus"
 

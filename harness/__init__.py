@@ -29,7 +29,7 @@ _EXPORTS = {
     "score": "harness.metrics",
     "default_fmu_dir": "harness.paths",
     "identify_file": "harness.identify",
-    "load_spec": "harness.sweep_plan",
+    "load_spec": "harness.sweep.plan",
     "run_sweep": "harness.sweep",
     "read_model": "harness.model",
     "ModelFileError": "harness.model",
@@ -54,7 +54,7 @@ if TYPE_CHECKING:
     from harness.robot.urdf import read_urdf
     from harness.scenarios import SCENARIOS, run_scenario
     from harness.sweep import run_sweep
-    from harness.sweep_plan import load_spec
+    from harness.sweep.plan import load_spec
 
 
 def __getattr__(name: str) -> Any:

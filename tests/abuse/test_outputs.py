@@ -343,7 +343,7 @@ def test_a_loop_of_links_in_out_is_a_message(tmp_path):
 SWEEP_HOLD = textwrap.dedent("""
     import sys, time
     from pathlib import Path
-    from harness.sweep_lock import locked_output
+    from harness.sweep.lock import locked_output
     with locked_output(Path(sys.argv[1])):
         print("held", flush=True)
         time.sleep(120)

@@ -22,8 +22,9 @@ from pathlib import Path
 import pytest
 from cli_runner import FMU_DIR, REPO, cli, refused, shell
 
-from harness import sweep, sweep_plan
-from harness.sweep_spec import MAX_RUNS, SpecError
+from harness import sweep
+from harness.sweep import plan as sweep_plan
+from harness.sweep.spec import MAX_RUNS, SpecError
 
 pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
 
@@ -275,7 +276,7 @@ def test_out_naming_a_file_is_refused(tmp_path):
 HOLD = textwrap.dedent("""
     import sys, time
     from pathlib import Path
-    from harness.sweep_lock import locked_output
+    from harness.sweep.lock import locked_output
     with locked_output(Path(sys.argv[1])):
         print("held", flush=True)
         time.sleep(120)

@@ -9,8 +9,8 @@ import pytest
 from jsonschema import Draft202012Validator
 
 from harness import sweep
-from harness.sweep_schema import check_shape, spec_schema
-from harness.sweep_spec import SpecError
+from harness.sweep.schema import check_shape, spec_schema
+from harness.sweep.spec import SpecError
 
 
 def test_the_schema_is_a_valid_draft_2020_12_schema():

@@ -1,86 +1,5 @@
-"""Parameter sweeps of the closed-loop scenarios on Dask.
-
-    python -m harness sweep SPEC --out DIR [--scheduler tcp://HOST:PORT] [--workers N]
-                                           [--retry-failed] [--no-plots] [--dry-run]
-
-Runs every combination that SPEC describes, each a closed-loop scenario run
-(observer + pendulum + twisting controller) scored by harness.metrics.score,
-on a Dask cluster: a LocalCluster on this machine by default (one worker
-process per core, one thread each), or the running scheduler given by
-``--scheduler`` (its workers need this package and fmpy installed; the FMUs
-are shipped to them, no shared file system is needed).
-
-SPEC is a JSON file (or TOML, if its name ends in .toml), for example:
-
-    {
-      "scenario": "6.1-sine",
-      "stop_time": 2.0,
-      "transient": 1.0,
-      "method": "paper",
-      "fixed": {"observer.tau": 0.01},
-      "grid": {"observer.alpha1[1]": [2.2, 4.4], "noise_std": [0, 1e-5, 1e-4]},
-      "random": {
-        "method": "lhs", "n": 20, "seed": 1,
-        "ranges": {
-          "observer.alpha2[1]": [10, 40],
-          "observer.tau": {"low": 1e-3, "high": 1e-1, "scale": "log"}
-        }
-      },
-      "points": [{"observer.h": 2e-4}],
-      "seeds": [0, 1, 2]
-    }
-
-Its keys (only "scenario" is required):
-  scenario   a name of harness.scenarios.SCENARIOS
-  stop_time  override the scenario's length [s]
-  transient  override the metrics' transient [s]
-  method     "paper" (the scenario as is) or "improved" (scenarios.improved_overrides)
-  fixed      the same value in every run
-  grid       the cartesian product of these lists
-  random     n samples crossed with the grid: "lhs" (Latin hypercube) or "uniform",
-             the sampling seed, and per parameter [low, high] (uniform) or
-             {"low", "high", "scale": "log"}
-  points     extra runs (each crossed with the seeds)
-  seeds      noise seeds (or an int n: seeds 0..n-1); default [0]
-
-A parameter is "fmu.variable" with fmu one of plant, controller, observer and
-a variable of that FMU, e.g. "observer.alpha1[1]", "observer.scheme",
-"plant.Vs", "controller.k1"; values are converted to the variable's type
-(Integer parameters sampled from a range are rounded).  Two pseudo-parameters:
-"noise_std" (std of the white noise on the measured theta [rad], default 0)
-and "seed" (the noise seed; give either "seeds" or a "seed" entry).  Values
-override, in this order, the scenario's, the method's, "fixed", then the
-swept ones.  The runs are (grid x random samples) + points, each x seeds;
-a noise-free run (noise_std = 0) does not depend on the seed and runs once.
-
-Outputs in DIR:
-  results.parquet  one row per run: key, status (ok/failed), message, wall_time [s],
-                worker, scenario, stop_time, method, every run parameter, every metric
-                (pandas.read_parquet; columns keep their types)
-  results.csv   the same table as CSV
-  runs/         while a sweep runs: one Parquet file per finished run
-  summary.json  counts, runs per second, the best run per headline metric
-  sweep_<parameter>.png   headline metrics against each swept parameter
-  spec.json     the spec of the last sweep into DIR
-
-A run is identified by ``key``, a hash of the scenario, stop time, transient,
-method and all its parameter values.  Each run's row is written to runs/ as it
-completes, so an interrupted or killed sweep keeps what it finished; at the end
-the rows go into results.parquet and results.csv (harness.sweep_table).
-Re-running with the same --out skips every run already in the table
-(``--retry-failed`` redoes the failed ones).  A run that fails (an FMU error, a rejected
-parameter value, a NaN metric) is recorded as failed with its message; the sweep goes on.
-If the FMUs are rebuilt with different behaviour, sweep into a new DIR.
-
-The spec's shape is checked against a JSON Schema (harness.sweep_schema; print it
-with python -m harness.sweep_schema), then its names and values.  Limits
-(harness.sweep_spec): at most 100000 runs per spec (counted from its
-sizes before anything is built), stop_time at most 10^4 s; every value is
-checked first (finite, Integers integral and in range, never wrapped).  One
-sweep at a time writes DIR (a lock, harness.sweep_lock); a second one is
-refused.  Exit status: 0 every run of the spec ok, 1 some failed (see
-the table), 2 a bad spec or no cluster, 3 DIR is locked by another sweep.
-"""
+"""The sweep command and its run over a spec: the runs planned, executed on the Dask
+cluster and tabled, the summary and figures written (the format: harness.sweep)."""
 from __future__ import annotations
 
 import argparse
@@ -92,10 +11,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from .outputs import OutputError, Outputs, write_atomically
-from .paths import default_fmu_dir
-from .sweep_lock import OutputLocked, locked_output
-from .sweep_plan import (
+from ..outputs import OutputError, Outputs, write_atomically
+from ..paths import default_fmu_dir
+from ..tempdirs import remove_stale
+from ..values import argparse_type, integer, real
+from .lock import OutputLocked, locked_output
+from .plan import (
     DEFAULT_FMU_DIR,
     FMU_FILES,
     METHODS,
@@ -105,12 +26,10 @@ from .sweep_plan import (
     parse_spec,
     run_key,
 )
-from .sweep_report import ProgressLine, headline_metrics, metric_unit, plot_summary, write_summary
-from .sweep_simulation import SimulationPool, prepare, run_in_process, simulate
-from .sweep_spec import CONNECT_TIMEOUT, MAX_WORKERS, ClusterError, SpecError
-from .sweep_table import CSV_EXPORT, TABLE, ResultsTable, result_row
-from .tempdirs import remove_stale
-from .values import argparse_type, integer, real
+from .report import ProgressLine, headline_metrics, metric_unit, plot_summary, write_summary
+from .simulation import SimulationPool, prepare, run_in_process, simulate
+from .spec import CONNECT_TIMEOUT, MAX_WORKERS, ClusterError, SpecError
+from .table import CSV_EXPORT, TABLE, ResultsTable, result_row
 
 __all__ = ["ClusterError", "DEFAULT_FMU_DIR", "FMU_FILES", "METHODS", "OutputLocked",
            "ResultsTable", "Run", "SimulationPool", "SpecError", "SweepResult", "SweepSpec",
@@ -145,7 +64,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, fmu_dir: Path = DEFAULT_FMU_DIR,
               retry_failed: bool = False, plots: bool = True, progress: bool = True,
               stream=None, connect_timeout: float = CONNECT_TIMEOUT) -> SweepResult:
     """Runs the spec's missing runs on Dask and records them in DIR's results table
-    (harness.sweep_table: DIR/results.parquet, DIR/results.csv).
+    (harness.sweep.table: DIR/results.parquet, DIR/results.csv).
 
     ``client``: an existing dask.distributed Client (else ``scheduler`` or a
     LocalCluster with ``n_workers`` workers is used and closed afterwards)."""
@@ -172,7 +91,7 @@ def _run_sweep(spec: SweepSpec, out: Path, fmu_dir: Path, *, scheduler, client, 
     wall = 0.0
     if todo:
         # Dask is imported only here: the command line starts without it.
-        from .sweep_dask import FMUWorkerPlugin, execute, fmu_payload, start_client
+        from .cluster import FMUWorkerPlugin, execute, fmu_payload, start_client
 
         own = client is None
         cluster = None
@@ -242,7 +161,7 @@ def register(subparsers, parents: Sequence[argparse.ArgumentParser] = ()
     """Adds the ``sweep`` subcommand to the harness CLI's subparsers (``parents``: the
     options every command takes)."""
     p = subparsers.add_parser("sweep", help="parameter / noise sweeps on Dask",
-                              description=__doc__, parents=list(parents),
+                              description=_package_doc(), parents=list(parents),
                               formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(p)
     return p
@@ -314,8 +233,13 @@ def cmd_sweep(args) -> int:
     return 0
 
 
+def _package_doc() -> str:
+    import harness.sweep
+    return harness.sweep.__doc__ or ""
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m harness.sweep", description=__doc__,
+    parser = argparse.ArgumentParser(prog="python -m harness.sweep", description=_package_doc(),
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(parser)
     parser.add_argument("--fmu-dir", default=str(DEFAULT_FMU_DIR),

@@ -13,12 +13,12 @@ from typing import Any, cast
 
 from distributed.diagnostics.plugin import WorkerPlugin
 
-from .sweep_plan import FMU_FILES, Run, SweepSpec
-from .sweep_report import ProgressLine
-from .sweep_simulation import SimulationPool, prepare, simulate
-from .sweep_spec import CONNECT_TIMEOUT, MAX_WORKERS, ClusterError
-from .sweep_table import ResultsTable, result_row
-from .tempdirs import owned_temp_dir, remove_stale
+from ..tempdirs import owned_temp_dir, remove_stale
+from .plan import FMU_FILES, Run, SweepSpec
+from .report import ProgressLine
+from .simulation import SimulationPool, prepare, simulate
+from .spec import CONNECT_TIMEOUT, MAX_WORKERS, ClusterError
+from .table import ResultsTable, result_row
 
 
 def fmu_payload(fmu_dir: Path) -> tuple[dict[str, bytes], str]:

@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from .outputs import write_atomically
-from .sweep_plan import SweepSpec
+from ..outputs import write_atomically
+from .plan import SweepSpec
 
 
 class ProgressLine:
@@ -39,8 +39,8 @@ class ProgressLine:
 
 
 def headline_metrics(spec: SweepSpec, rows: list[dict[str, Any]]) -> list[str]:
-    from .compare import HEADLINE
-    from .scenarios import SCENARIOS
+    from ..compare import HEADLINE
+    from ..scenarios import SCENARIOS
 
     present = {k for r in rows for k in r}
     return [m for m in HEADLINE[SCENARIOS[spec.scenario].kind] if m in present]

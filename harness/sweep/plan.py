@@ -1,9 +1,9 @@
 """A sweep specification read into its runs (see harness.sweep for the format).
 
 :func:`load_spec` reads a JSON or TOML file, :func:`parse_spec` checks it --
-its shape against the JSON Schema (harness.sweep_schema), then every name
+its shape against the JSON Schema (harness.sweep.schema), then every name
 against the scenarios and the FMUs' model descriptions and every value
-(harness.sweep_spec) -- and
+(harness.sweep.spec) -- and
 gives a :class:`SweepSpec`, whose :meth:`SweepSpec.runs` lists the runs, each
 identified by a hash of everything that determines its result.
 """
@@ -17,10 +17,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .fmus import Value, Variable, variables_of
-from .paths import default_fmu_dir
-from .sweep_schema import METHODS, check_shape
-from .sweep_spec import (
+from ..fmus import Value, Variable, variables_of
+from ..paths import default_fmu_dir
+from .schema import METHODS, check_shape
+from .spec import (
     MAX_STOP_TIME,
     PSEUDO,
     RandomSampling,
@@ -36,7 +36,7 @@ from .sweep_spec import (
     sampling_seed,
     value_range,
 )
-from .sweep_spec import transient as check_transient
+from .spec import transient as check_transient
 
 DEFAULT_FMU_DIR = default_fmu_dir()
 FMU_FILES = {"plant": "Pendulum.fmu", "controller": "TwistingController.fmu",
@@ -153,9 +153,9 @@ def _parameter(name: str, variables: Mapping[str, Mapping[str, Variable]]) -> Va
 
 def parse_spec(data: Mapping[str, Any], fmu_dir: Path = DEFAULT_FMU_DIR) -> SweepSpec:
     """Validates a spec (a dict as read from JSON/TOML): its shape against the schema
-    (harness.sweep_schema), then against the scenarios and FMUs (every value, and the
-    number of runs: harness.sweep_spec)."""
-    from .scenarios import SCENARIOS
+    (harness.sweep.schema), then against the scenarios and FMUs (every value, and the
+    number of runs: harness.sweep.spec)."""
+    from ..scenarios import SCENARIOS
 
     check_shape(data)
     name = data["scenario"]
@@ -225,7 +225,7 @@ def parse_spec(data: Mapping[str, Any], fmu_dir: Path = DEFAULT_FMU_DIR) -> Swee
 def load_spec(path: str | Path, fmu_dir: Path = DEFAULT_FMU_DIR) -> SweepSpec:
     """The spec of a JSON (or .toml) file, read by harness.inputs (bounded size and
     depth, UTF-8, no duplicate keys), then checked (parse_spec)."""
-    from .inputs import InputError, read_structured
+    from ..inputs import InputError, read_structured
 
     path = Path(path)
     try:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from filelock import FileLock, Timeout
 
-from .outputs import LOCK_NAME as COMMAND_LOCK
+from ..outputs import LOCK_NAME as COMMAND_LOCK
 
 LOCK_NAME = ".sweep.lock"
 

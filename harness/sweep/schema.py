@@ -1,11 +1,11 @@
 """The JSON Schema of a sweep specification, and its check with clear messages.
 
 The schema (:func:`spec_schema`, JSON Schema draft 2020-12; print it with
-``python -m harness.sweep_schema``) fixes the shape of a spec: which keys,
+``python -m harness.sweep.schema``) fixes the shape of a spec: which keys,
 their types, the choices of "scenario", "method", "random.method" and
 "scale", and the bounds of stop_time, transient, random.n, random.seed and
-seeds.  What a schema cannot say is checked afterwards by harness.sweep_plan
-and harness.sweep_spec: that a parameter names a variable of an FMU, its
+seeds.  What a schema cannot say is checked afterwards by harness.sweep.plan
+and harness.sweep.spec: that a parameter names a variable of an FMU, its
 value fits that variable's type and declared range, numbers are finite
 (JSON parsers accept NaN and Infinity), and the number of runs.
 
@@ -21,19 +21,19 @@ from collections.abc import Sequence
 from functools import lru_cache
 from typing import Any
 
-from .sweep_spec import MAX_RUNS, MAX_STOP_TIME, SEED_MAX, SpecError
+from .spec import MAX_RUNS, MAX_STOP_TIME, SEED_MAX, SpecError
 
 METHODS = ("paper", "improved")
 TYPE_WORDS = {"object": "a table/object", "array": "a list", "number": "a number",
               "integer": "an integer", "string": "a string", "boolean": "a Boolean"}
-RUN_LIMIT = f"a sweep has at most {MAX_RUNS} runs (harness.sweep_spec.MAX_RUNS)"
+RUN_LIMIT = f"a sweep has at most {MAX_RUNS} runs (harness.sweep.spec.MAX_RUNS)"
 HUGE = 10**40  # integers from here on are shown as "a huge number"
 
 
 @lru_cache(maxsize=1)
 def spec_schema() -> dict[str, Any]:
     """The JSON Schema of a sweep spec (a new dict each process; do not modify)."""
-    from .scenarios import SCENARIOS
+    from ..scenarios import SCENARIOS
 
     value = {"type": ["number", "boolean"],
              "description": "a parameter value: a number (Real, Integer) or true/false (Boolean)"}

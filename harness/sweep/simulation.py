@@ -13,15 +13,15 @@ from typing import Any
 
 import numpy as np
 
-from .fmus import FMUError, Value
-from .sweep_plan import DEFAULT_FMU_DIR, Run, SweepSpec
-from .sweep_spec import PSEUDO
-from .sweep_table import result_row
+from ..fmus import FMUError, Value
+from .plan import DEFAULT_FMU_DIR, Run, SweepSpec
+from .spec import PSEUDO
+from .table import result_row
 
 
 def prepare(spec: SweepSpec, run: Run):
     """The Scenario of one run (all overrides applied), its noise std and seed."""
-    from .scenarios import SCENARIOS, improved_overrides
+    from ..scenarios import SCENARIOS, improved_overrides
 
     base = SCENARIOS[spec.scenario]
     noise_std = float(run.params.get("noise_std", 0.0))
@@ -59,7 +59,7 @@ class SimulationPool:
         self._lock = threading.Lock()
 
     def acquire(self):
-        from .scenarios import SCENARIOS, build
+        from ..scenarios import SCENARIOS, build
 
         with self._lock:
             if self._free:
@@ -96,8 +96,8 @@ def simulate(pool: SimulationPool, scenario, noise_std: float, seed: int,
     """One scored run on a pooled co-simulation: what scenarios.run_scenario + score do.
 
     Never raises for a failed run: returns status "failed" and the message."""
-    from .metrics import score
-    from .scenarios import run_on
+    from ..metrics import score
+    from ..scenarios import run_on
 
     start = time.perf_counter()
     result: dict[str, Any] = {"status": "ok", "message": "", "metrics": {}}

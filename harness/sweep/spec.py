@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from .fmus import Value
-from .values import INT32_MAX, INT32_MIN, BadValue, fmi_value, integer, real
+from ..fmus import Value
+from ..values import INT32_MAX, INT32_MIN, BadValue, fmi_value, integer, real
 
 # The most runs one sweep may have: a run is a closed-loop scenario of at least
 # a second of model time (0.1 s or more of wall time), so 10^5 runs is hours on
@@ -202,5 +202,5 @@ def run_count_bound(grid_sizes: list[int], samples: int | None, points: int,
 def check_run_count(bound: int) -> None:
     if bound > MAX_RUNS:
         raise SpecError(f"the spec describes up to {bound} runs, more than the {MAX_RUNS} a sweep "
-                        f"may have (harness.sweep_spec.MAX_RUNS); split it into several sweeps "
+                        f"may have (harness.sweep.spec.MAX_RUNS); split it into several sweeps "
                         f"(they can share --out)")

@@ -28,9 +28,9 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from .outputs import write_atomically as _write_atomically
-from .sweep_plan import Run, SweepSpec
-from .sweep_spec import SpecError
+from ..outputs import write_atomically as _write_atomically
+from .plan import Run, SweepSpec
+from .spec import SpecError
 
 TABLE = "results.parquet"
 CSV_EXPORT = "results.csv"
