@@ -36,11 +36,25 @@ setup_venv() {
     local stamp=$VENV/.requirements.sha
     local want
     want=$(cat requirements.txt pyproject.toml | sha256sum | cut -d' ' -f1)
-    if [ -x "$PY" ] && [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then return; fi
-    log "creating $VENV from requirements.txt"
-    python3 -m venv "$VENV"
-    "$PY" -m pip install --quiet --disable-pip-version-check -r requirements.txt
-    # The harness itself, editable: its native library is CMake's (harness/lib/).
+    if ! [ -x "$PY" ] || ! [ -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
+        log "creating $VENV from requirements.txt"
+        python3 -m venv "$VENV"
+        "$PY" -m pip install --quiet --disable-pip-version-check -r requirements.txt
+        echo "$want" > "$stamp"
+        rm -f "$VENV/.package.sha"
+    fi
+    install_package
+}
+
+# The harness itself, editable.  The editable install maps the package's modules by
+# their paths when it is made, so it is made again when a module is added, moved or
+# removed (a stale map fails the import of a moved module).
+install_package() {
+    local stamp=$VENV/.package.sha
+    local want
+    want=$( (cat pyproject.toml; find harness -name '*.py' | sort) | sha256sum | cut -d' ' -f1)
+    if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then return; fi
+    log "installing the harness into $VENV (editable)"
     "$PY" -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation \
         -e .
     echo "$want" > "$stamp"

@@ -83,6 +83,23 @@ def read_columns(path: Path, header: Header, columns: list[str],
     return np.concatenate(chunks) if chunks else np.empty((0, len(indices)))
 
 
+def uneven_step(t: np.ndarray, tolerance: float, role: str = "t") -> tuple[int, str] | None:
+    """Why the time stamps `t` are not a log's even steps: (the index of the sample after
+    the first bad step, what is wrong), or None when every step is positive and within
+    `tolerance` of the mean step (a logger's jitter, float64's rounding of epoch stamps)."""
+    steps = np.diff(t)
+    if not np.all(steps > 0):
+        k = int(np.argmax(~(steps > 0)))
+        return k + 1, f"{role} does not increase ({t[k]:.17g}, then {t[k + 1]:.17g})"
+    mean = (t[-1] - t[0]) / (len(t) - 1)
+    worst = int(np.argmax(np.abs(steps - mean)))
+    if abs(steps[worst] - mean) > tolerance * mean:
+        return worst + 1, (f"a step of {steps[worst]:.6g} s where the mean step is {mean:.6g} "
+                           f"s; the samples must be evenly spaced within {100 * tolerance:g} % "
+                           "(a gap, or a clock that jitters more: resample the log first)")
+    return None
+
+
 def _first_bad_value(path: Path, indices: list[int], roles: list[str],
                      has_header: bool) -> tuple[int, str]:
     """(line, role) of the first value that is not a number (only when reading failed)."""

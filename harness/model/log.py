@@ -11,11 +11,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..csv_columns import CsvColumnError, column_of, read_columns, read_header
+from ..csv_columns import CsvColumnError, column_of, read_columns, read_header, uneven_step
 from .model import Model
 from .reader import TIME
 
-#: A sampling step may differ from the median step by this fraction (clock jitter).
+#: A sampling step may differ from the mean step by this fraction (clock jitter).
 STEP_TOLERANCE = 0.01
 
 
@@ -34,8 +34,8 @@ class ModelLog:
 
     @property
     def step(self) -> float:
-        """The sampling step [s] (the median step; the steps are checked to be even)."""
-        return float(np.median(np.diff(self.t)))
+        """The sampling step [s]: the mean step (the steps are checked to be even)."""
+        return float((self.t[-1] - self.t[0]) / (len(self.t) - 1))
 
     @property
     def samples(self) -> int:
@@ -71,16 +71,9 @@ def read_log(path: str | Path, model: Model) -> ModelLog:
 def _check_time(path: Path, column: str, t: np.ndarray) -> None:
     if len(t) < 3:
         raise LogFileError(f"{path}: {len(t)} samples; identification needs many more")
-    steps = np.diff(t)
-    if not np.all(steps > 0):
-        first = int(np.flatnonzero(steps <= 0)[0])
-        raise LogFileError(f"{path}: time column {column!r} does not increase at sample "
-                           f"{first + 2} ({t[first]:g} then {t[first + 1]:g})")
-    median = float(np.median(steps))
-    if np.max(np.abs(steps - median)) > STEP_TOLERANCE * median:
-        raise LogFileError(f"{path}: time column {column!r} is not evenly sampled (steps "
-                           f"from {steps.min():g} to {steps.max():g} s, median {median:g}); "
-                           "resample the log to a constant step first")
+    uneven = uneven_step(t, STEP_TOLERANCE, f"time column {column!r}")
+    if uneven:
+        raise LogFileError(f"{path}: at sample {uneven[0] + 1}, {uneven[1]}")
 
 
 def _missing(path: Path, column: str, available: list[str]) -> LogFileError:

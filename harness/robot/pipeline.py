@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 from scipy.signal import savgol_filter
 
-from ..csv_columns import CsvColumnError, column_of, read_columns, read_header
+from ..csv_columns import CsvColumnError, column_of, read_columns, read_header, uneven_step
 from .base_parameters import BaseParameters, base_parameters
 from .consistency import consistent_parameters, write_identified_urdf
 from .filtered_regression import filtered_regression, low_pass
@@ -107,19 +107,9 @@ def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
     if len(data) < 10:
         raise LogError(f"{path}: {len(data)} samples; identification needs many more")
     t = data[:, 0]
-    steps = np.diff(t)
-    mean = (t[-1] - t[0]) / (len(t) - 1)
-    if not np.all(steps > 0):
-        line = int(np.argmax(~(steps > 0))) + first_line + 1
-        before = line - first_line - 1  # the sample before the step
-        raise LogError(f"{path} line {line}: t does not increase ({t[before]:.17g}, then "
-                       f"{t[before + 1]:.17g})")
-    worst = int(np.argmax(np.abs(steps - mean)))
-    if abs(steps[worst] - mean) > relative_tolerance * mean:
-        raise LogError(f"{path} line {worst + first_line + 1}: a step of {steps[worst]:.6g} s "
-                       f"where the mean step is {mean:.6g} s; the samples must be evenly "
-                       f"spaced within {100 * relative_tolerance:g} % (a gap, or a clock that "
-                       "jitters more: resample the log first)")
+    uneven = uneven_step(t, relative_tolerance)
+    if uneven:
+        raise LogError(f"{path} line {uneven[0] + first_line}: {uneven[1]}")
     return JointLog(t, data[:, 1:1 + n], data[:, 1 + n:])
 
 
