@@ -10,7 +10,9 @@ set(STO_CORE_OBSERVER
 set(STO_CORE_ROBOT
     core/robot_pipeline.c core/robot_observer.c core/rigid_body.c core/regressor_identifier.c
     core/statistics_job.c core/gains.c)
-set(STO_CORE_SOURCES ${STO_CORE_OBSERVER} ${STO_CORE_ROBOT})
+# A model file's regressor as data (harness/model/program.py writes it).
+set(STO_CORE_MODEL core/term_program.c)
+set(STO_CORE_SOURCES ${STO_CORE_OBSERVER} ${STO_CORE_ROBOT} ${STO_CORE_MODEL})
 list(REMOVE_DUPLICATES STO_CORE_SOURCES)
 
 # The model-independent instance core under every FMI version.
@@ -37,4 +39,5 @@ set(STO_RobotObserver_XML_DIR fmu/robot)
 
 # The Python package's native library (ctypes): the master loop and the robot batch
 # entry points over the same core.
-set(STO_NATIVE_SOURCES harness/native/master_loop.c harness/robot/native/robot_native.c)
+set(STO_NATIVE_SOURCES harness/native/master_loop.c harness/robot/native/robot_native.c
+    harness/native/term_program.c)

@@ -15,6 +15,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "check.h"
+
 #include "adaptive_rules.h"
 #include "gains.h"
 #include "identifier.h"
@@ -25,22 +27,6 @@
 #include "regressor_identifier.h"
 #include "statistics_job.h"
 #include "super_twisting.h"
-
-static int check(int ok, const char *format, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 2, 3)))
-#endif
-    ;
-static int check(int ok, const char *format, ...)
-{
-    va_list args;
-    va_start(args, format);
-    printf("%s ", ok ? "PASS" : "FAIL");
-    vprintf(format, args);
-    putchar('\n');
-    va_end(args);
-    return ok ? 0 : 1;
-}
 
 static const char *scheme_name(int scheme) { return scheme == 1 ? "paper" : "implicit"; }
 
@@ -1111,10 +1097,7 @@ static int adaptive_rules(void)
 
 int main(int argc, char **argv)
 {
-    static const struct {
-        const char *name;
-        int (*run)(void);
-    } cases[] = {
+    static const TestCase cases[] = {
         {"observer_exact_model", observer_exact_model},
         {"observer_unknown_perturbation", observer_unknown_perturbation},
         {"filtered_injection_recovers_perturbation", filtered_injection_recovers_perturbation},
@@ -1132,13 +1115,5 @@ int main(int argc, char **argv)
         {"pipeline_identifies_a_joint", pipeline_identifies_a_joint},
         {"adaptive_rules", adaptive_rules},
     };
-    const size_t n_cases = sizeof cases / sizeof cases[0];
-    if (argc < 2) {
-        for (size_t i = 0; i < n_cases; ++i) puts(cases[i].name);
-        return 0;
-    }
-    for (size_t i = 0; i < n_cases; ++i)
-        if (strcmp(argv[1], cases[i].name) == 0) return cases[i].run() ? 1 : 0;
-    fprintf(stderr, "test_core: unknown case %s\n", argv[1]);
-    return 2;
+    return run_cases("test_core", cases, sizeof cases / sizeof cases[0], argc, argv);
 }

@@ -1,0 +1,218 @@
+#include "term_program.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- reading the text form ---- */
+
+#define TOKEN_SIZE 64
+
+typedef struct {
+    const char *text;
+    size_t length, at;
+    int line;
+    char token[TOKEN_SIZE];
+    char *error;
+    size_t error_size;
+} Cursor;
+
+static int fail(Cursor *c, const char *format, ...)
+{
+    if (c->error && c->error_size) {
+        int used = snprintf(c->error, c->error_size, "term program, line %d: ", c->line);
+        if (used < 0) used = 0;
+        if ((size_t)used < c->error_size) {
+            va_list args;
+            va_start(args, format);
+            vsnprintf(c->error + used, c->error_size - (size_t)used, format, args);
+            va_end(args);
+        }
+    }
+    return -1;
+}
+
+static int is_space(char ch) { return ch == ' ' || ch == '\t' || ch == '\r' || ch == '\n'; }
+
+/* The next word into c->token; 0, or -1 at the end of the text or for a word
+ * too long to be a number or keyword. */
+static int next_word(Cursor *c)
+{
+    for (;;) {
+        while (c->at < c->length && is_space(c->text[c->at])) {
+            if (c->text[c->at] == '\n') ++c->line;
+            ++c->at;
+        }
+        if (c->at < c->length && c->text[c->at] == '#') {
+            while (c->at < c->length && c->text[c->at] != '\n') ++c->at;
+            continue;
+        }
+        break;
+    }
+    if (c->at >= c->length) return fail(c, "the text ends where a word was expected");
+    size_t size = 0;
+    while (c->at < c->length && !is_space(c->text[c->at]) && c->text[c->at] != '#') {
+        if (c->text[c->at] == '\0') return fail(c, "a NUL byte in the text");
+        if (size + 1 >= TOKEN_SIZE) return fail(c, "a word longer than %d characters",
+                                                TOKEN_SIZE - 1);
+        c->token[size++] = c->text[c->at++];
+    }
+    c->token[size] = '\0';
+    return 0;
+}
+
+static int expect_word(Cursor *c, const char *word)
+{
+    if (next_word(c)) return -1;
+    if (strcmp(c->token, word) != 0)
+        return fail(c, "expected '%s', found '%s'", word, c->token);
+    return 0;
+}
+
+static int read_int(Cursor *c, const char *what, long lo, long hi, int *value)
+{
+    if (next_word(c)) return -1;
+    char *end = NULL;
+    errno = 0;
+    const long v = strtol(c->token, &end, 10);
+    if (end == c->token || *end != '\0' || errno)
+        return fail(c, "%s: '%s' is not an integer", what, c->token);
+    if (v < lo || v > hi) return fail(c, "%s = %ld is outside [%ld, %ld]", what, v, lo, hi);
+    *value = (int)v;
+    return 0;
+}
+
+static int read_double(Cursor *c, const char *what, double *value)
+{
+    if (next_word(c)) return -1;
+    char *end = NULL;
+    const double v = strtod(c->token, &end);
+    if (end == c->token || *end != '\0') return fail(c, "%s: '%s' is not a number", what, c->token);
+    if (!isfinite(v)) return fail(c, "%s = %s is not finite", what, c->token);
+    *value = v;
+    return 0;
+}
+
+/* How many values an op takes from the stack and the range of its argument. */
+static int op_arity(int op) { return op <= TP_INPUT ? 0 : op <= TP_POWER ? 2 : 1; }
+
+static int arg_limit(const TermProgram *p, int op)
+{
+    switch (op) {
+    case TP_CONSTANT: return p->n_constants;
+    case TP_POSITION: case TP_VELOCITY: case TP_ACCELERATION: return p->n;
+    case TP_INPUT: return p->m;
+    default: return 1; /* arg 0 */
+    }
+}
+
+static int read_entry(Cursor *c, TermProgram *p)
+{
+    int i, k, length;
+    if (read_int(c, "entry row", 0, p->n - 1, &i) || read_int(c, "entry column", 0, p->p, &k) ||
+        read_int(c, "entry length", 1, TP_MAX_TOKENS, &length))
+        return -1;
+    if (p->length[i][k]) return fail(c, "entry %d %d is given twice", i, k);
+    if (length > TP_MAX_TOKENS - p->n_tokens)
+        return fail(c, "more than %d tokens in all", TP_MAX_TOKENS);
+    int depth = 0;
+    p->start[i][k] = p->n_tokens;
+    for (int t = 0; t < length; ++t) {
+        int op, arg;
+        if (read_int(c, "op", 0, TP_OP_COUNT - 1, &op) || read_int(c, "arg", 0, 1 << 20, &arg))
+            return -1;
+        if (arg >= arg_limit(p, op))
+            return fail(c, "entry %d %d, token %d: argument %d out of range for op %d", i, k, t,
+                        arg, op);
+        const int arity = op_arity(op);
+        if (depth < arity)
+            return fail(c, "entry %d %d, token %d: op %d needs %d values, the stack holds %d", i,
+                        k, t, op, arity, depth);
+        depth += 1 - arity;
+        if (depth > TP_MAX_STACK)
+            return fail(c, "entry %d %d: deeper than %d values", i, k, TP_MAX_STACK);
+        p->op[p->n_tokens] = op;
+        p->arg[p->n_tokens] = arg;
+        ++p->n_tokens;
+    }
+    if (depth != 1) return fail(c, "entry %d %d leaves %d values, not 1", i, k, depth);
+    p->length[i][k] = length;
+    return 0;
+}
+
+int tp_parse(TermProgram *p, const char *text, size_t length, char *error, size_t error_size)
+{
+    Cursor c = {.text = text, .length = length, .line = 1, .error = error,
+                .error_size = error_size};
+    memset(p, 0, sizeof *p);
+    if (!text) return fail(&c, "no text");
+    if (length > TP_MAX_TEXT) return fail(&c, "longer than %d bytes", TP_MAX_TEXT);
+    int version;
+    if (expect_word(&c, "sto-term-program") || read_int(&c, "version", 1, 1, &version) ||
+        expect_word(&c, "sizes") ||
+        read_int(&c, "coordinates", 1, TP_MAX_COORDINATES, &p->n) ||
+        read_int(&c, "inputs", 0, TP_MAX_INPUTS, &p->m) ||
+        read_int(&c, "parameters", 1, TP_MAX_PARAMETERS, &p->p) ||
+        expect_word(&c, "constants") ||
+        read_int(&c, "constants", 0, TP_MAX_CONSTANTS, &p->n_constants))
+        return -1;
+    for (int j = 0; j < p->n_constants; ++j)
+        if (read_double(&c, "constant", &p->constant[j])) return -1;
+    const int entries = p->n * (p->p + 1);
+    for (int e = 0; e < entries; ++e)
+        if (expect_word(&c, "entry") || read_entry(&c, p)) return -1;
+    if (next_word(&c) == 0) return fail(&c, "'%s' after the last entry", c.token);
+    if (error && error_size) error[0] = '\0';
+    return 0;
+}
+
+/* ---- evaluation ---- */
+
+static double sign(double x) { return (double)((x > 0.0) - (x < 0.0)); }
+
+double tp_entry(const TermProgram *p, const TpSample *s, int i, int k)
+{
+    double stack[TP_MAX_STACK];
+    int top = -1; /* tp_parse proved every entry's depth */
+    const int end = p->start[i][k] + p->length[i][k];
+    for (int t = p->start[i][k]; t < end; ++t) {
+        const int a = p->arg[t];
+        switch ((TpOp)p->op[t]) {
+        case TP_CONSTANT: stack[++top] = p->constant[a]; break;
+        case TP_POSITION: stack[++top] = s->q[a]; break;
+        case TP_VELOCITY: stack[++top] = s->qd[a]; break;
+        case TP_ACCELERATION: stack[++top] = s->qdd[a]; break;
+        case TP_INPUT: stack[++top] = s->u[a]; break;
+        case TP_ADD: --top; stack[top] += stack[top + 1]; break;
+        case TP_MULTIPLY: --top; stack[top] *= stack[top + 1]; break;
+        case TP_POWER: --top; stack[top] = pow(stack[top], stack[top + 1]); break;
+        case TP_NEGATE: stack[top] = -stack[top]; break;
+        case TP_SIN: stack[top] = sin(stack[top]); break;
+        case TP_COS: stack[top] = cos(stack[top]); break;
+        case TP_TAN: stack[top] = tan(stack[top]); break;
+        case TP_TANH: stack[top] = tanh(stack[top]); break;
+        case TP_EXP: stack[top] = exp(stack[top]); break;
+        case TP_LOG: stack[top] = log(stack[top]); break;
+        case TP_SIGN: stack[top] = sign(stack[top]); break;
+        case TP_ABS: stack[top] = fabs(stack[top]); break;
+        case TP_SQRT: stack[top] = sqrt(stack[top]); break;
+        case TP_ATAN: stack[top] = atan(stack[top]); break;
+        case TP_SINH: stack[top] = sinh(stack[top]); break;
+        case TP_COSH: stack[top] = cosh(stack[top]); break;
+        case TP_OP_COUNT: break;
+        }
+    }
+    return stack[0];
+}
+
+void tp_evaluate(const TermProgram *p, const TpSample *s, double Y[][TP_MAX_PARAMETERS],
+                 double r[])
+{
+    for (int i = 0; i < p->n; ++i) {
+        for (int k = 0; k < p->p; ++k) Y[i][k] = tp_entry(p, s, i, k);
+        r[i] = tp_entry(p, s, i, p->p);
+    }
+}
