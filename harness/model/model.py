@@ -101,17 +101,27 @@ class Model:
         return factors, np.array([si_factor(p.unit) for p in self.parameters])
 
     @cached_property
-    def _evaluate(self) -> Callable[..., list]:
-        factors, _ = self._scales
+    def scaled_entries(self) -> tuple[tuple[sympy.Expr, ...], ...]:
+        """Per equation, its regressor entries ``Y_i1 .. Y_ip`` then ``r_i`` as expressions of
+        the measured symbols (positions, velocities, accelerations, inputs) in SI units, the
+        constants substituted and each parameter column scaled to the file's unit: the
+        numbers of :meth:`regressor`, and what the term program compiles."""
+        factors, column_scales = self._scales
         s = self.symbols
         values = {s.constants[k.name]: sympy.Float(k.value) * factors.get(s.constants[k.name], 1.0)
                   for k in self.constants}
         scaled = {sym: sym * f for sym, f in factors.items() if sym not in values and f != 1.0}
-        entries = []
+        rows = []
         for eq in self.equations:
-            for term in (*eq.terms, eq.known):
-                entries.append(term.subs(values).xreplace(scaled))
-        return compile_regressor(s.measured(), entries)
+            terms = [term.subs(values).xreplace(scaled) * (sympy.Float(c) if c != 1.0 else 1)
+                     for term, c in zip(eq.terms, column_scales)]
+            rows.append((*terms, eq.known.subs(values).xreplace(scaled)))
+        return tuple(rows)
+
+    @cached_property
+    def _evaluate(self) -> Callable[..., list]:
+        entries = [entry for row in self.scaled_entries for entry in row]
+        return compile_regressor(self.symbols.measured(), entries)
 
     def regressor(self, q: object, qd: object, qdd: object,
                   inputs: object = None) -> tuple[np.ndarray, np.ndarray]:
@@ -132,8 +142,7 @@ class Model:
         flat = stack(self._evaluate(*columns), samples)
         p = len(self.parameters)
         flat = flat.reshape(samples, len(self.equations), p + 1)
-        Y = flat[:, :, :p] * self._scales[1]
-        return np.ascontiguousarray(Y), np.ascontiguousarray(flat[:, :, p])
+        return np.ascontiguousarray(flat[:, :, :p]), np.ascontiguousarray(flat[:, :, p])
 
     def column_scales(self, q: object, qd: object, qdd: object,
                       inputs: object = None) -> np.ndarray:
