@@ -17,6 +17,7 @@ import sympy
 
 from .expressions import ExpressionError
 from .model import Model
+from .units import si_factor
 
 #: The core's ops (enum TpOp of term_program.h, in its order; a test holds them equal).
 OPS = ("constant", "position", "velocity", "acceleration", "input",
@@ -115,8 +116,11 @@ def compile_program(model: Model) -> str:
         raise ProgramError(f"the regressor compiles to {compiler.tokens} tokens: the FMU's "
                            f"core takes at most {MAX_TOKENS}")
     pool = " ".join(repr(value) for value in compiler.constants)
+    si = [si_factor(q.unit) if model.units else 1.0 for q in model.parameters]
     header = ["sto-term-program 1", f"# {model.source}", f"sizes {n} {m} {p}",
-              f"constants {len(compiler.constants)} {pool}".rstrip()]
+              f"constants {len(compiler.constants)} {pool}".rstrip(),
+              "nominal " + " ".join(repr(float(q.nominal)) for q in model.parameters),
+              "scale " + " ".join(repr(float(f)) for f in si)]
     return "\n".join(header + lines) + "\n"
 
 

@@ -161,6 +161,15 @@ int tp_parse(TermProgram *p, const char *text, size_t length, char *error, size_
         return -1;
     for (int j = 0; j < p->n_constants; ++j)
         if (read_double(&c, "constant", &p->constant[j])) return -1;
+    if (expect_word(&c, "nominal")) return -1;
+    for (int k = 0; k < p->p; ++k)
+        if (read_double(&c, "nominal", &p->nominal[k])) return -1;
+    if (expect_word(&c, "scale")) return -1;
+    for (int k = 0; k < p->p; ++k) {
+        if (read_double(&c, "scale", &p->scale[k])) return -1;
+        if (!(p->scale[k] > 0.0)) return fail(&c, "scale of parameter %d = %g is not positive",
+                                              k, p->scale[k]);
+    }
     const int entries = p->n * (p->p + 1);
     for (int e = 0; e < entries; ++e)
         if (expect_word(&c, "entry") || read_entry(&c, p)) return -1;

@@ -7,10 +7,15 @@
  * program at every sample, so one FMU binary serves every model file: the
  * model reaches it as a resource file, never as generated C.
  *
+ * Y's columns are in the file's units of the parameters (Y theta = r with
+ * theta as the file writes it, r in SI).
+ *
  * The text form (one token per word, '#' starts a comment line):
  *     sto-term-program 1
  *     sizes N M P           coordinates, inputs, parameters
  *     constants C  c_1 .. c_C
+ *     nominal v_1 .. v_P    the parameters' nominal values (the file's units)
+ *     scale s_1 .. s_P      each parameter's unit in SI (theta_SI = s theta)
  *     entry I K L  op arg .. op arg     L (op, arg) pairs; K = P: r_I
  * with one entry for every I < N and K <= P.  Ops (term_program.c, TpOp)
  * push a constant (arg: its index) or a measured value (arg: the coordinate
@@ -44,6 +49,7 @@ typedef struct {
     int n, m, p;                   /* coordinates, inputs, parameters */
     int n_constants, n_tokens;
     double constant[TP_MAX_CONSTANTS];
+    double nominal[TP_MAX_PARAMETERS], scale[TP_MAX_PARAMETERS];
     int op[TP_MAX_TOKENS], arg[TP_MAX_TOKENS];
     /* entry (i, k), k <= p (k = p: r_i): tokens start[i][k] .. start[i][k] + length[i][k] - 1 */
     int start[TP_MAX_COORDINATES][TP_MAX_PARAMETERS + 1];

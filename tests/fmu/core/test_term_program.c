@@ -16,6 +16,8 @@ static const char EMPS[] =
     "# a comment line\n"
     "sizes 1 1 4\n"
     "constants 2 0.001 1\n"
+    "nominal 100 0 0 0\n"
+    "scale 1 1 1 1\n"
     "entry 0 0 3  0 0  3 0  6 0\n"
     "entry 0 1 3  0 0  2 0  6 0\n"
     "entry 0 2 2  2 0  15 0\n"
@@ -56,6 +58,13 @@ static int every_op(void)
     char text[4096];
     int used = snprintf(text, sizeof text, "sto-term-program 1 sizes 1 0 %d constants 0\n",
                         (int)n_unary + 3);
+    used += snprintf(text + used, sizeof text - (size_t)used, "nominal");
+    for (size_t k = 0; k < n_unary + 3; ++k)
+        used += snprintf(text + used, sizeof text - (size_t)used, " 0");
+    used += snprintf(text + used, sizeof text - (size_t)used, " scale");
+    for (size_t k = 0; k < n_unary + 3; ++k)
+        used += snprintf(text + used, sizeof text - (size_t)used, " 1");
+    used += snprintf(text + used, sizeof text - (size_t)used, "\n");
     for (size_t k = 0; k < n_unary; ++k)
         used += snprintf(text + used, sizeof text - (size_t)used, "entry 0 %d 2 1 0 %d 0\n",
                          (int)k, unary[k].op);
@@ -96,19 +105,23 @@ static int refuses_bad_programs(void)
         {"sto-term-program 1 sizes 1 0 1 constants 1 nan", "not finite"},
         {"sto-term-program 1 sizes 1 0 1 constants 1 1e999", "not finite"},
         {"sto-term-program 1 sizes 1 0 1 constants 1 x", "'x' is not a number"},
-        {"sto-term-program 1 sizes 1 0 1 constants 0 entry 0 0 1 0 0", "argument 0 out of range"},
-        {"sto-term-program 1 sizes 1 0 1 constants 0 entry 0 0 1 4 0", "argument 0 out of range"},
-        {"sto-term-program 1 sizes 1 0 1 constants 0 entry 0 0 1 5 0", "needs 2 values"},
-        {"sto-term-program 1 sizes 1 0 1 constants 0 entry 0 0 2 1 0 1 0", "leaves 2 values"},
-        {"sto-term-program 1 sizes 1 0 1 constants 0 entry 0 0 1 99 0", "op = 99"},
-        {"sto-term-program 1 sizes 1 0 1 constants 0 entry 0 0 1 1 0 entry 0 0 1 1 0",
+        {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 1 scale 0", "not positive"},
+        {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 1 scale -1", "not positive"},
+        {"sto-term-program 1 sizes 1 0 1 constants 0 nominal inf", "not finite"},
+        {"sto-term-program 1 sizes 1 0 1 constants 0 entry", "expected 'nominal'"},
+        {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 entry 0 0 1 0 0", "argument 0 out of range"},
+        {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 entry 0 0 1 4 0", "argument 0 out of range"},
+        {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 entry 0 0 1 5 0", "needs 2 values"},
+        {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 entry 0 0 2 1 0 1 0", "leaves 2 values"},
+        {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 entry 0 0 1 99 0", "op = 99"},
+        {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 entry 0 0 1 1 0 entry 0 0 1 1 0",
          "given twice"},
-        {"sto-term-program 1 sizes 1 0 1 constants 0 entry 0 0 1 1 0 entry 0 1 1 1 0 extra",
+        {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 entry 0 0 1 1 0 entry 0 1 1 1 0 extra",
          "'extra' after the last entry"},
-        {"sto-term-program 1 sizes 1 0 1 constants 0 entry 0 0 1 1 0", "the text ends"},
-        {"sto-term-program 1 sizes 1 0 1 constants 0 entry 1 0 1 1 0", "entry row = 1"},
-        {"sto-term-program 1 sizes 1 0 1 constants 0 entry 0 0 1 1 -1", "arg = -1"},
-        {"sto-term-program 1 sizes 1 0 1 constants 0 entry 0 0 1 1 "
+        {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 entry 0 0 1 1 0", "the text ends"},
+        {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 entry 1 0 1 1 0", "entry row = 1"},
+        {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 entry 0 0 1 1 -1", "arg = -1"},
+        {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 entry 0 0 1 1 "
          "12345678901234567890123456789012345678901234567890123456789012345678",
          "longer than 63"},
     };
@@ -123,7 +136,7 @@ static int refuses_bad_programs(void)
     }
     /* A stack deeper than TP_MAX_STACK: TP_MAX_STACK + 1 pushes. */
     char deep[2048];
-    int used = snprintf(deep, sizeof deep, "sto-term-program 1 sizes 1 0 1 constants 0 entry 0 0 %d",
+    int used = snprintf(deep, sizeof deep, "sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 entry 0 0 %d",
                         2 * TP_MAX_STACK + 1);
     for (int t = 0; t <= TP_MAX_STACK; ++t) used += snprintf(deep + used, sizeof deep - (size_t)used, " 1 0");
     for (int t = 0; t < TP_MAX_STACK; ++t) used += snprintf(deep + used, sizeof deep - (size_t)used, " 5 0");
