@@ -8,14 +8,42 @@
 
 static void anchor_snapshot(RegressorIdentifier *id);
 
+/* The settings shared by both layouts; the columns and runs are set by the caller. */
+static int init_settings(RegressorIdentifier *id, RriKind kind, int rows, int p,
+                         const double torque_scale[], double h, double rho, double R)
+{
+    if (!(h > 0.0) || !isfinite(h) || !(rho > 0.0) || !isfinite(rho)) return -1;
+    if (kind == RRI_MFF && !(R > 0.0 && R < 1.0)) return -1;
+    if (kind != RRI_LSM && kind != RRI_MFF) return -1;
+    for (int i = 0; i < rows; ++i) {
+        const double s = torque_scale ? torque_scale[i] : 1.0;
+        if (!(s > 0.0) || !isfinite(s)) return -1;
+        id->weight[i] = 1.0 / (s * s);
+    }
+    id->rows = rows;
+    id->p = p;
+    id->h = h;
+    id->rho = rho;
+    id->lambda = kind == RRI_MFF ? pow(R, h) : 1.0;
+    id->one_minus_lambda_rho = (1.0 - id->lambda) * rho;
+    /* an int: a tiny h (below RRI_BATCH_TIME / RRI_MAX_BATCH_SAMPLES) gets shorter batches */
+    id->batch_samples = (int)fmin(ceil(RRI_BATCH_TIME / h), RRI_MAX_BATCH_SAMPLES);
+    id->batch_lambda = pow(id->lambda, 2.0 * id->batch_samples); /* variances forget twice as fast */
+    id->reference_lambda = pow(id->lambda, 1.0 / INFO_REFERENCE_MEMORY);
+    id->reference_pull = (1.0 - id->reference_lambda) * rho;
+    id->rest_lambda = pow(id->lambda, 1.0 / INFO_REST_MEMORY);
+    id->rest_pull = (1.0 - id->rest_lambda) * rho;
+    id->skip_threshold = INFO_SKIP_SHARE * p * (1.0 - id->reference_lambda);
+    id->gap_limit = kind == RRI_MFF ? INFO_GAP_MEMORY / -log(R) : 0.0;
+    rri_reset(id);
+    return 0;
+}
+
 int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int columns[],
              const double torque_scale[], double h, double rho, double R)
 {
     memset(id, 0, sizeof *id);
     if (rows < 1 || rows > RRI_MAX_ROWS || p < 1 || p > RRI_PARAMETERS_OF(rows)) return -1;
-    if (!(h > 0.0) || !isfinite(h) || !(rho > 0.0) || !isfinite(rho)) return -1;
-    if (kind == RRI_MFF && !(R > 0.0 && R < 1.0)) return -1;
-    if (kind != RRI_LSM && kind != RRI_MFF) return -1;
     for (int k = 0; k < p; ++k) {
         if (columns[k] < 0 || columns[k] >= RRI_PARAMETERS_OF(rows)) return -1;
         for (int j = 0; j < k; ++j)
@@ -39,28 +67,21 @@ int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int c
             }
         }
     }
-    for (int i = 0; i < rows; ++i) {
-        const double s = torque_scale ? torque_scale[i] : 1.0;
-        if (!(s > 0.0) || !isfinite(s)) return -1;
-        id->weight[i] = 1.0 / (s * s);
+    return init_settings(id, kind, rows, p, torque_scale, h, rho, R);
+}
+
+int rri_init_dense(RegressorIdentifier *id, RriKind kind, int rows, int p,
+                   const double torque_scale[], double h, double rho, double R)
+{
+    memset(id, 0, sizeof *id);
+    if (rows < 1 || rows > RRI_MAX_ROWS || p < 1 || p > RRI_MAX_PARAMETERS) return -1;
+    for (int k = 0; k < p; ++k) id->columns[k] = k;
+    for (int i = 0; i < rows; ++i) { /* every row may reach every column: one run */
+        id->runs[i] = 1;
+        id->run_start[i][0] = 0;
+        id->run_end[i][0] = p;
     }
-    id->rows = rows;
-    id->p = p;
-    id->h = h;
-    id->rho = rho;
-    id->lambda = kind == RRI_MFF ? pow(R, h) : 1.0;
-    id->one_minus_lambda_rho = (1.0 - id->lambda) * rho;
-    /* an int: a tiny h (below RRI_BATCH_TIME / RRI_MAX_BATCH_SAMPLES) gets shorter batches */
-    id->batch_samples = (int)fmin(ceil(RRI_BATCH_TIME / h), RRI_MAX_BATCH_SAMPLES);
-    id->batch_lambda = pow(id->lambda, 2.0 * id->batch_samples); /* variances forget twice as fast */
-    id->reference_lambda = pow(id->lambda, 1.0 / INFO_REFERENCE_MEMORY);
-    id->reference_pull = (1.0 - id->reference_lambda) * rho;
-    id->rest_lambda = pow(id->lambda, 1.0 / INFO_REST_MEMORY);
-    id->rest_pull = (1.0 - id->rest_lambda) * rho;
-    id->skip_threshold = INFO_SKIP_SHARE * p * (1.0 - id->reference_lambda);
-    id->gap_limit = kind == RRI_MFF ? INFO_GAP_MEMORY / -log(R) : 0.0;
-    rri_reset(id);
-    return 0;
+    return init_settings(id, kind, rows, p, torque_scale, h, rho, R);
 }
 
 void rri_reset(RegressorIdentifier *id)

@@ -105,6 +105,11 @@ typedef enum { RRI_LSM = 1, RRI_MFF = 2 } RriKind;
 int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int columns[],
              const double torque_scale[], double h, double rho, double R);
 
+/* The same over a dense regressor of any model (a model file's, model_pipeline.h):
+ * Y's columns 0..p-1 are the parameters and every row may reach every column. */
+int rri_init_dense(RegressorIdentifier *id, RriKind kind, int rows, int p,
+                   const double torque_scale[], double h, double rho, double R);
+
 /* Back to the nominal parameters and P = rho I. */
 void rri_reset(RegressorIdentifier *id);
 

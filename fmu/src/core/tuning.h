@@ -65,6 +65,15 @@
 #define RRI_BATCH_TIME 0.5         /* [s] of scores summed into one batch */
 #define RRI_ANCHOR_INTERVAL 32     /* samples between snapshots of the anchor's solve */
 
+/* ---- model files (model_pipeline.h) ------------------------------------------------ */
+#define MP_INJECTION_TAU 0.002      /* [s] filter of the observer's injection (its output) */
+#define MP_CONVERGENCE_WINDOW 0.05  /* [s] of the switching-rate test before identifying */
+#define MP_SINGULAR_PIVOT 1e-12     /* a pivot below this share of the largest |M_ij|: the
+                                     * nominal inertia is singular, F = 0 */
+#define MP_WARM_UP 10.0             /* time constants of G before its rows enter (e^-10) */
+#define MP_TAU_IDENTIFIER 0.02      /* [s] default of the regression's filter G */
+#define MP_RHO 1e-9                 /* default regularization, SI parameters */
+
 /* ---- statistics of an identifier (information_statistics.h, statistics_job.h) ------ */
 #define STATS_EIGEN_ITERATIONS 30   /* inverse iterations at most */
 #define STATS_EIGEN_TOLERANCE 1e-13 /* stop at this relative change of the eigenvalue */

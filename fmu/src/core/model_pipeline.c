@@ -1,0 +1,245 @@
+#include "model_pipeline.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "observer_scheme.h"
+
+#define MAX_N MP_MAX_COORDINATES
+
+static int refuse(char *error, size_t size, const char *format, ...)
+{
+    if (error && size) {
+        va_list args;
+        va_start(args, format);
+        vsnprintf(error, size, format, args);
+        va_end(args);
+    }
+    return -1;
+}
+
+int mp_init(ModelPipeline *p, const TermProgram *program, const double alpha1[],
+            const double alpha2[], const double y[], char *error, size_t error_size)
+{
+    const int n = program->n;
+    if (n > MAX_N)
+        return refuse(error, error_size, "the model has %d coordinates: this FMU observes at "
+                      "most %d", n, MAX_N);
+    if (p->scheme != STO_SCHEME_IMPLICIT && p->scheme != STO_SCHEME_ADAPTIVE)
+        return refuse(error, error_size, "scheme = %d: 2 (implicit) or 3 (noise-adaptive)",
+                      p->scheme);
+    if (p->identifier != 0 && p->identifier != RRI_LSM && p->identifier != RRI_MFF)
+        return refuse(error, error_size, "identifier = %d: 0 (off), 1 (LSM) or 2 (MFF)",
+                      p->identifier);
+    if (!(p->tau_identifier >= 0.0) || !isfinite(p->tau_identifier) ||
+        !(p->statistics_interval >= 0.0) || !isfinite(p->statistics_interval))
+        return refuse(error, error_size, "tau_identifier = %g and statistics_interval = %g must "
+                      "be finite and >= 0", p->tau_identifier, p->statistics_interval);
+    const double zero[MAX_N] = {0};
+    sto_init(&p->obs, n, p->h, alpha1, alpha2, MP_INJECTION_TAU, y, zero);
+    sto_configure(&p->obs, (StoScheme)p->scheme, MP_CONVERGENCE_WINDOW);
+    memset(&p->bank, 0, sizeof p->bank);
+    if (p->scheme == STO_SCHEME_ADAPTIVE) adaptive_init(&p->bank, p->h);
+    p->gain = p->tau_identifier > 0.0 ? -expm1(-p->h / p->tau_identifier) : 1.0;
+    p->warm_up = (int)fmin(ceil(MP_WARM_UP * p->tau_identifier / p->h), 1e9);
+    p->warm_samples = 0;
+    memset(p->velocity, 0, sizeof p->velocity);
+    memset(p->nominal_acceleration, 0, sizeof p->nominal_acceleration);
+    p->singular_steps = 0.0;
+    p->identifying = p->started = 0;
+    memset(p->Y0, 0, sizeof p->Y0);
+    memset(p->velocity_filtered, 0, sizeof p->velocity_filtered);
+    memset(&p->Y, 0, sizeof p->Y);
+    memset(p->z, 0, sizeof p->z);
+    memset(&p->id, 0, sizeof p->id);
+    if (p->identifier &&
+        rri_init_dense(&p->id, (RriKind)p->identifier, n, program->p, NULL, p->h, p->rho, p->R))
+        return refuse(error, error_size, "the identifier refused its settings (h = %g, rho = %g, "
+                      "R = %g): rho > 0, and 0 < R < 1 for MFF", p->h, p->rho, p->R);
+    sj_init(&p->statistics, p->identifier ? program->p : 1,
+            sj_interval_steps(p->statistics_interval, p->h), SJ_BUDGET);
+    return 0;
+}
+
+/* Every entry (k <= p) of every equation at the sample with q'' = 0 (e0) and
+ * each acceleration's coefficient A[j] = entries(q'' = e_j) - e0. */
+typedef struct {
+    double e0[MAX_N][TP_MAX_PARAMETERS + 1];
+    double A[MAX_N][MAX_N][TP_MAX_PARAMETERS + 1]; /* [j][i][k] */
+} AffineEntries;
+
+static void affine_entries(const TermProgram *program, TpSample *s, AffineEntries *out)
+{
+    const int n = program->n, p = program->p;
+    memset(s->qdd, 0, sizeof s->qdd);
+    for (int i = 0; i < n; ++i)
+        for (int k = 0; k <= p; ++k) out->e0[i][k] = tp_entry(program, s, i, k);
+    for (int j = 0; j < n; ++j) {
+        s->qdd[j] = 1.0;
+        for (int i = 0; i < n; ++i)
+            for (int k = 0; k <= p; ++k)
+                out->A[j][i][k] = tp_entry(program, s, i, k) - out->e0[i][k];
+        s->qdd[j] = 0.0;
+    }
+}
+
+/* The equations at the nominal parameters, M a = b, solved for the accelerations
+ * by Gaussian elimination with partial pivoting.  Returns 0, or -1 (a = 0) for a
+ * singular or non-finite M. */
+static int nominal_acceleration(const TermProgram *program, const AffineEntries *e, double a[])
+{
+    const int n = program->n, p = program->p;
+    double M[MAX_N][MAX_N], b[MAX_N], largest = 0.0;
+    for (int i = 0; i < n; ++i) {
+        double residual = -e->e0[i][p];
+        for (int k = 0; k < p; ++k) residual += program->nominal[k] * e->e0[i][k];
+        b[i] = -residual;
+        for (int j = 0; j < n; ++j) {
+            double m = -e->A[j][i][p];
+            for (int k = 0; k < p; ++k) m += program->nominal[k] * e->A[j][i][k];
+            M[i][j] = m;
+            largest = fmax(largest, fabs(m));
+        }
+    }
+    memset(a, 0, (size_t)n * sizeof a[0]);
+    if (!(largest > 0.0) || !isfinite(largest)) return -1;
+    for (int c = 0; c < n; ++c) {
+        int pivot = c;
+        for (int r = c + 1; r < n; ++r)
+            if (fabs(M[r][c]) > fabs(M[pivot][c])) pivot = r;
+        if (!(fabs(M[pivot][c]) > MP_SINGULAR_PIVOT * largest)) return -1;
+        if (pivot != c) {
+            for (int j = 0; j < n; ++j) {
+                const double t = M[c][j];
+                M[c][j] = M[pivot][j];
+                M[pivot][j] = t;
+            }
+            const double t = b[c];
+            b[c] = b[pivot];
+            b[pivot] = t;
+        }
+        for (int r = c + 1; r < n; ++r) {
+            const double f = M[r][c] / M[c][c];
+            for (int j = c; j < n; ++j) M[r][j] -= f * M[c][j];
+            b[r] -= f * b[c];
+        }
+    }
+    double x[MAX_N];
+    for (int c = n - 1; c >= 0; --c) {
+        double v = b[c];
+        for (int j = c + 1; j < n; ++j) v -= M[c][j] * x[j];
+        x[c] = v / M[c][c];
+        if (!isfinite(x[c])) return -1;
+    }
+    memcpy(a, x, (size_t)n * sizeof a[0]);
+    return 0;
+}
+
+/* One sample of the regression: the equations at the velocity estimates through
+ * G (model_pipeline.h), in SI parameters, into the identifier. */
+static void regression_step(ModelPipeline *p, const TermProgram *program, const AffineEntries *e)
+{
+    const int n = program->n, np = program->p;
+    const double g = p->started ? p->gain : 1.0; /* the first sample: no transient */
+    double acceleration[MAX_N];
+    for (int j = 0; j < n; ++j) {
+        const double before = p->velocity_filtered[j];
+        p->velocity_filtered[j] += g * (p->velocity[j] - before);
+        acceleration[j] = p->started ? (p->velocity_filtered[j] - before) / p->h : 0.0;
+    }
+    for (int i = 0; i < n; ++i) {
+        double entry[TP_MAX_PARAMETERS + 1] = {0};
+        for (int k = 0; k <= np; ++k) {
+            /* the acceleration below is G q'' between the last two samples: the other
+             * entries are taken there too, as the mean of their filtered values */
+            const double before = p->started ? p->Y0[i][k] : e->e0[i][k];
+            p->Y0[i][k] += g * (e->e0[i][k] - p->Y0[i][k]);
+            double v = 0.5 * (before + p->Y0[i][k]);
+            for (int j = 0; j < n; ++j) v += e->A[j][i][k] * acceleration[j];
+            entry[k] = v;
+        }
+        double z = entry[np];
+        for (int k = 0; k < np; ++k) {
+            z -= entry[k] * program->nominal[k];
+            p->Y.row[i][k] = entry[k] / program->scale[k];
+        }
+        p->z[i] = z;
+    }
+    p->started = 1;
+    /* G q'' starts at 0 where the other entries start at their values: the rows
+     * enter once that transient has decayed (MP_WARM_UP time constants) */
+    if (p->warm_samples < p->warm_up) {
+        ++p->warm_samples;
+        return;
+    }
+    rri_step(&p->id, p->z, &p->Y);
+    sj_step(&p->statistics);
+}
+
+void mp_run(ModelPipeline *p, const TermProgram *program, const double y[], const double u[],
+            double start_time, unsigned long long k, unsigned long long k_end)
+{
+    const int n = program->n;
+    TpSample s;
+    memset(&s, 0, sizeof s);
+    memcpy(s.q, y, (size_t)n * sizeof s.q[0]);
+    memcpy(s.u, u, (size_t)program->m * sizeof s.u[0]);
+    AffineEntries e;
+    StoTrace trace;
+    for (; k < k_end; ++k) {
+        StoAcceleration a[MAX_N];
+        memset(a, 0, sizeof a);
+        if (p->nominal_model) { /* the interval that starts here, at the last velocities */
+            memcpy(s.qd, p->velocity, (size_t)n * sizeof s.qd[0]);
+            affine_entries(program, &s, &e);
+            if (nominal_acceleration(program, &e, p->nominal_acceleration))
+                p->singular_steps += 1.0;
+            for (int i = 0; i < n; ++i) a[i].held = p->nominal_acceleration[i];
+        }
+        if (p->scheme == STO_SCHEME_ADAPTIVE) {
+            adaptive_run(&p->obs, &p->bank, y, a, 1, &trace);
+            memcpy(p->velocity, p->bank.velocity, (size_t)n * sizeof p->velocity[0]);
+        } else {
+            sto_run(&p->obs, y, a, 1, &trace);
+            for (int i = 0; i < n; ++i) p->velocity[i] = trace.velocity[i][0];
+        }
+        if (!p->identifier) continue;
+        const double t = start_time + (double)k * p->h;
+        if (!p->identifying && t >= p->t_id && sto_converged(&p->obs)) {
+            p->identifying = 1;
+            p->started = p->warm_samples = 0;
+        }
+        if (!p->identifying) continue;
+        memcpy(s.qd, p->velocity, (size_t)n * sizeof s.qd[0]);
+        affine_entries(program, &s, &e);
+        regression_step(p, program, &e);
+    }
+}
+
+void mp_communicate(ModelPipeline *p)
+{
+    if (p->scheme == STO_SCHEME_ADAPTIVE) adaptive_outputs(&p->obs, &p->bank);
+    else sto_update_outputs(&p->obs);
+    if (p->identifying) sj_schedule(&p->statistics, &p->id);
+}
+
+void mp_estimates(const ModelPipeline *p, const TermProgram *program, double theta[],
+                  double std_error[])
+{
+    const double *delta = p->identifying ? sj_freshest_estimate(&p->statistics, &p->id) : NULL;
+    const int published = p->identifying && p->statistics.completed > 0.0;
+    for (int k = 0; k < program->p; ++k) {
+        theta[k] = program->nominal[k] + (delta ? delta[k] / program->scale[k] : 0.0);
+        std_error[k] = published ? p->statistics.std_error[k] / program->scale[k] : 0.0;
+    }
+}
+
+void mp_restart_identifier(ModelPipeline *p)
+{
+    if (!p->identifier) return;
+    rri_reset(&p->id);
+    sj_reset(&p->statistics);
+    p->identifying = p->started = p->warm_samples = 0;
+}

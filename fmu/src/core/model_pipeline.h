@@ -1,0 +1,85 @@
+/* The observer and identifier of a mechanical system declared in a model file,
+ * composed once over its term program (term_program.h):
+ *     sum_k theta_k Y_ik(q, q', q'', u) = r_i(q, q', q'', u),   i = 1..n.
+ *
+ * Observer: the super-twisting observer of every coordinate (implicit scheme,
+ * or beside the bank of noise-adaptive linear observers: noise_adaptive.h),
+ * with the paper's nominal model F (Davila, Fridman and Poznyak 2006, (12))
+ * the model file's equations solved for the accelerations at the nominal
+ * parameters, the measured positions, the velocity estimates and the inputs.
+ * Where the nominal inertia is singular, F = 0 (the injection then carries the
+ * whole acceleration).
+ *
+ * Identification: the equations at the velocity estimates, every entry through
+ * one first-order low-pass filter G (time constant tau_identifier) into the
+ * regressor identifier (regressor_identifier.h: LSM or MFF in information form,
+ * standard errors by the sandwich over batches), with the statistics' solve
+ * spread over the internal steps (statistics_job.h).  The equations are affine
+ * in the accelerations, Y = Y0(q, q', u) + A(q, q') q'' (the same for r), and
+ * G q'' = d/dt (G q'): the acceleration's part of each filtered entry is A
+ * times the derivative of the filtered velocity, so that no acceleration
+ * estimate is differentiated or filtered twice; where A is constant (a mass)
+ * this is the filtered entry exactly.  The unknowns are identified in SI units
+ * (theta_SI = scale theta): the regularization rho does not depend on the
+ * units a file is written in.
+ * Plain C, no allocation, no FMI types. */
+#ifndef MODEL_PIPELINE_H
+#define MODEL_PIPELINE_H
+
+#include "noise_adaptive.h"
+#include "regressor_identifier.h"
+#include "statistics_job.h"
+#include "super_twisting.h"
+#include "term_program.h"
+
+#define MP_MAX_COORDINATES STO_MAX_DOF
+
+typedef struct {
+    /* configuration */
+    double h, tau_identifier, rho, R, t_id, statistics_interval;
+    int scheme;                 /* STO_SCHEME_IMPLICIT or STO_SCHEME_ADAPTIVE */
+    int identifier;             /* 0 off, RRI_LSM, RRI_MFF */
+    int nominal_model;          /* 1: F from the nominal parameters; 0: F = 0 */
+    /* derived at initialization */
+    double gain;                /* 1 - exp(-h / tau_identifier) */
+    int warm_up;                /* samples of the filters before the rows enter */
+    /* state */
+    SuperTwistingObserver obs;
+    AdaptiveBank bank;
+    double velocity[MP_MAX_COORDINATES];     /* the published velocity at the last sample */
+    double nominal_acceleration[MP_MAX_COORDINATES]; /* F of the interval that starts there */
+    double singular_steps;      /* samples at which the nominal inertia was singular */
+    int identifying, started;   /* the identifier runs; its filters hold a sample */
+    int warm_samples;           /* samples since it started, up to warm_up */
+    double Y0[MP_MAX_COORDINATES][TP_MAX_PARAMETERS + 1]; /* G of the acceleration-free */
+    double velocity_filtered[MP_MAX_COORDINATES];          /* entries; G of the velocity */
+    RbRegressor Y;              /* the filtered equations (SI parameters) ... */
+    double z[MP_MAX_COORDINATES]; /* ... and their residual at the nominal parameters */
+    RegressorIdentifier id;
+    StatisticsJob statistics;
+} ModelPipeline;
+
+/* Checks the configuration against the program (sizes, ranges) and starts the
+ * observer at the positions y with gains alpha1, alpha2 (per coordinate).
+ * Returns 0, or -1 with a message in error[error_size]. */
+int mp_init(ModelPipeline *p, const TermProgram *program, const double alpha1[],
+            const double alpha2[], const double y[], char *error, size_t error_size);
+
+/* Internal steps k .. k_end - 1 (time start_time + k h) with the positions y
+ * and inputs u held. */
+void mp_run(ModelPipeline *p, const TermProgram *program, const double y[], const double u[],
+            double start_time, unsigned long long k, unsigned long long k_end);
+
+/* A communication point: the observer's outputs and, while identifying, the
+ * statistics' next snapshot when one is due. */
+void mp_communicate(ModelPipeline *p);
+
+/* The parameters in the file's units and their standard errors (0 until the
+ * first statistics job completes; the nominal values until identification starts). */
+void mp_estimates(const ModelPipeline *p, const TermProgram *program, double theta[],
+                  double std_error[]);
+
+/* Restarts identification from the nominal parameters. */
+void mp_restart_identifier(ModelPipeline *p);
+
+#endif

@@ -1,0 +1,123 @@
+/* Unit tests of the model-file pipeline (fmu/src/core/model_pipeline.h): the
+ * observer and identifier over a term program, on trajectories with a known
+ * solution.  Run as `test_model_pipeline CASE` (check.h). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+
+#include "gains.h"
+#include "model_pipeline.h"
+
+/* A drive M x'' + Fv x' + Fc sign(x') + OF = F (the EMPS model, SI). */
+static const char DRIVE[] =
+    "sto-term-program 1\n"
+    "sizes 1 1 4\n"
+    "constants 1 1\n"
+    "nominal 100 0 0 0\n"
+    "scale 1 1 1 1\n"
+    "entry 0 0 1  3 0\n"
+    "entry 0 1 1  2 0\n"
+    "entry 0 2 2  2 0  15 0\n"
+    "entry 0 3 1  0 0\n"
+    "entry 0 4 1  4 0\n";
+static const double DRIVE_TRUE[4] = {95.0, 200.0, 20.0, -3.0};
+
+static const double PI = 3.14159265358979323846;
+
+/* x(t) with reversals, its velocity and acceleration. */
+static void trajectory(double t, double *x, double *v, double *a)
+{
+    const double w1 = 2.0 * PI * 0.5, w2 = 2.0 * PI * 1.7;
+    *x = 0.1 * sin(w1 * t) + 0.03 * sin(w2 * t);
+    *v = 0.1 * w1 * cos(w1 * t) + 0.03 * w2 * cos(w2 * t);
+    *a = -0.1 * w1 * w1 * sin(w1 * t) - 0.03 * w2 * w2 * sin(w2 * t);
+}
+
+/* Measured: exact positions 6.4e-4 worst (OF), 1 um encoder 1.0e-2 (Fc).
+ * Runs the pipeline over `seconds` at 1 kHz with the positions rounded to
+ * `resolution` (0: exact); returns the worst relative error of the four parameters
+ * and fills theta, std. */
+static double identify_drive(int scheme, double resolution, double seconds, double theta[4],
+                             double std_error[4], double *velocity_rms)
+{
+    static TermProgram program;
+    char error[256];
+    if (tp_parse(&program, DRIVE, strlen(DRIVE), error, sizeof error)) {
+        printf("FAIL parse: %s\n", error);
+        return INFINITY;
+    }
+    ModelPipeline *p = calloc(1, sizeof *p);
+    p->h = 1e-3;
+    p->scheme = scheme;
+    p->identifier = RRI_LSM;
+    p->nominal_model = 1;
+    p->tau_identifier = MP_TAU_IDENTIFIER;
+    p->rho = MP_RHO;
+    p->statistics_interval = 0.1;
+    double alpha1 = 0.0, alpha2 = 0.0;
+    gains_complete(10.0, 0.5, &alpha1, &alpha2);
+    double x, v, a;
+    trajectory(0.0, &x, &v, &a);
+    if (mp_init(p, &program, &alpha1, &alpha2, &x, error, sizeof error)) {
+        printf("FAIL init: %s\n", error);
+        free(p);
+        return INFINITY;
+    }
+    const long samples = (long)(seconds / p->h);
+    double square = 0.0;
+    long counted = 0;
+    for (long k = 0; k < samples; ++k) {
+        trajectory((double)k * p->h, &x, &v, &a);
+        const double F = DRIVE_TRUE[0] * a + DRIVE_TRUE[1] * v +
+                         DRIVE_TRUE[2] * (v > 0 ? 1.0 : -1.0) + DRIVE_TRUE[3];
+        const double y = resolution > 0.0 ? resolution * round(x / resolution) : x;
+        mp_run(p, &program, &y, &F, 0.0, (unsigned long long)k, (unsigned long long)k + 1);
+        mp_communicate(p);
+        if (k * p->h > 1.0) {
+            square += (p->velocity[0] - v) * (p->velocity[0] - v);
+            ++counted;
+        }
+    }
+    /* the last statistics job completes within its spread */
+    for (int extra = 0; extra < 200 && p->statistics.stage != SJ_IDLE; ++extra) sj_step(&p->statistics);
+    mp_estimates(p, &program, theta, std_error);
+    *velocity_rms = sqrt(square / (double)counted);
+    double worst = 0.0;
+    for (int k = 0; k < 4; ++k)
+        worst = fmax(worst, fabs(theta[k] - DRIVE_TRUE[k]) / fabs(DRIVE_TRUE[k]));
+    free(p);
+    return worst;
+}
+
+static int identifies_a_drive(void)
+{
+    int failed = 0;
+    static const struct {
+        int scheme;
+        double resolution, bound;
+    } runs[] = {{STO_SCHEME_IMPLICIT, 0.0, 0.002}, {STO_SCHEME_ADAPTIVE, 0.0, 0.002},
+                {STO_SCHEME_ADAPTIVE, 1e-6, 0.02}};
+    for (size_t r = 0; r < sizeof runs / sizeof runs[0]; ++r) {
+        double theta[4] = {0}, std_error[4] = {0}, velocity_rms = 0.0;
+        const double worst = identify_drive(runs[r].scheme, runs[r].resolution, 20.0, theta,
+                                            std_error, &velocity_rms);
+        failed += check(worst <= runs[r].bound,
+                        "scheme %d, encoder %g m: M %.4g Fv %.4g Fc %.4g OF %.4g (true 95, 200, 20, "
+                        "-3): worst relative error %.2e <= %g; std %.2g %.2g %.2g %.2g; velocity "
+                        "RMS error %.2e m/s", runs[r].scheme, runs[r].resolution, theta[0],
+                        theta[1], theta[2], theta[3], worst, runs[r].bound, std_error[0],
+                        std_error[1], std_error[2], std_error[3], velocity_rms);
+    }
+    return failed;
+}
+
+int main(int argc, char **argv)
+{
+    static const TestCase cases[] = {
+        {"identifies_a_drive", identifies_a_drive},
+    };
+    return run_cases("test_model_pipeline", cases, sizeof cases / sizeof cases[0], argc, argv);
+}
