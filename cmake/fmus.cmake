@@ -84,6 +84,8 @@ function(sto_add_fmu id fmi)
     list(TRANSFORM headers PREPEND "${SRC}/" OUTPUT_VARIABLE header_paths)
     string(REPLACE ";" "," source_list "${sources}")
     string(REPLACE ";" "," header_list "${headers}")
+    list(TRANSFORM STO_${id}_RESOURCES PREPEND "${CMAKE_SOURCE_DIR}/" OUTPUT_VARIABLE resources)
+    string(REPLACE ";" "," resource_list "${resources}")
     set(nm "")
     if(CMAKE_SYSTEM_NAME STREQUAL "Linux" AND STO_NM)
         set(nm "${STO_NM}")
@@ -92,13 +94,14 @@ function(sto_add_fmu id fmi)
         "-DDESCRIBE=$<TARGET_FILE:describe_${id}>" -DFMI_VERSION=${fmi} "-DLAYOUT=${layout}"
         "-DCOMMITTED_XML=${committed}" "-DSOURCE_ROOT=${SRC}" "-DSOURCES=${source_list}"
         "-DHEADERS=${header_list}" "-DBINARY=$<TARGET_FILE:${target}>" "-DFMU=${fmu}" "-DNM=${nm}"
+        "-DRESOURCES=${resource_list}"
         -P "${CMAKE_SOURCE_DIR}/cmake/package_fmu.cmake")
     if(STO_CHECK_FMUS)
         # The FMU's default experiment as its reference result (FMI-LS-REF), embedded.
         list(APPEND commands COMMAND "${STO_PYTHON}" tools/importers/make_reference.py "${fmu}")
     endif()
     add_custom_command(OUTPUT "${fmu}" ${commands}
-        DEPENDS ${target} describe_${id} "${committed}" ${source_paths} ${header_paths}
+        DEPENDS ${target} describe_${id} "${committed}" ${source_paths} ${header_paths} ${resources}
                 "${CMAKE_SOURCE_DIR}/cmake/package_fmu.cmake" "${CMAKE_SOURCE_DIR}/tools/importers/make_reference.py"
         WORKING_DIRECTORY "${CMAKE_SOURCE_DIR}"
         COMMENT "Packaging ${id}.fmu (FMI ${fmi})" VERBATIM)

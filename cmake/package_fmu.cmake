@@ -6,7 +6,8 @@
 #   - the binary the build put in binaries/<platform>/, whose exports are checked;
 #   - the zip.
 # Variables: DESCRIBE FMI_VERSION LAYOUT COMMITTED_XML SOURCE_ROOT SOURCES (;-list,
-# relative to SOURCE_ROOT) HEADERS (;-list) BINARY FMU NM (empty: no export check).
+# relative to SOURCE_ROOT) HEADERS (;-list) BINARY FMU NM (empty: no export check)
+# RESOURCES (;-list of files for resources/, may be empty).
 foreach(var DESCRIBE FMI_VERSION LAYOUT COMMITTED_XML SOURCE_ROOT SOURCES BINARY FMU)
     if(NOT DEFINED ${var})
         message(FATAL_ERROR "package_fmu.cmake: ${var} is not set")
@@ -14,6 +15,7 @@ foreach(var DESCRIBE FMI_VERSION LAYOUT COMMITTED_XML SOURCE_ROOT SOURCES BINARY
 endforeach()
 string(REPLACE "," ";" SOURCES "${SOURCES}")
 string(REPLACE "," ";" HEADERS "${HEADERS}")
+string(REPLACE "," ";" RESOURCES "${RESOURCES}")
 
 execute_process(COMMAND "${DESCRIBE}" "fmi${FMI_VERSION}" ${SOURCES}
                 OUTPUT_FILE "${LAYOUT}/modelDescription.xml" RESULT_VARIABLE status)
@@ -38,6 +40,11 @@ execute_process(COMMAND "${DESCRIBE}" build ${SOURCES}
 if(NOT status EQUAL 0)
     message(FATAL_ERROR "describe_model build failed for ${LAYOUT} (${status})")
 endif()
+
+file(REMOVE_RECURSE "${LAYOUT}/resources")
+foreach(file IN LISTS RESOURCES)
+    file(COPY "${file}" DESTINATION "${LAYOUT}/resources")
+endforeach()
 
 # Only the FMI functions of the FMU's version may be exported.
 if(NM)

@@ -20,12 +20,12 @@ list(REMOVE_DUPLICATES STO_CORE_SOURCES)
 # The model-independent instance core under every FMI version.
 set(STO_INSTANCE_SOURCES instance/instance.c)
 # Headers every FMU ships beside its sources (fmpy compile rebuilds from them).
-set(STO_SHIPPED_HEADERS instance/instance.h instance/model_interface.h)
+set(STO_SHIPPED_HEADERS instance/instance.h instance/model_interface.h models/state_fields.h)
 
-# The FMUs: model identifier, its model file, its core group and the folder of its
-# committed modelDescription.xml (FMI 2; FMI 3 in <folder>/fmi3/), relative to the
-# repository.
-set(STO_MODELS SuperTwistingObserver Pendulum TwistingController RobotObserver)
+# The FMUs: model identifier, its model file, its core group, the folder of its
+# committed modelDescription.xml (FMI 2; FMI 3 in <folder>/fmi3/) and the files of
+# its resources/ folder (optional), relative to the repository.
+set(STO_MODELS SuperTwistingObserver Pendulum TwistingController RobotObserver ModelObserver)
 set(STO_SuperTwistingObserver_MODEL models/observer.c)
 set(STO_SuperTwistingObserver_CORE ${STO_CORE_OBSERVER})
 set(STO_SuperTwistingObserver_XML_DIR fmu)
@@ -38,6 +38,10 @@ set(STO_TwistingController_XML_DIR fmu/plants/TwistingController)
 set(STO_RobotObserver_MODEL models/robot_observer.c)
 set(STO_RobotObserver_CORE ${STO_CORE_ROBOT})
 set(STO_RobotObserver_XML_DIR fmu/robot)
+set(STO_ModelObserver_MODEL models/model_observer.c)
+set(STO_ModelObserver_CORE ${STO_CORE_MODEL})
+set(STO_ModelObserver_XML_DIR fmu/model)
+set(STO_ModelObserver_RESOURCES fmu/model/resources/model.txt)
 
 # The Python package's native library (ctypes): the master loop and the robot batch
 # entry points over the same core.

@@ -6,6 +6,7 @@
     identify DATA.csv --robot ROBOT.urdf --out DIR   a serial robot (harness.robot)
     identify LOG --model MODEL.toml --out DIR   a model file's unknowns from a log (CSV, .mat)
     validate LOG --model MODEL.toml --out DIR   a model file's input reconstruction error
+    fmu --model MODEL.toml --out DIR            a model file's observer/identifier FMU
     validate LOG --robot ROBOT.urdf --out DIR   a URDF's torque prediction error (harness.robot)
     robot-fmu-parameters ROBOT.urdf --out FILE.ssv   the RobotObserver FMU's parameters
     demo [--out DIR]                            the closed-loop demonstration (reproduce + compare)
@@ -367,6 +368,8 @@ def build_parser() -> argparse.ArgumentParser:
     register_sweep(sub, parents=[common])
     from .model.commands import register_validate
     register_validate(sub, parents=[common])
+    from .model.fmu_export import register_fmu
+    register_fmu(sub, parents=[common])
     return parser
 
 

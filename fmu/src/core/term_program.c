@@ -170,9 +170,17 @@ int tp_parse(TermProgram *p, const char *text, size_t length, char *error, size_
         if (!(p->scale[k] > 0.0)) return fail(&c, "scale of parameter %d = %g is not positive",
                                               k, p->scale[k]);
     }
+    p->identifier = 1;
+    if (next_word(&c)) return -1;
+    if (strcmp(c.token, "identifier") == 0) {
+        if (read_int(&c, "identifier", 0, 2, &p->identifier) || next_word(&c)) return -1;
+    }
     const int entries = p->n * (p->p + 1);
-    for (int e = 0; e < entries; ++e)
-        if (expect_word(&c, "entry") || read_entry(&c, p)) return -1;
+    for (int e = 0; e < entries; ++e) {
+        if (e > 0 && next_word(&c)) return -1;
+        if (strcmp(c.token, "entry") != 0) return fail(&c, "expected 'entry', found '%s'", c.token);
+        if (read_entry(&c, p)) return -1;
+    }
     if (next_word(&c) == 0) return fail(&c, "'%s' after the last entry", c.token);
     if (error && error_size) error[0] = '\0';
     return 0;

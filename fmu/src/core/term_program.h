@@ -16,6 +16,8 @@
  *     constants C  c_1 .. c_C
  *     nominal v_1 .. v_P    the parameters' nominal values (the file's units)
  *     scale s_1 .. s_P      each parameter's unit in SI (theta_SI = s theta)
+ *     identifier K          optional: the identifier the model asks for (1 LSM, the
+ *                           default; 2 MFF for time-varying parameters; 0 none)
  *     entry I K L  op arg .. op arg     L (op, arg) pairs; K = P: r_I
  * with one entry for every I < N and K <= P.  Ops (term_program.c, TpOp)
  * push a constant (arg: its index) or a measured value (arg: the coordinate
@@ -50,6 +52,7 @@ typedef struct {
     int n_constants, n_tokens;
     double constant[TP_MAX_CONSTANTS];
     double nominal[TP_MAX_PARAMETERS], scale[TP_MAX_PARAMETERS];
+    int identifier;
     int op[TP_MAX_TOKENS], arg[TP_MAX_TOKENS];
     /* entry (i, k), k <= p (k = p: r_i): tokens start[i][k] .. start[i][k] + length[i][k] - 1 */
     int start[TP_MAX_COORDINATES][TP_MAX_PARAMETERS + 1];

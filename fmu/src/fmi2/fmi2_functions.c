@@ -3,6 +3,8 @@
  * This file owns what is FMI 2: the state machine (an allowed-state mask per
  * function, FMI 2.0 section 4.2.4), the importer's callbacks, the escaping
  * of logged text, and the status inquiries.  Everything else is the core's. */
+#include <ctype.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "fmi2Functions.h"
@@ -120,12 +122,44 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
                                                   nCategories, categories);
 }
 
+/* The native path of a file: URI (RFC 8089 as FMI 2 importers write it:
+ * file:///C:/x, file:/x, file://localhost/x; %XX decoded) into out[size];
+ * NULL for NULL, another scheme, a remote host or a path too long. */
+static const char *uri_path(const char *uri, char *out, size_t size)
+{
+    if (!uri) return NULL;
+    const char *rest;
+    if (strncmp(uri, "file://", 7) == 0) {
+        rest = uri + 7;
+        if (strncmp(rest, "localhost/", 10) == 0) rest += 9;
+        if (rest[0] != '/') return NULL; /* a remote host */
+    } else if (strncmp(uri, "file:/", 6) == 0) {
+        rest = uri + 5;
+    } else {
+        return NULL;
+    }
+    /* a drive letter: /C:/x is C:/x */
+    if (isalpha((unsigned char)rest[1]) && (rest[2] == ':' || rest[2] == '|')) ++rest;
+    size_t at = 0;
+    for (const char *c = rest; *c; ++c) {
+        int value = (unsigned char)*c;
+        if (*c == '%' && isxdigit((unsigned char)c[1]) && isxdigit((unsigned char)c[2])) {
+            const char hex[3] = {c[1], c[2], '\0'};
+            value = (int)strtol(hex, NULL, 16);
+            c += 2;
+        }
+        if (value == 0 || at + 1 >= size) return NULL;
+        out[at++] = (char)value;
+    }
+    out[at] = '\0';
+    return out;
+}
+
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation,
                               const fmi2CallbackFunctions *functions, fmi2Boolean visible,
                               fmi2Boolean loggingOn)
 {
-    (void)fmuResourceLocation; /* no resources needed; NULL is accepted */
     (void)visible;
     if (!functions) return NULL; /* nobody to tell */
     /* Memory comes from the C library (canNotUseMemoryManagementFunctions). */
@@ -140,7 +174,9 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     if (!instance_arguments_valid(&FMI2_API, logger, env, "fmi2Instantiate", instanceName,
                                   fmuGUID))
         return NULL;
-    return instance_new(&FMI2_API, "fmi2Instantiate", instanceName, logger, env, loggingOn != 0);
+    char path[4096];
+    return instance_new(&FMI2_API, "fmi2Instantiate", instanceName, logger, env, loggingOn != 0,
+                        uri_path(fmuResourceLocation, path, sizeof path));
 }
 
 void fmi2FreeInstance(fmi2Component c)

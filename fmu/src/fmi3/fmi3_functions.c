@@ -98,7 +98,7 @@ fmi3Instance fmi3InstantiateCoSimulation(
     size_t nRequiredIntermediateVariables, fmi3InstanceEnvironment instanceEnvironment,
     fmi3LogMessageCallback logMessage, fmi3IntermediateUpdateCallback intermediateUpdate)
 {
-    (void)resourcePath, (void)visible, (void)intermediateUpdate;
+    (void)visible, (void)intermediateUpdate;
     (void)earlyReturnAllowed; /* it never returns early */
     (void)requiredIntermediateVariables;
     const char *function = "fmi3InstantiateCoSimulation";
@@ -120,7 +120,7 @@ fmi3Instance fmi3InstantiateCoSimulation(
                                   instanceName, instantiationToken))
         return NULL;
     return instance_new(&FMI3_API, function, instanceName, logger, instanceEnvironment,
-                        loggingOn);
+                        loggingOn, resourcePath);
 }
 
 static void refuse_interface(fmi3InstanceEnvironment environment, fmi3LogMessageCallback log,

@@ -173,6 +173,75 @@ static void build_output_spans(Instance *inst)
     }
 }
 
+/* A data block at its start: the start values and the instance's resource region. */
+static void start_data(const Instance *inst, void *data)
+{
+    apply_start_values(data);
+    if (!inst->resource) return;
+    memcpy((unsigned char *)data + MD.resource_offset, inst->resource, MD.resource_size);
+    if (MD.resource_start_values) MD.resource_start_values(data);
+}
+
+/* Reads the model's resource file from resource_dir into inst->resource. */
+static int load_resource(Instance *inst, const char *function, const char *resource_dir)
+{
+    if (!resource_dir || !resource_dir[0]) {
+        instance_log(inst, STATUS_ERROR, "%s: no resource location given: %s reads its model "
+                     "from resources/%s", function, MD.model_identifier, MD.resource_file);
+        return 0;
+    }
+    const size_t dir_length = strlen(resource_dir), file_length = strlen(MD.resource_file);
+    char *path = malloc(dir_length + file_length + 2);
+    char *text = malloc(MD.resource_max_bytes + 1);
+    inst->resource = calloc(1, MD.resource_size);
+    if (!path || !text || !inst->resource) {
+        free(path);
+        free(text);
+        instance_log(inst, STATUS_ERROR, "%s: out of memory", function);
+        return 0;
+    }
+    memcpy(path, resource_dir, dir_length);
+    const char last = dir_length ? resource_dir[dir_length - 1] : '/';
+    size_t at = dir_length;
+    if (last != '/' && last != '\\') path[at++] = '/';
+    memcpy(path + at, MD.resource_file, file_length + 1);
+    FILE *file = fopen(path, "rb");
+    size_t length = 0;
+    int ok = file != NULL;
+    if (!file) {
+        instance_log(inst, STATUS_ERROR, "%s: cannot open the model file %s", function, path);
+    } else {
+        length = fread(text, 1, MD.resource_max_bytes + 1, file);
+        if (ferror(file)) {
+            instance_log(inst, STATUS_ERROR, "%s: cannot read %s", function, path);
+            ok = 0;
+        } else if (length > MD.resource_max_bytes) {
+            instance_log(inst, STATUS_ERROR, "%s: %s is longer than %zu bytes", function, path,
+                         MD.resource_max_bytes);
+            ok = 0;
+        }
+        fclose(file);
+    }
+    if (ok) {
+        ModelLogger logger = model_logger(inst);
+        ok = MD.parse_resource(inst->resource, text, length, &logger) != MODEL_ERROR;
+    }
+    free(path);
+    free(text);
+    return ok;
+}
+
+/* A restored block must hold this instance's resource region. */
+static int resource_valid(const Instance *inst, const char *function, const unsigned char *data)
+{
+    if (!inst->resource ||
+        memcmp(data + MD.resource_offset, inst->resource, MD.resource_size) == 0)
+        return 1;
+    instance_log(inst, STATUS_ERROR, "%s: the state was written with another model file than "
+                 "this instance's resources/%s; state refused", function, MD.resource_file);
+    return 0;
+}
+
 static void reset_clock(Instance *inst)
 {
     memset(&inst->clock, 0, sizeof inst->clock);
@@ -199,7 +268,8 @@ bool instance_arguments_valid(const InstanceApi *api, AnyFunction logger, void *
 }
 
 Instance *instance_new(const InstanceApi *api, const char *function, const char *name,
-                       AnyFunction logger, void *environment, bool logging_on)
+                       AnyFunction logger, void *environment, bool logging_on,
+                       const char *resource_dir)
 {
     Instance *inst = calloc(1, sizeof *inst);
     if (inst) {
@@ -219,6 +289,10 @@ Instance *instance_new(const InstanceApi *api, const char *function, const char 
         return NULL;
     }
     strcpy(inst->name, name);
+    if (MD.resource_file && !load_resource(inst, function, resource_dir)) {
+        instance_free(inst);
+        return NULL;
+    }
     fill_vr_table(inst->variable_of_vr, inst->vr_limit, api->array_references);
     build_output_spans(inst);
     instance_reset(inst);
@@ -231,6 +305,7 @@ void instance_free(Instance *inst)
     for (size_t i = 0; i < inst->n_snapshots; ++i) free(inst->snapshots[i]);
     free(inst->snapshots);
     free(inst->variable_of_vr);
+    free(inst->resource);
     free(inst->data);
     free(inst->name);
     free(inst);
@@ -239,7 +314,7 @@ void instance_free(Instance *inst)
 void instance_reset(Instance *inst)
 {
     reset_clock(inst);
-    apply_start_values(inst->data);
+    start_data(inst, inst->data);
 }
 
 /* ---- variables ------------------------------------------------------------ */
@@ -741,7 +816,7 @@ static int unstarted_data_valid(const Instance *inst, const char *function,
         instance_log(inst, STATUS_ERROR, "%s: out of memory", function);
         return 0;
     }
-    apply_start_values(fresh);
+    start_data(inst, fresh);
     for (size_t v = 0; v < MD.n_variables; ++v) {
         const ModelVariable *var = &MD.variables[v];
         const size_t element = var->type == TYPE_REAL ? sizeof(double) : sizeof(int);
@@ -876,6 +951,7 @@ static int stepping_data_valid(Instance *inst, const char *function, const Clock
             }
         }
     }
+    if (ok && inst->resource) mark(covered, MD.resource_offset, MD.resource_size);
     for (size_t f = 0; ok && f < MD.n_state_fields; ++f)
         ok = field_valid(inst, function, &MD.state_fields[f], data, initialized, covered);
     if (ok) ok = reals_valid(inst, function, data, covered, "the model data", 0, MD.data_size);
@@ -918,7 +994,8 @@ Status instance_deserialize(Instance *inst, const char *function, const unsigned
                              "stopTime = %g, startTime = %g)", function,
                              (unsigned)clock.stop_time_defined, clock.stop_time, clock.start_time);
     const unsigned char *data = payload + offsetof(Snapshot, data);
-    if (!data_valid(inst, function, data)) return instance_escalate(inst, STATUS_ERROR);
+    if (!data_valid(inst, function, data) || !resource_valid(inst, function, data))
+        return instance_escalate(inst, STATUS_ERROR);
     if ((clock.state & inst->api->unstarted_states) &&
         (clock.steps != 0 || clock.comm_time != clock.start_time))
         return instance_fail(inst, "%s: a state before initialization with %llu steps taken "

@@ -78,6 +78,8 @@ typedef struct {
     /* value reference -> index in the variable table (-1: none), built once */
     int16_t *variable_of_vr;
     uint32_t vr_limit;
+    /* The model's resource region as read at instantiation (NULL: none) */
+    unsigned char *resource;
     /* Snapshots handed out by this instance: a pointer the importer passes
      * back is only dereferenced if it is one of these. */
     Snapshot **snapshots;
@@ -88,9 +90,12 @@ typedef struct {
 /* Checks the instance name and the token, logging why they are refused. */
 bool instance_arguments_valid(const InstanceApi *api, AnyFunction logger, void *environment,
                               const char *function, const char *name, const char *token);
-/* NULL (after logging) if out of memory.  Memory comes from the C library. */
+/* NULL (after logging) if out of memory, or if the model reads a resource file
+ * (ModelDescriptor.resource_file) that resource_dir (a native path, NULL: none
+ * given) does not hold or that the model refuses.  Memory comes from the C library. */
 Instance *instance_new(const InstanceApi *api, const char *function, const char *name,
-                       AnyFunction logger, void *environment, bool logging_on);
+                       AnyFunction logger, void *environment, bool logging_on,
+                       const char *resource_dir);
 void instance_free(Instance *inst);
 /* Back to the freshly instantiated state (FMU states handed out stay valid). */
 void instance_reset(Instance *inst);

@@ -160,6 +160,21 @@ typedef struct {
      * initialize.  May log; MODEL_ERROR refuses the state. */
     ModelStatus (*check_restored)(const void *data, const void *initialized,
                                   const ModelLogger *log);
+    /* Optional (resource_file NULL: none): a file of the FMU's resources folder
+     * that the model reads at instantiation (the model file of ModelObserver).
+     * parse_resource reads its text (at most resource_max_bytes) into the
+     * resource region [resource_offset, resource_offset + resource_size) of a
+     * data block; MODEL_ERROR (after logging why) refuses the instantiation.
+     * The region is pointer-free and holds no variable; the layer keeps it
+     * through resets, and a restored state must hold this instance's region
+     * byte for byte (a state of another model file is refused). */
+    const char *resource_file;
+    size_t resource_offset, resource_size, resource_max_bytes;
+    ModelStatus (*parse_resource)(void *region, const char *text, size_t length,
+                                  const ModelLogger *log);
+    /* Optional: the start values the resource sets (after the table's), so that
+     * an FMU whose modelDescription is written with its resource states them. */
+    void (*resource_start_values)(void *data);
 } ModelDescriptor;
 
 /* Every model has the parameter max_internal_steps, at the same value

@@ -9,6 +9,7 @@
 #include "../core/gains.h"
 #include "../core/observer_pipeline.h"
 #include "../instance/model_interface.h"
+#include "state_fields.h"
 
 #define MAX_N OP_MAX_N
 #define MAX_L OP_MAX_L
@@ -400,20 +401,8 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
 static const StateField STATE_FIELDS[] = {
     D(pipe.m), D(pipe.selected), D(pipe.slot_velocity), D(pipe.slot_velocity_sign),
     D(pipe.slot_input), D(pipe.identifier_gain), I(pipe.identifier_active, 0, 1),
-    I(reset_seen, 0, 1), D(pipe.obs.n), D(pipe.obs.h), D(pipe.obs.h_squared),
-    D(pipe.obs.inverse_h_squared), D(pipe.obs.alpha1), D(pipe.obs.alpha2), D(pipe.obs.filter_gain),
-    D(pipe.obs.rate_gain), D(pipe.obs.scheme), I(pipe.obs.primed, 0, 1),
-    I(pipe.obs.reversal_age, -1, IMPLICIT_REVERSAL_SAMPLES - 1),
-    I(pipe.obs.smooth_samples, 0, IMPLICIT_SMOOTH_SAMPLES), D(pipe.bank.count), D(pipe.bank.gain),
-    D(pipe.bank.stride), D(pipe.bank.span), D(pipe.bank.velocity_gain), D(pipe.bank.start_limit),
-    D(pipe.bank.gains), D(pipe.bank.fine),
-    I(pipe.bank.zoom_index, -1, (ADAPTIVE_MAX_MEMBERS - 1) * ADAPTIVE_FINE),
-    I(pipe.bank.center, -1, ADAPTIVE_MAX_MEMBERS - 1), I(pipe.bank.started, 0, 1),
-    U(pipe.bank.waited), U(pipe.bank.age),
-    I(pipe.bank.selected, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS + ADAPTIVE_ZOOM - 1),
-    I(pipe.bank.published, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS + ADAPTIVE_ZOOM - 1),
-    I(pipe.bank.perturbation, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS - 1),
-    I(pipe.bank.follow, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS - 1), D(pipe.id.kind),
+    I(reset_seen, 0, 1), STO_STATE_FIELDS(ObserverData, pipe.obs),
+    BANK_STATE_FIELDS(ObserverData, pipe.bank), D(pipe.id.kind),
     D(pipe.id.rows), D(pipe.id.m), D(pipe.id.h), D(pipe.id.h_log_r), D(pipe.info.rows),
     D(pipe.info.m), D(pipe.info.drift), D(pipe.info.h), D(pipe.info.rho), D(pipe.info.lambda),
     D(pipe.info.one_minus_lambda_rho), D(pipe.info.forgetting_rate), D(pipe.info.anchor_interval),

@@ -26,6 +26,7 @@
 #include "../core/robot_pipeline.h"
 #include "../core/statistics_job.h"
 #include "../instance/model_interface.h"
+#include "state_fields.h"
 
 #define MAX_N RB_MAX_JOINTS
 #define MAX_P RB_MAX_PARAMETERS
@@ -474,17 +475,7 @@ static const StateField STATE_FIELDS[] = {
     D(regression.reversals), D(regression.pi_nominal), I(regression.have_previous, 0, 1),
     I(regression.have_older, 0, 1), I(regression.started, 0, 1),
     I(regression.settled, 0, 2147483647), R(regression.weight, 0.0, 1.0),
-    D(id.rows), D(id.p), D(id.columns), D(id.runs), D(id.run_start), D(id.run_end),
-    D(id.weight), D(id.h), D(id.rho), D(id.lambda), D(id.one_minus_lambda_rho),
-    I(id.anchor_age, 0, 2147483647), I(id.anchor_unit, 0, RRI_MAX_PARAMETERS + 2),
-    I(id.anchor_failed, 0, 1), D(id.batch_samples), I(id.batch_age, 0, RRI_MAX_BATCH_SAMPLES),
-    D(id.batch_lambda), D(id.reference_lambda), D(id.reference_pull), D(id.rest_lambda),
-    D(id.rest_pull), D(id.skip_threshold), D(id.gap_limit),
-    D(statistics.p), D(statistics.interval), D(statistics.budget),
-    R(statistics.since, 0.0, NAN), I(statistics.stage, SJ_IDLE, SJ_EIGEN),
-    I(statistics.index, 0, RRI_MAX_PARAMETERS > STATS_EIGEN_ITERATIONS ? RRI_MAX_PARAMETERS
-                                                                   : STATS_EIGEN_ITERATIONS),
-    R(statistics.completed, 0.0, NAN), R(statistics.age, 0.0, INFINITY),
+    RRI_STATE_FIELDS(RobotData, id), SJ_STATE_FIELDS(RobotData, statistics),
     /* the doubles, named by their struct */
     REAL_FIELDS(RobotData, obs), REAL_FIELDS(RobotData, regression), REAL_FIELDS(RobotData, id),
     REAL_FIELDS(RobotData, statistics),

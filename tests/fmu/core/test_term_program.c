@@ -37,6 +37,7 @@ static int evaluates_a_drive(void)
                     "Y = [%g, %g, %g, %g], expected [3, -0.25, -1, 1]", Y[0][0], Y[0][1], Y[0][2],
                     Y[0][3]);
     failed += check(r[0] == 42.5, "r = %g, expected 42.5", r[0]);
+    failed += check(program.identifier == 1, "identifier %d: LSM by default", program.identifier);
     return failed;
 }
 
@@ -109,6 +110,10 @@ static int refuses_bad_programs(void)
         {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 1 scale -1", "not positive"},
         {"sto-term-program 1 sizes 1 0 1 constants 0 nominal inf", "not finite"},
         {"sto-term-program 1 sizes 1 0 1 constants 0 entry", "expected 'nominal'"},
+        {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 identifier 3",
+         "identifier = 3"},
+        {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 identifier 2 x",
+         "expected 'entry', found 'x'"},
         {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 entry 0 0 1 0 0", "argument 0 out of range"},
         {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 entry 0 0 1 4 0", "argument 0 out of range"},
         {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 entry 0 0 1 5 0", "needs 2 values"},

@@ -1,0 +1,331 @@
+/* ModelObserver: the observer and identifier FMU of any mechanical system
+ * declared in a model file (core/model_pipeline.h), whose equations reach it
+ * as data: resources/model.txt, the term program (core/term_program.h) that
+ * `sto-harness fmu --model` writes beside a modelDescription.xml naming the
+ * model's coordinates, inputs and parameters.  One binary serves every model
+ * file; the variables are generic scalars (position_1, theta_3, ...) that the
+ * generated modelDescription renames, and those a model does not use stay 0.
+ * Value references are stable (docs/fmu.md). */
+#include <math.h>
+#include <stddef.h>
+#include <string.h>
+
+#include "../core/gains.h"
+#include "../core/model_pipeline.h"
+#include "../core/term_program.h"
+#include "../instance/model_interface.h"
+#include "state_fields.h"
+
+#define MAX_N MP_MAX_COORDINATES
+#define MAX_U TP_MAX_INPUTS
+#define MAX_P TP_MAX_PARAMETERS
+#define GAINS_P 0.5 /* p of condition (6) for the gains of Theorem 3.1 */
+
+typedef struct {
+    TermProgram program; /* the resource region: the model file, as read at instantiation */
+    ModelPipeline pipe;  /* its configuration holds most parameters */
+    double f_plus[MAX_N];
+    int max_internal_steps;
+    double max_work;
+    double work_per_step;
+    double alpha1[MAX_N], alpha2[MAX_N]; /* from f_plus by Theorem 3.1 */
+    /* inputs */
+    double y[MAX_N], u[MAX_U];
+    int identifier_reset;
+    int reset_seen;
+    /* outputs */
+    double position[MAX_N], velocity[MAX_N], theta[MAX_P], theta_std[MAX_P];
+    double excitation;
+    int converged, identifier_active;
+} ModelData;
+
+#define OFF(field) offsetof(ModelData, field)
+
+/* One generic scalar per element: the generated modelDescription renames them. */
+#define ELEMENT(kind, base, vr0, field, unit_, text, i) \
+    {.name = base "_" #i, .vr = (vr0) + (i) - 1, .type = TYPE_REAL,                              \
+     kind(.offset = OFF(field) + ((i) - 1) * sizeof(double), .unit = unit_, .description = text)}
+#define FOUR(kind, base, vr0, field, unit, text)                                                 \
+    ELEMENT(kind, base, vr0, field[0], unit, text, 1), ELEMENT(kind, base, vr0, field[0], unit, text, 2), \
+    ELEMENT(kind, base, vr0, field[0], unit, text, 3), ELEMENT(kind, base, vr0, field[0], unit, text, 4)
+#define THIRTY_TWO(kind, base, vr0, field, text)                                                 \
+    ELEMENTS_32(ELEMENT, kind, base, vr0, field[0], NULL, text)
+/* The 32 elements with literal indices (their names are made by stringizing). */
+#define ELEMENTS_32(E, ...)                                                                      \
+    E(__VA_ARGS__, 1), E(__VA_ARGS__, 2), E(__VA_ARGS__, 3), E(__VA_ARGS__, 4),                  \
+    E(__VA_ARGS__, 5), E(__VA_ARGS__, 6), E(__VA_ARGS__, 7), E(__VA_ARGS__, 8),                  \
+    E(__VA_ARGS__, 9), E(__VA_ARGS__, 10), E(__VA_ARGS__, 11), E(__VA_ARGS__, 12),               \
+    E(__VA_ARGS__, 13), E(__VA_ARGS__, 14), E(__VA_ARGS__, 15), E(__VA_ARGS__, 16),              \
+    E(__VA_ARGS__, 17), E(__VA_ARGS__, 18), E(__VA_ARGS__, 19), E(__VA_ARGS__, 20),              \
+    E(__VA_ARGS__, 21), E(__VA_ARGS__, 22), E(__VA_ARGS__, 23), E(__VA_ARGS__, 24),              \
+    E(__VA_ARGS__, 25), E(__VA_ARGS__, 26), E(__VA_ARGS__, 27), E(__VA_ARGS__, 28),              \
+    E(__VA_ARGS__, 29), E(__VA_ARGS__, 30), E(__VA_ARGS__, 31), E(__VA_ARGS__, 32)
+#define F_PLUS(i)                                                                                \
+    {.name = "f_plus_" #i, .vr = 17 + (i), .type = TYPE_REAL,                                     \
+     PARAM(.offset = OFF(f_plus) + ((i) - 1) * sizeof(double), .start = 10.0, .min = 0.0,         \
+           .max = NAN, .min_exclusive = true,                                                     \
+           .description = "Bound of the nominal model's acceleration error of coordinate " #i    \
+                          " (its unit per s^2): the super-twisting gains by Theorem 3.1")}
+#define INPUT_ELEMENT(i)                                                                         \
+    {.name = "input_" #i, .vr = 209 + (i), .type = TYPE_REAL,                                     \
+     INPUT(.offset = OFF(u) + ((i) - 1) * sizeof(double), .description = "Known input " #i)}
+
+static const ModelVariable VARIABLES[] = {
+    {.name = "h", .vr = 1, .type = TYPE_REAL, PARAM(.offset = OFF(pipe.h), .start = 1e-3,
+     .min = 0.0, .max = 1.0, .min_exclusive = true, .unit = "s",
+     .description = "Fixed internal step of the observer and identifier (the log's sample "
+                    "period: one internal step per sample)")},
+    {.name = "nominal_model", .vr = 3, .type = TYPE_BOOLEAN,
+     PARAM(.offset = OFF(pipe.nominal_model), .start = 1, UNBOUNDED,
+     .description = "The observer predicts with the model's equations at the nominal "
+                    "parameters (false: no model, the injection carries the acceleration)")},
+    {.name = "scheme", .vr = 4, .type = TYPE_INTEGER, PARAM(.offset = OFF(pipe.scheme),
+     .start = STO_SCHEME_ADAPTIVE, .min = 2, .max = 3,
+     .description = "2: the implicit super-twisting observer; 3: beside it, linear observers "
+                    "that adapt to the measurement noise (the velocity of the one that fits)")},
+    {.name = "identifier", .vr = 5, .type = TYPE_INTEGER, PARAM(.offset = OFF(pipe.identifier),
+     .start = RRI_LSM, .min = 0, .max = 2,
+     .description = "Parameter identifier: 0 off, 1 least squares (constant parameters), "
+                    "2 matrix forgetting factor (time-varying)")},
+    {.name = "statistics_interval", .vr = 11, .type = TYPE_REAL,
+     PARAM(.offset = OFF(pipe.statistics_interval), .start = 0.1, .min = 0.0, .max = NAN,
+     .unit = "s", .description = "Time between the solves of the standard errors (their "
+                                 "p^3 work spread over the internal steps after each)")},
+    F_PLUS(1), F_PLUS(2), F_PLUS(3), F_PLUS(4),
+    {.name = "t_id", .vr = 80, .type = TYPE_REAL, PARAM(.offset = OFF(pipe.t_id), .start = 0.0,
+     UNBOUNDED, .unit = "s",
+     .description = "Earliest time at which identification starts (once the observer has "
+                    "converged)")},
+    {.name = "rho", .vr = 81, .type = TYPE_REAL, PARAM(.offset = OFF(pipe.rho), .start = MP_RHO,
+     .min = 0.0, .max = NAN, .min_exclusive = true,
+     .description = "Regularization of the parameters in SI units: the information starts "
+                    "at rho I")},
+    {.name = "R", .vr = 82, .type = TYPE_REAL, PARAM(.offset = OFF(pipe.R), .start = 0.1,
+     .min = 0.0, .max = 1.0, .min_exclusive = true, .max_exclusive = true,
+     .description = "MFF forgetting factor per second (weight R^(t - s))")},
+    {.name = "tau_identifier", .vr = 116, .type = TYPE_REAL,
+     PARAM(.offset = OFF(pipe.tau_identifier), .start = MP_TAU_IDENTIFIER, .min = 0.0,
+     .max = NAN, .unit = "s",
+     .description = "Time constant of the filter on every entry of the equations before the "
+                    "identifier (0: none)")},
+    MAX_INTERNAL_STEPS_VARIABLE(OFF(max_internal_steps)),
+    WORK_VARIABLES(OFF(max_work), OFF(work_per_step)),
+    FOUR(INPUT, "position", 200, y, NULL, "Measured coordinate"),
+    INPUT_ELEMENT(1), INPUT_ELEMENT(2), INPUT_ELEMENT(3), INPUT_ELEMENT(4), INPUT_ELEMENT(5),
+    INPUT_ELEMENT(6), INPUT_ELEMENT(7),
+    {.name = "identifier_reset", .vr = 220, .type = TYPE_BOOLEAN,
+     .causality = CAUSALITY_INPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
+     .offset = OFF(identifier_reset),
+     .description = "A rising edge restarts identification from the nominal parameters"},
+    FOUR(OUTPUT, "position_estimate", 300, position, NULL, "Position estimate"),
+    FOUR(OUTPUT, "velocity", 310, velocity, NULL, "Velocity estimate"),
+    THIRTY_TWO(OUTPUT, "theta", 400, theta, "Parameter estimate (the model file's unit)"),
+    THIRTY_TWO(OUTPUT, "theta_std", 440, theta_std, "Standard error of the parameter estimate"),
+    {.name = "identifier_active", .vr = 361, .type = TYPE_BOOLEAN,
+     .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
+     .offset = OFF(identifier_active), .description = "The identifier is integrating"},
+    {.name = "converged", .vr = 362, .type = TYPE_BOOLEAN,
+     .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
+     .offset = OFF(converged),
+     .description = "The observer is in its sliding mode by the switching-rate test"},
+    {.name = "excitation", .vr = 363, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(excitation),
+     .description = "Smallest eigenvalue of the identifier's information per unit time (SI "
+                    "parameters); near 0: some parameter is not being learned")},
+};
+
+static ModelStatus parse_resource(void *region, const char *text, size_t length,
+                                  const ModelLogger *log)
+{
+    char error[256];
+    if (tp_parse(region, text, length, error, sizeof error) == 0) return MODEL_OK;
+    log->log(log->context, MODEL_ERROR, "resources/model.txt: %s", error);
+    return MODEL_ERROR;
+}
+
+/* The identifier the model file asks for (--identifier mff of `fmu --model`). */
+static void resource_start_values(void *data)
+{
+    ModelData *d = data;
+    d->pipe.identifier = d->program.identifier;
+}
+
+static void publish(ModelData *d)
+{
+    const int n = d->program.n;
+    mp_estimates(&d->pipe, &d->program, d->theta, d->theta_std);
+    for (int i = 0; i < n; ++i) {
+        d->position[i] = d->pipe.obs.x1_hat[i];
+        d->velocity[i] = d->pipe.velocity[i];
+    }
+    d->excitation = d->pipe.identifying ? d->pipe.statistics.excitation : 0.0;
+    d->identifier_active = d->pipe.identifying;
+    d->converged = sto_converged(&d->pipe.obs);
+}
+
+/* Work units (about ns, model_interface.h) of one internal step: the observer
+ * per coordinate (the bank of linear observers beside it), two evaluations of
+ * the program at n + 1 accelerations, the identifier's rank-n update and the
+ * statistics job's slice. */
+static double step_work(const ModelData *d)
+{
+    const double n = d->program.n, p = d->program.p;
+    const double tokens = d->program.n_tokens;
+    return (d->pipe.scheme == STO_SCHEME_ADAPTIVE ? 600.0 + 50.0 * n : 15.0 * n) +
+           2.0 * (n + 1.0) * 5.0 * tokens +
+           (d->pipe.identifier ? 1000.0 + n * p * (p + 3.0) / 2.0 : 0.0);
+}
+
+static ModelStatus initialize(void *data, double start_time, const ModelLogger *log)
+{
+    (void)start_time;
+    ModelData *d = data;
+    const int n = d->program.n;
+    for (int i = 0; i < n; ++i) {
+        double a1 = 0.0, a2 = 0.0;
+        if (gains_complete(d->f_plus[i], GAINS_P, &a1, &a2) != 0) {
+            log->log(log->context, MODEL_ERROR, "f_plus_%d = %g gives no gains by Theorem 3.1 "
+                     "(too large)", i + 1, d->f_plus[i]);
+            return MODEL_ERROR;
+        }
+        d->alpha1[i] = a1;
+        d->alpha2[i] = a2;
+    }
+    char error[256];
+    if (mp_init(&d->pipe, &d->program, d->alpha1, d->alpha2, d->y, error, sizeof error)) {
+        log->log(log->context, MODEL_ERROR, "%s", error);
+        return MODEL_ERROR;
+    }
+    d->reset_seen = d->identifier_reset;
+    d->work_per_step = step_work(d);
+    publish(d);
+    return MODEL_OK;
+}
+
+static double internal_step(const void *data) { return ((const ModelData *)data)->pipe.h; }
+
+static double max_work(const void *data) { return ((const ModelData *)data)->max_work; }
+
+static double work_per_step(const void *data) { return ((const ModelData *)data)->work_per_step; }
+
+static uint64_t max_internal_steps(const void *data)
+{
+    return (uint64_t)((const ModelData *)data)->max_internal_steps;
+}
+
+static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
+{
+    ModelData *d = data;
+    if (d->identifier_reset != d->reset_seen) {
+        d->reset_seen = d->identifier_reset;
+        if (d->identifier_reset) mp_restart_identifier(&d->pipe);
+    }
+    mp_run(&d->pipe, &d->program, d->y, d->u, start_time, k, k_end);
+}
+
+static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
+{
+    ModelData *d = data;
+    mp_communicate(&d->pipe);
+    publish(d);
+    for (int i = 0; i < d->program.n; ++i) {
+        if (!isfinite(d->position[i]) || !isfinite(d->velocity[i])) {
+            log->log(log->context, MODEL_ERROR,
+                     "observer diverged at t = %g: position_estimate_%d = %g, velocity_%d = %g "
+                     "(position_%d = %g): raise f_plus_%d, or check the model's nominal values "
+                     "and the step h", t, i + 1, d->position[i], i + 1, d->velocity[i], i + 1,
+                     d->y[i], i + 1);
+            return MODEL_ERROR;
+        }
+    }
+    for (int k = 0; k < d->program.p; ++k) {
+        if (!isfinite(d->theta[k]) || !isfinite(d->theta_std[k])) {
+            log->log(log->context, MODEL_ERROR, "identifier diverged at t = %g: theta_%d = %g "
+                     "(a non-finite entry of the equations: an input or measurement out of "
+                     "range of the model's functions?)", t, k + 1, d->theta[k]);
+            return MODEL_ERROR;
+        }
+    }
+    return MODEL_OK;
+}
+
+/* A deserialized state, field by field (model_interface.h). */
+#define D(field) DERIVED_FIELD(ModelData, field)
+#define I(field, lo, hi) STATE_FIELD(ModelData, field, FIELD_INT, lo, hi)
+#define R(field, lo, hi) STATE_FIELD(ModelData, field, FIELD_REAL, lo, hi)
+static const StateField STATE_FIELDS[] = {
+    D(alpha1), D(alpha2), I(reset_seen, 0, 1), D(pipe.gain), D(pipe.warm_up),
+    I(pipe.identifying, 0, 1), I(pipe.started, 0, 1), I(pipe.warm_samples, 0, 1000000000),
+    R(pipe.singular_steps, 0.0, NAN), STO_STATE_FIELDS(ModelData, pipe.obs),
+    BANK_STATE_FIELDS(ModelData, pipe.bank), RRI_STATE_FIELDS(ModelData, pipe.id),
+    SJ_STATE_FIELDS(ModelData, pipe.statistics),
+    /* the doubles, named by their struct */
+    REAL_FIELDS(ModelData, pipe.obs), REAL_FIELDS(ModelData, pipe.bank),
+    REAL_FIELDS(ModelData, pipe.id), REAL_FIELDS(ModelData, pipe.statistics),
+};
+#undef D
+#undef I
+#undef R
+
+/* What the field table cannot state: indices below counts held in other fields. */
+static ModelStatus check_restored(const void *data, const void *initialized,
+                                  const ModelLogger *log)
+{
+    const ModelData *d = data;
+    (void)initialized;
+    if (d->pipe.scheme == STO_SCHEME_ADAPTIVE && !adaptive_valid(&d->pipe.bank, d->program.n)) {
+        log->log(log->context, MODEL_ERROR, "deserialized FMU state: an index of pipe.bank is "
+                 "not one of its %d members; state refused", d->pipe.bank.count);
+        return MODEL_ERROR;
+    }
+    if (d->pipe.warm_samples > d->pipe.warm_up) {
+        log->log(log->context, MODEL_ERROR, "deserialized FMU state: pipe.warm_samples = %d "
+                 "exceeds pipe.warm_up = %d; state refused", d->pipe.warm_samples,
+                 d->pipe.warm_up);
+        return MODEL_ERROR;
+    }
+    const RegressorIdentifier *id = &d->pipe.id;
+    const StatisticsJob *job = &d->pipe.statistics;
+    const int index_limit = job->stage == SJ_EIGEN ? STATS_EIGEN_ITERATIONS : job->p;
+    if (d->pipe.identifier && (id->anchor_unit > id->p + 2 || id->batch_age >= id->batch_samples)) {
+        log->log(log->context, MODEL_ERROR, "deserialized FMU state: pipe.id.anchor_unit = %d or "
+                 "pipe.id.batch_age = %d is out of range; state refused", id->anchor_unit,
+                 id->batch_age);
+        return MODEL_ERROR;
+    }
+    if (job->stage != SJ_IDLE && job->stage != SJ_ESTIMATE && job->index >= index_limit) {
+        log->log(log->context, MODEL_ERROR, "deserialized FMU state: pipe.statistics.index = %d "
+                 "is out of range for its stage %d; state refused", job->index, job->stage);
+        return MODEL_ERROR;
+    }
+    return MODEL_OK;
+}
+
+const ModelDescriptor MODEL_DESCRIPTOR = {
+    .model_name = "ModelObserver",
+    .model_identifier = "ModelObserver",
+    .guid = "{8f3b2d6e-4a1c-4e7b-9d05-6c2a7e1f3b94}",
+    .description = "Super-twisting observer and LSM/MFF identifier of a mechanical system "
+                   "declared in a model file (resources/model.txt)",
+    .variables = VARIABLES,
+    .n_variables = sizeof VARIABLES / sizeof VARIABLES[0],
+    .data_size = sizeof(ModelData),
+    .default_stop_time = 10.0,
+    .default_tolerance = 1e-6,
+    .initialize = initialize,
+    .internal_step = internal_step,
+    .max_internal_steps = max_internal_steps,
+    .max_work = max_work,
+    .work_per_step = work_per_step,
+    .advance = advance,
+    .communication_point = communication_point,
+    .state_fields = STATE_FIELDS,
+    .n_state_fields = sizeof STATE_FIELDS / sizeof STATE_FIELDS[0],
+    .check_restored = check_restored,
+    .resource_file = "model.txt",
+    .resource_offset = offsetof(ModelData, program),
+    .resource_size = sizeof(TermProgram),
+    .resource_max_bytes = TP_MAX_TEXT,
+    .parse_resource = parse_resource,
+    .resource_start_values = resource_start_values,
+};
