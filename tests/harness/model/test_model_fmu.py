@@ -1,0 +1,213 @@
+"""The FMU of a model file (``sto-harness fmu --model``, harness/model/fmu_export.py): a
+valid FMU of FMI 2 and 3 whose variables carry the model's names and units, which
+identifies the model from a log through fmpy as ``identify`` does, and refuses what it
+cannot be built for with exit status 2."""
+from __future__ import annotations
+
+import shutil
+import zipfile
+from pathlib import Path
+
+import fmpy
+import numpy as np
+import pytest
+from fmpy.fmi2 import FMU2Slave
+from fmpy.validation import validate_fmu
+from scipy.integrate import solve_ivp
+
+from harness.cli import main
+from harness.model import read_model
+from harness.model.commands import identify_model
+from harness.model.log import read_log
+
+REPO = Path(__file__).resolve().parents[3]
+EMPS = REPO / "examples" / "emps"
+TWO_MASS = REPO / "examples" / "two_mass" / "two_mass.toml"
+
+
+def export(model: Path, out: Path, *options: str) -> Path:
+    assert main(["fmu", "--model", str(model), "--out", str(out), *options]) == 0
+    return out / f"{model.stem}.fmu"
+
+
+@pytest.fixture(scope="module")
+def emps_fmus(tmp_path_factory):
+    out = tmp_path_factory.mktemp("emps_fmu")
+    return {2: export(EMPS / "emps.toml", out / "2"), 3: export(EMPS / "emps.toml", out / "3",
+                                                                  "--fmi-version", "3")}
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_the_fmu_is_valid_and_speaks_the_models_names(emps_fmus, version):
+    fmu = emps_fmus[version]
+    assert validate_fmu(str(fmu)) == []
+    variables = {v.name: v for v in fmpy.read_model_description(str(fmu)).modelVariables}
+    assert variables["x"].causality == "input" and variables["x"].unit == "m"
+    assert variables["vir"].causality == "input" and variables["vir"].unit == "V"
+    assert variables["der(x)"].causality == "output" and variables["der(x)"].unit == "m/s"
+    for name, unit in (("M", "kg"), ("Fv", "N.s/m"), ("Fc", "N"), ("OF", "N")):
+        assert variables[name].causality == "output" and variables[name].unit == unit
+        assert variables[f"{name}_std"].unit == unit
+    assert variables["observer.h"].causality == "parameter"
+    # the generic variables the model does not use are left out
+    assert not any(n.startswith(("position_", "theta_", "input_")) for n in variables)
+    with zipfile.ZipFile(fmu) as archive:
+        program = archive.read("resources/model.txt").decode()
+        assert program.startswith("sto-term-program 1") and "sizes 1 1 4" in program
+        assert not any(n.startswith("extra/") for n in archive.namelist())
+
+
+def run_log(fmu: Path, t, positions: dict, inputs: dict, outputs: list[str], **start):
+    names = [*positions, *inputs]
+    signals = np.zeros(len(t), dtype=[("time", float)] + [(n, float) for n in names])
+    signals["time"] = t - t[0]
+    for n, values in {**positions, **inputs}.items():
+        signals[n] = values
+    step = float(t[1] - t[0])
+    return fmpy.simulate_fmu(str(fmu), stop_time=float(signals["time"][-1]), step_size=step,
+                             output_interval=step, input=signals,
+                             start_values={"observer.h": step, **start}, output=outputs)
+
+
+def test_the_fmu_identifies_emps_as_identify_does(emps_fmus):
+    """Measured: M -0.44 %, Fv -0.85 %, Fc +0.84 %, OF +0.38 % from identify's values."""
+    model = read_model(EMPS / "emps.toml")
+    log = read_log(EMPS / "data" / "DATA_EMPS.mat", model)
+    found = identify_model(model, log).result
+    offline, offline_std = found.theta, found.std_error
+    names = [p.name for p in model.parameters]
+    result = run_log(emps_fmus[2], log.t, {"x": log.q[:, 0]}, {"vir": log.inputs[:, 0]},
+                     names + [f"{n}_std" for n in names] + ["observer.identifier_active"])
+    assert result["observer.identifier_active"][-1]
+    for k, name in enumerate(names):
+        value, std = result[name][-1], result[f"{name}_std"][-1]
+        assert abs(value - offline[k]) <= 0.01 * abs(offline[k]), (name, value, offline[k])
+        # error bars of the same size: measured 1.4 to 2.2 times identify's (sandwich both)
+        assert 0.5 * offline_std[k] < std < 4.0 * offline_std[k], (name, std, offline_std[k])
+    # FMI 3: the same binary core, the same numbers
+    fmi3 = run_log(emps_fmus[3], log.t[:5000], {"x": log.q[:5000, 0]},
+                   {"vir": log.inputs[:5000, 0]}, names)
+    fmi2 = run_log(emps_fmus[2], log.t[:5000], {"x": log.q[:5000, 0]},
+                   {"vir": log.inputs[:5000, 0]}, names)
+    for name in names:
+        assert fmi3[name][-1] == fmi2[name][-1]
+
+
+TRUTH = {"m1": 2.4, "m2": 0.8, "c1": 0.8, "c2": 0.3, "k": 350.0, "d": 1.5}
+
+
+def two_mass_log(seconds=20.0, rate=1000.0):
+    p = TRUTH
+    freqs = np.array([0.3, 0.9, 2.1, 4.3, 7.7])
+
+    def force(t):
+        return 20.0 * np.sum(np.sin(2 * np.pi * freqs * t + np.arange(5)), axis=0)
+
+    def rhs(t, s):
+        x1, x2, v1, v2 = s
+        spring = p["k"] * (x1 - x2) + p["d"] * (v1 - v2)
+        return [v1, v2, (force(t) - p["c1"] * v1 - spring) / p["m1"],
+                (-p["c2"] * v2 + spring) / p["m2"]]
+
+    t = np.arange(0.0, seconds, 1.0 / rate)
+    sol = solve_ivp(rhs, (0.0, seconds), [0, 0, 0, 0], t_eval=t, rtol=1e-10, atol=1e-12,
+                    method="DOP853")
+    return t, sol.y[0], sol.y[1], np.array([force(x) for x in t])
+
+
+def test_the_fmu_identifies_a_coupled_two_mass_system(tmp_path):
+    """n = 2, the spring and damper in both equations. Measured: worst 0.3 % (k)."""
+    fmu = export(TWO_MASS, tmp_path)
+    t, x1, x2, F = two_mass_log()
+    names = list(TRUTH)
+    result = run_log(fmu, t, {"x1": x1, "x2": x2}, {"F": F}, names)
+    for name in names:
+        assert abs(result[name][-1] - TRUTH[name]) <= 0.02 * TRUTH[name], \
+            (name, result[name][-1], TRUTH[name])
+
+
+def test_mff_is_the_fmus_default_when_asked(tmp_path):
+    fmu = export(TWO_MASS, tmp_path, "--identifier", "mff")
+    variables = {v.name: v for v in fmpy.read_model_description(str(fmu)).modelVariables}
+    assert variables["observer.identifier"].start == "2"
+    slave = FMU2Slave(guid=fmpy.read_model_description(str(fmu)).guid,
+                      unzipDirectory=fmpy.extract(str(fmu)), modelIdentifier="ModelObserver",
+                      instanceName="mff")
+    slave.instantiate()
+    slave.setupExperiment(startTime=0.0)
+    slave.enterInitializationMode()
+    try:
+        vr = variables["observer.identifier"].valueReference
+        assert slave.getInteger([vr]) == [2]
+    finally:
+        slave.freeInstance()
+
+
+def test_a_state_of_another_model_file_is_refused(tmp_path, capsys):
+    """The same binary with another model file: its state is refused, not reinterpreted."""
+    first = export(EMPS / "emps.toml", tmp_path / "a")
+    changed = tmp_path / "emps.toml"
+    changed.write_text((EMPS / "emps.toml").read_text().replace("nominal = 100", "nominal = 90"))
+    second = export(changed, tmp_path / "b")
+    slaves = []
+    for fmu in (first, second):
+        description = fmpy.read_model_description(str(fmu))
+        slave = FMU2Slave(guid=description.guid, unzipDirectory=fmpy.extract(str(fmu)),
+                          modelIdentifier="ModelObserver", instanceName=fmu.parent.name)
+        slave.instantiate()
+        slave.setupExperiment(startTime=0.0)
+        slave.enterInitializationMode()
+        slave.exitInitializationMode()
+        slaves.append(slave)
+    try:
+        state = slaves[0].serializeFMUstate(slaves[0].getFMUstate())
+        with pytest.raises(Exception):
+            slaves[1].setFMUstate(slaves[1].deSerializeFMUstate(state))
+        assert "written with another model file" in capsys.readouterr().out
+        slaves[0].setFMUstate(slaves[0].deSerializeFMUstate(state))  # its own: accepted
+        slaves[0].terminate()
+    finally:
+        for slave in slaves:
+            slave.freeInstance()
+
+
+def test_an_fmu_without_its_model_file_does_not_instantiate(tmp_path, emps_fmus):
+    unzipped = Path(fmpy.extract(str(emps_fmus[2]), unzipdir=str(tmp_path / "fmu")))
+    (unzipped / "resources" / "model.txt").unlink()
+    description = fmpy.read_model_description(str(emps_fmus[2]))
+    slave = FMU2Slave(guid=description.guid, unzipDirectory=str(unzipped),
+                      modelIdentifier="ModelObserver", instanceName="missing")
+    with pytest.raises(Exception, match="Failed to instantiate"):
+        slave.instantiate(loggingOn=True)
+    shutil.rmtree(unzipped)
+
+
+def write_model(path: Path, coordinates: int, extra_parameter: str = "") -> Path:
+    names = [f"q{i}" for i in range(1, coordinates + 1)]
+    equations = ", ".join(f'"m{i}*der({c},2) = u"' for i, c in enumerate(names, start=1))
+    parameters = "\n".join(f"m{i} = {{ nominal = 1 }}" for i in range(1, coordinates + 1))
+    path.write_text(f'[model]\ncoordinates = {names!r}\ninputs = ["u"]\n'
+                    f'equations = [{equations}]\n[parameters]\n{parameters}\n{extra_parameter}')
+    return path
+
+
+@pytest.mark.parametrize(("case", "message"), [
+    ("five_coordinates", "the model has 5 coordinates: the FMU takes at most 4"),
+    ("name_clash", "would share the names m1_std"),
+    ("out_is_a_file", "is not a folder"),
+])
+def test_what_the_fmu_cannot_be_built_for_is_refused(tmp_path, capsys, case, message):
+    out = tmp_path / "out"
+    if case == "five_coordinates":
+        model = write_model(tmp_path / "m.toml", 5)
+    elif case == "name_clash":
+        model = tmp_path / "m.toml"
+        model.write_text('[model]\ncoordinates = ["q"]\ninputs = ["u"]\n'
+                         'equations = ["m1*der(q,2) + m1_std*der(q) = u"]\n'
+                         '[parameters]\nm1 = { nominal = 1 }\nm1_std = { nominal = 0 }\n')
+    else:
+        model = write_model(tmp_path / "m.toml", 1)
+        out.write_text("a file")
+    assert main(["fmu", "--model", str(model), "--out", str(out)]) == 2
+    assert message in capsys.readouterr().err
+    assert case == "out_is_a_file" or not (out / "m.fmu").exists()
