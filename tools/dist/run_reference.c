@@ -143,6 +143,36 @@ typedef struct {
     fmi3GetFloat64TYPE *get3;
 } Runner;
 
+/* The FMU's resources folder from its binary's path (<fmu>/binaries/<platform>/<file>):
+ * a native path with a trailing separator (FMI 3) and a file: URI (FMI 2). */
+static char RESOURCE_PATH[4096], RESOURCE_URI[4200];
+
+static void find_resources(const char *binary)
+{
+    const size_t length = strlen(binary);
+    if (length + 16 > sizeof RESOURCE_PATH) die("the binary's path is too long");
+    memcpy(RESOURCE_PATH, binary, length + 1);
+    for (int up = 0; up < 3; ++up) { /* the file, its platform and binaries/ */
+        char *cut = NULL;
+        for (char *c = RESOURCE_PATH; *c; ++c)
+            if (*c == '/' || *c == '\\') cut = c;
+        if (!cut) die("%s is not in <fmu>/binaries/<platform>/", binary);
+        *cut = '\0';
+    }
+    const char separator = strchr(binary, '\\') ? '\\' : '/';
+    const size_t root = strlen(RESOURCE_PATH);
+    snprintf(RESOURCE_PATH + root, sizeof RESOURCE_PATH - root, "%cresources%c", separator,
+             separator);
+    /* file:///C:/x/resources/ or file:///x/resources/ (spaces as %20) */
+    size_t at = (size_t)snprintf(RESOURCE_URI, sizeof RESOURCE_URI, "file://%s",
+                                 RESOURCE_PATH[0] == '/' ? "" : "/");
+    for (const char *c = RESOURCE_PATH; *c && at + 4 < sizeof RESOURCE_URI; ++c) {
+        if (*c == ' ') at += (size_t)snprintf(RESOURCE_URI + at, 4, "%%20");
+        else RESOURCE_URI[at++] = *c == '\\' ? '/' : *c;
+    }
+    RESOURCE_URI[at] = '\0';
+}
+
 static Runner start_fmi2(const Plan *p)
 {
     static const fmi2CallbackFunctions callbacks = {logger2, NULL, NULL, NULL, NULL};
@@ -153,8 +183,8 @@ static Runner start_fmi2(const Plan *p)
     Runner r = {.fmi = 2};
     { LOAD(fmi2DoStepTYPE, fmi2DoStep) r.do_step2 = fmi2DoStep; }
     { LOAD(fmi2GetRealTYPE, fmi2GetReal) r.get2 = fmi2GetReal; }
-    r.instance = fmi2Instantiate("run_reference", fmi2CoSimulation, p->token, NULL, &callbacks,
-                                 fmi2False, fmi2False);
+    r.instance = fmi2Instantiate("run_reference", fmi2CoSimulation, p->token, RESOURCE_URI,
+                                 &callbacks, fmi2False, fmi2False);
     if (!r.instance) die("fmi2Instantiate failed");
     if (fmi2SetupExperiment(r.instance, fmi2False, 0.0, p->start, fmi2True, p->stop) > fmi2Warning ||
         fmi2EnterInitializationMode(r.instance) > fmi2Warning ||
@@ -171,7 +201,7 @@ static Runner start_fmi3(const Plan *p)
     Runner r = {.fmi = 3};
     { LOAD(fmi3DoStepTYPE, fmi3DoStep) r.do_step3 = fmi3DoStep; }
     { LOAD(fmi3GetFloat64TYPE, fmi3GetFloat64) r.get3 = fmi3GetFloat64; }
-    r.instance = fmi3InstantiateCoSimulation("run_reference", p->token, NULL, fmi3False,
+    r.instance = fmi3InstantiateCoSimulation("run_reference", p->token, RESOURCE_PATH, fmi3False,
                                              fmi3False, fmi3False, fmi3False, NULL, 0, NULL,
                                              logger3, NULL);
     if (!r.instance) die("fmi3InstantiateCoSimulation failed");
@@ -210,6 +240,7 @@ int main(int argc, char **argv)
     if (argc != 3) die("usage: run_reference PLAN BINARY");
     Plan p = read_plan(argv[1]);
     open_library(argv[2]);
+    find_resources(argv[2]);
     Runner r = p.fmi == 2 ? start_fmi2(&p) : start_fmi3(&p);
     const size_t columns = 1 + p.n_values;
     double *values = xcalloc(p.n_values, sizeof *values);
