@@ -22,7 +22,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import pytest
-from abuse_fmi import (
+
+from tools.abuse.abuse_fmi import (
     CLOCK_SIZE,
     DISCARD,
     ERROR,

@@ -17,7 +17,7 @@
  *         is the closed-loop harness's case H = h (a communication point per step).
  *
  * Inputs are constants (y, u, F, phi nonzero).  One fmi2DoStep of H runs
- * STEPS internal steps; bench/step_instructions.sh runs this under
+ * STEPS internal steps; bench/perf/step_instructions.sh runs this under
  * callgrind --toggle-collect=fmi2DoStep and divides by STEPS.  Prints the
  * outcome (status, identifier_active, converged, x2_hat[1]) to stdout. */
 #include <stdarg.h>

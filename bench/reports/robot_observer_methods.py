@@ -1,7 +1,7 @@
-"""The model-based observer (fmu/src/core/robot_observer.c) as methods of bench/robots.py,
+"""The model-based observer (fmu/src/core/robot_observer.c) as methods of bench/reports/robots.py,
 and the cost of its internal step:
 
-    .venv/bin/python bench/robot_observer_methods.py
+    .venv/bin/python -m bench.reports.robot_observer_methods
 
 - "model obs (URDF)": the observer with the URDF's model (the truth's links differ by
   0.8..1.2, or the payload is missing; the friction is unknown) and the online identifier
@@ -24,22 +24,17 @@ the Coulomb friction's smoothing velocity v_s in {0 (sign), 0.005, 0.02, 0.05} r
 """
 from __future__ import annotations
 
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run as a script
-
-from realdata.baselines import tune_log10  # noqa: E402
-from robot_trajectories import multisine  # noqa: E402
-
-from harness.robot.base_parameters import base_parameters  # noqa: E402
-from harness.robot.examples import example_urdf  # noqa: E402
-from harness.robot.fmu import fmu_parameters, run_fmu  # noqa: E402
-from harness.robot.pipeline import identify_robot  # noqa: E402
-from harness.robot.urdf import read_urdf  # noqa: E402
+from bench.reports.realdata.baselines import tune_log10
+from bench.reports.robot_trajectories import multisine
+from harness.robot.base_parameters import base_parameters
+from harness.robot.examples import example_urdf
+from harness.robot.fmu import fmu_parameters, run_fmu
+from harness.robot.pipeline import identify_robot
+from harness.robot.urdf import read_urdf
 
 MODEL_METHODS = ("model obs (URDF)", "model obs (ident.)", "model obs (ident. sign)", "FMU")
 SHAPES = (0.0, 0.005, 0.02, 0.05)  # [rad/s] Coulomb smoothing velocities tried
@@ -132,7 +127,7 @@ def step_cost(name: str, steps: int = 20000, runs: int = 5) -> tuple[int, int, f
 
 
 if __name__ == "__main__":
-    # .venv/bin/python bench/robot_observer_methods.py: the cost of one internal step
+    # .venv/bin/python -m bench.reports.robot_observer_methods: the cost of one internal step
     for robot_name in ("double_pendulum", "ur5", "panda"):
         n, p, us = step_cost(robot_name)
         print(f"{robot_name}: {n} joints, {p} base parameters: {us:.1f} us per step "

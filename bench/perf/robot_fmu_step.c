@@ -1,7 +1,7 @@
 /* Drives the RobotObserver model through its FMI 2.0 API, linked in directly
  * (no FMU, no dlopen), for the cost of its whole internal step: the observer
  * with the rigid-body forward dynamics, the regression and the identifier
- * (bench/robot_step_cost.py --fmu):
+ * (bench/perf/robot_step_cost.py --fmu):
  *
  *     robot_fmu_step PARAMETERS TRAJECTORY WARMUP STEPS CALLS
  *
@@ -161,7 +161,7 @@ int main(int argc, char **argv)
     set_inputs(c, n, x);
     check(fmi2ExitInitializationMode(c), "fmi2ExitInitializationMode");
 
-    /* Through a volatile pointer, as bench/step_driver.c: fmi2DoStep stays a
+    /* Through a volatile pointer, as bench/perf/step_driver.c: fmi2DoStep stays a
      * function of its own for callgrind's --toggle-collect. */
     fmi2DoStepTYPE *volatile do_step = fmi2DoStep;
     fmi2Status status = fmi2OK;

@@ -2,9 +2,9 @@
 # Instructions per internal step of the SuperTwistingObserver model, counted
 # by callgrind.
 #
-#   bench/step_instructions.sh [STEPS]        (default 10000)
+#   bench/perf/step_instructions.sh [STEPS]        (default 10000)
 #
-# Runs bench/step_driver.c as CMake builds it with the observer's objects (the
+# Runs bench/perf/step_driver.c as CMake builds it with the observer's objects (the
 # step_driver target of ./build.sh fmus: the FMUs' -O2, plus -g), for each configuration
 #     valgrind --tool=callgrind --toggle-collect=fmi2DoStep step_driver CONFIG SCHEME STEPS
 # i.e. counts the instructions executed inside the one fmi2DoStep (STEPS
@@ -19,7 +19,7 @@
 # set STEP_DRIVER to its bin/step_driver (valgrind 3.19 cannot run AVX-512 code, so
 # -march=native fails on such machines).
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../.."
 
 STEPS=${1:-10000}
 OUT=build/bench

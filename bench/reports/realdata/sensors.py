@@ -57,7 +57,7 @@ MEASUREMENTS: dict[str, Measurement] = {m.name: m for m in [
     Measurement("enc-16", bits=16),
     Measurement("enc-20", bits=20),
 ]}
-# Sensors of the held-out grid (bench/realdata/held_out.py) that the defaults were not
+# Sensors of the held-out grid (bench/reports/realdata/held_out.py) that the defaults were not
 # tuned on: other encoder resolutions, and an encoder whose counts jitter (noise before
 # the quantizer, as an interpolating encoder's or a noisy analog sensor's ADC).
 HELD_OUT_MEASUREMENTS: dict[str, Measurement] = {m.name: m for m in [

@@ -1,6 +1,6 @@
 """identify on a long log: wall time and peak memory of ``sto-harness identify``.
 
-    .venv/bin/python bench/identify_long_log.py [--samples 10000000] [--csv-decimation N]
+    .venv/bin/python -m bench.perf.identify_long_log [--samples 10000000] [--csv-decimation N]
                                                 [--format csv|parquet]
 
 Writes a log of N samples at 1 kHz (a pendulum-like y, a two-tone u; about 55

@@ -1,4 +1,4 @@
-"""Helpers of bench/real_measurements.py: the observer FMU against classical baselines on
+"""Helpers of bench/reports/real_measurements.py: the observer FMU against classical baselines on
 plant data that is not made by the observer's own discretization.
 
 plants   -- the pendulum trajectories (open loop, closed loop; several integrators)

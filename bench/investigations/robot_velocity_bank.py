@@ -3,29 +3,23 @@ with encoder noise: per joint, the noise-adaptive bank's velocity RMS, the bandw
 publishes (share of samples), and the causal Kalman filter's RMS at the bank members'
 bandwidths (lambda = (omega h)^6) and at its oracle tuning.
 
-    .venv/bin/python bench/robot_velocity_bank.py [--robot double_pendulum] [--rate 1000]
+    .venv/bin/python -m bench.investigations.robot_velocity_bank [--robot double_pendulum] [--rate 1000]
                                                   [--seconds 10] [--bits 17]
 
-The log is bench/robots.py's training log (same truth, controller and seed)."""
+The log is bench/reports/robots.py's training log (same truth, controller and seed)."""
 from __future__ import annotations
 
 import argparse
-import sys
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from realdata.baselines import kalman, tune_log10  # noqa: E402
-from robot_trajectories import quantize, simulate  # noqa: E402
-from robots import pinocchio_truth, truth_of  # noqa: E402
-
-from harness.robot.examples import example_urdf  # noqa: E402
-from harness.robot.native import observe_adaptive  # noqa: E402
-from harness.robot.pipeline import JointLog, savitzky_golay  # noqa: E402
-from harness.robot.urdf import read_urdf  # noqa: E402
+from bench.reports.realdata.baselines import kalman, tune_log10
+from bench.reports.robot_trajectories import quantize, simulate
+from bench.reports.robots import pinocchio_truth, truth_of
+from harness.robot.examples import example_urdf
+from harness.robot.native import observe_adaptive
+from harness.robot.pipeline import JointLog, savitzky_golay
+from harness.robot.urdf import read_urdf
 
 GAINS = {"double_pendulum": (50.0, 5.0), "ur5": (400.0, 40.0), "panda": (200.0, 20.0)}
 

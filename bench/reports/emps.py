@@ -2,7 +2,7 @@
 benchmark's IDIM-LS computed in the same run, and the causal velocity against a zero-phase
 reference. Prints a markdown table (not a test).
 
-    .venv/bin/python bench/emps.py [--data examples/emps/data] [--out DIR]
+    .venv/bin/python -m bench.reports.emps [--data examples/emps/data] [--out DIR]
 
 IDIM-LS here is the published pipeline: qm through a 4th-order Butterworth at 100 Hz,
 forward and backward; central differences for the velocity and acceleration; the first
@@ -16,19 +16,17 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 import tempfile
 import time
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO))
+import numpy as np
+import scipy.io
+import scipy.signal
 
-import numpy as np  # noqa: E402
-import scipy.io  # noqa: E402
-import scipy.signal  # noqa: E402
+from harness.cli import main
 
-from harness.cli import main  # noqa: E402
+REPO = Path(__file__).resolve().parents[2]
 
 PUBLISHED = {"M": 95.1089, "Fv": 203.5034, "Fc": 20.3935, "OF": -3.1648}
 PUBLISHED_ERRORS = (0.0408, 0.0598)  # estimation, cross-test (the benchmark's paper)

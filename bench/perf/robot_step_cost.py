@@ -4,19 +4,19 @@ base parameter and the friction with its anchor re-solve every RRI_ANCHOR_INTERV
 steps, the statistics' share), per example robot; with --fmu, of the RobotObserver
 FMU's whole internal step.
 
-    .venv/bin/python bench/robot_step_cost.py [--steps 20000] [--runs 5] [--callgrind]
+    .venv/bin/python -m bench.perf.robot_step_cost [--steps 20000] [--runs 5] [--callgrind]
                                               [--against REVISION] [--identifier lsm|mff]
                                               [--fmu [--statistics-interval S]
                                                [--sample-period h] [--keep DIR]]
 
-Runs bench/robot_step.c as CMake built it (./build.sh fmus: the FMUs' flags) and prints the
+Runs bench/perf/robot_step.c as CMake built it (./build.sh fmus: the FMUs' flags) and prints the
 wall time per step (the median of --runs runs) and, with --callgrind, the instructions.
 --against builds a git revision's fmu/src too, with this checkout's CMake recipe and
 driver (e.g. the commit before a change) and interleaves the two builds' runs, so
 that both see the same load.  --identifier mff: MFF (R = 0.1, the FMU's default) instead
 of LSM, in both (--fmu: the FMU's parameter identifier = 2).
 
---fmu runs bench/robot_fmu_step.c built with the RobotObserver's sources (CMake's
+--fmu runs bench/perf/robot_fmu_step.c built with the RobotObserver's sources (CMake's
 robot_fmu_step target),
 sets the parameters that `python -m harness robot-fmu-parameters URDF --step h`
 writes (h = --sample-period, default 1e-4 s; every base parameter and the friction
@@ -49,17 +49,14 @@ from pathlib import Path
 
 import numpy as np
 
-REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO))
+from bench.reports.robot_trajectories import multisine
+from harness.robot.base_parameters import base_parameters
+from harness.robot.examples import example_urdf
+from harness.robot.fmu import read_ssv
+from harness.robot.native import core_defaults
+from harness.robot.urdf import read_urdf
 
-from robot_trajectories import multisine  # noqa: E402
-
-from harness.robot.base_parameters import base_parameters  # noqa: E402
-from harness.robot.examples import example_urdf  # noqa: E402
-from harness.robot.fmu import read_ssv  # noqa: E402
-from harness.robot.native import core_defaults  # noqa: E402
-from harness.robot.urdf import read_urdf  # noqa: E402
-
+REPO = Path(__file__).resolve().parents[2]
 
 def model_file(name: str, path: Path) -> int:
     urdf, locked = example_urdf(name)
@@ -101,8 +98,8 @@ def build(binary: Path, revision: str | None, fmu: bool = False) -> None:
     with tarfile.open(fileobj=io.BytesIO(archive)) as tar:
         tar.extractall(root, filter="data")
     # this checkout's recipe and drivers, so that revisions before them can be measured
-    for name in ("CMakeLists.txt", "cmake", "bench/step_driver.c", "bench/robot_step.c",
-                 "bench/robot_fmu_step.c", "tools/abuse/closed_loop.c"):
+    for name in ("CMakeLists.txt", "cmake", "bench/perf/step_driver.c", "bench/perf/robot_step.c",
+                 "bench/perf/robot_fmu_step.c", "tools/abuse/closed_loop.c"):
         if (REPO / name).is_dir():
             shutil.copytree(REPO / name, root / name, dirs_exist_ok=True)
         else:
@@ -277,7 +274,7 @@ def main() -> int:
     parser.add_argument("--runs", type=int, default=5, help="wall-time runs (the median is shown)")
     parser.add_argument("--callgrind", action="store_true")
     parser.add_argument("--fmu", action="store_true",
-                        help="the RobotObserver FMU's whole internal step (bench/robot_fmu_step.c)")
+                        help="the RobotObserver FMU's whole internal step (bench/perf/robot_fmu_step.c)")
     parser.add_argument("--statistics-interval", type=float, metavar="S",
                         help="--fmu: the FMU's statistics_interval (default its 0.1 s)")
     parser.add_argument("--sample-period", type=float, default=FMU_H, metavar="h",

@@ -2,23 +2,21 @@
 samples of the velocity reversals or away from them (docs/improvements.md, "Velocity
 reversals with a Coulomb term").
 
-    .venv/bin/python bench/reversal_errors.py A,accurate,1000,clean,b-exact
+    .venv/bin/python -m bench.investigations.reversal_errors A,accurate,1000,clean,b-exact
 
-The data set is made as bench/real_measurements.py makes it (into --data, reused).
+The data set is made as bench/reports/real_measurements.py makes it (into --data, reused).
 """
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import real_measurements as rm  # noqa: E402
-from realdata import methods, plants, sensors  # noqa: E402
+from bench.reports import real_measurements as rm
+from bench.reports.realdata import methods, plants, sensors
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 
 
 def main() -> int:

@@ -1,15 +1,15 @@
 """The LSM regression's filter (the FMU parameter tau_identifier) on the real-measurement rows.
 
-    .venv/bin/python bench/real_measurements.py --keep-data      # first: data and baselines
-    .venv/bin/python bench/identifier_filter.py [--taus 0.002,0.03,0.05,0.1,0.2]
+    .venv/bin/python -m bench.reports.real_measurements --keep-data      # first: data and baselines
+    .venv/bin/python -m bench.investigations.identifier_filter [--taus 0.002,0.03,0.05,0.1,0.2]
         [--rows A,6.2] [--results build/real_measurements] [--fmu-dir build/fmus] [--jobs 2]
 
-    # the held-out joints (bench/realdata/held_out.py):
-    .venv/bin/python bench/real_measurements.py --held-out --keep-data --out build/held_out
-    .venv/bin/python bench/identifier_filter.py --rows C-fast,C-heavy,C-chirp \
+    # the held-out joints (bench/reports/realdata/held_out.py):
+    .venv/bin/python -m bench.reports.real_measurements --held-out --keep-data --out build/held_out
+    .venv/bin/python -m bench.investigations.identifier_filter --rows C-fast,C-heavy,C-chirp \
         --results build/held_out
 
-Runs fmu-default (bench/realdata/methods.py) on the rows of bench/real_measurements.py's
+Runs fmu-default (bench/reports/realdata/methods.py) on the rows of bench/reports/real_measurements.py's
 grid whose identifier is LSM (data set A and the 6.2 loop, or the held-out joints),
 once per value of tau_identifier, on the trajectories that run kept, and prints per
 row the worst relative parameter error at the end next to the best baseline's
@@ -22,16 +22,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO))
-sys.path.insert(0, str(REPO / "bench"))
+from bench.reports import real_measurements as rm
+from bench.reports.realdata import methods
 
-import real_measurements as rm  # noqa: E402
-from realdata import methods  # noqa: E402
+REPO = Path(__file__).resolve().parents[2]
 
 BASELINES = ("kalman", "rts", "savgol")
 _PARAMETERS = methods.fmu_parameters  # the bench's problem statement, before the patch below
@@ -66,7 +63,7 @@ def main() -> None:
     args = parser.parse_args()
     results = args.results / "results.json"
     if not results.exists() or not (args.results / "data").is_dir():
-        parser.error(f"{results} or its data/ are missing: run bench/real_measurements.py "
+        parser.error(f"{results} or its data/ are missing: run bench/reports/real_measurements.py "
                      "--keep-data first")
     reference = {(r["dataset"], r["plant"], r["rate"], r["measurement"], r["model"]): r
                  for r in json.loads(results.read_text())["rows"]}

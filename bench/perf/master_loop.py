@@ -1,6 +1,6 @@
 """Cost per macro step of the 3-FMU closed loop: native vs plain-Python master loop.
 
-    .venv/bin/python bench/master_loop.py [--repeats 5]
+    .venv/bin/python -m bench.perf.master_loop [--repeats 5]
 
 Runs scenario 6.2 with the FMU's default (improved) method (observer + pendulum
 + twisting controller, H = 1e-4 s) for
@@ -19,14 +19,12 @@ import sys
 import time
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO))
+import numpy as np
 
-import numpy as np  # noqa: E402
+from harness.master import initialize, run
+from harness.scenarios import COMMUNICATION_STEP, PROBES, SCENARIOS, build, improved_overrides
 
-from harness.master import initialize, run  # noqa: E402
-from harness.scenarios import COMMUNICATION_STEP, PROBES, SCENARIOS, build, improved_overrides  # noqa: E402
-
+REPO = Path(__file__).resolve().parents[2]
 
 def time_loop(use_native: bool, steps: int, coupled: bool = True) -> float:
     s = SCENARIOS["6.2"]

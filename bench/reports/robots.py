@@ -1,11 +1,11 @@
 """Serial robots (issue 11): identification from joint logs against the field's baselines.
 
-    .venv/bin/python bench/robots.py [--rates 1000,10000] [--seconds 20] [--robots ...]
+    .venv/bin/python -m bench.reports.robots [--rates 1000,10000] [--seconds 20] [--robots ...]
         [--methods ...] [--model-left-out ROBOT@RATE,...] [--out docs/robots_results.md]
         [--results build/robots/results.json]
-    .venv/bin/python bench/robots.py --from-results build/robots/results.json --out FILE
+    .venv/bin/python -m bench.reports.robots --from-results build/robots/results.json --out FILE
 
---out writes the generated results document (bench/robot_report.py: conditions, the
+--out writes the generated results document (bench/reports/robot_report.py: conditions, the
 issue's targets judged from the rows, one table per rate); docs/robots_results.md is
 one (edit the scripts, not the document).  Every row goes to --results as well, after
 each robot and rate, so that the document can be written again without a new run.
@@ -21,7 +21,7 @@ model the integrator can follow); the identification assumes sign(q').
 Methods: the pipeline (harness.robot.pipeline) with Savitzky-Golay velocities ("sg")
 and with the causal super-twisting observer ("observer"); the baseline "SG+LS": plain
 Savitzky-Golay + torque-space least squares (no reversal mask, no consistency).
-The model-based observer of the RobotObserver FMU (bench/robot_observer_methods.py): with
+The model-based observer of the RobotObserver FMU (bench/reports/robot_observer_methods.py): with
 the URDF's model, with the model identified by "sg", and the FMU itself (--methods).
 Velocity baseline: a causal steady-state Kalman filter per joint, tuned on the truth
 (an oracle tuning: the best a Kalman filter can do).
@@ -44,20 +44,17 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO / "bench"))
-sys.path.insert(0, str(REPO))
+from bench.reports import robot_report
+from bench.reports.realdata.baselines import kalman, tune_log10
+from bench.reports.robot_observer_methods import MODEL_METHODS, model_observer
+from bench.reports.robot_trajectories import quantize, simulate
+from harness.robot.base_parameters import base_parameters
+from harness.robot.examples import example_urdf
+from harness.robot.least_squares import torque_least_squares
+from harness.robot.pipeline import JointLog, identify_robot, savitzky_golay
+from harness.robot.urdf import read_urdf
 
-import robot_report  # noqa: E402
-from realdata.baselines import kalman, tune_log10  # noqa: E402
-from robot_observer_methods import MODEL_METHODS, model_observer  # noqa: E402
-from robot_trajectories import quantize, simulate  # noqa: E402
-
-from harness.robot.base_parameters import base_parameters  # noqa: E402
-from harness.robot.examples import example_urdf  # noqa: E402
-from harness.robot.least_squares import torque_least_squares  # noqa: E402
-from harness.robot.pipeline import JointLog, identify_robot, savitzky_golay  # noqa: E402
-from harness.robot.urdf import read_urdf  # noqa: E402
+REPO = Path(__file__).resolve().parents[2]
 
 COULOMB_VELOCITY = 0.02
 PAYLOAD, TIP = 0.3, np.array([0.0, 0.0, 0.2])
@@ -261,7 +258,7 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         shutil.copyfile(FMU, fmu)
     run = {
-        "command": shlex.join([".venv/bin/python", "bench/robots.py",
+        "command": shlex.join([".venv/bin/python", "bench/reports/robots.py",
                                *(sys.argv[1:] if argv is None else argv)]),
         "commit": _commit(), "seconds": args.seconds, "seed": 1,
         "robots": args.robots.split(","), "rates": [float(r) for r in args.rates.split(",")],

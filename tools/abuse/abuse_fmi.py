@@ -1,4 +1,5 @@
-"""Raw FMI 2.0 access for the abuse tests: any FMU, any pointer, any call order.
+"""Raw FMI 2.0 access for the abuse tests and the fuzzers' seed corpus (make_corpus.py): any FMU,
+any pointer, any call order.
 
 The FMUs come from $STO_FMU_DIR (tools/abuse/sanitize.sh points it at the
 sanitized build) or build/fmus.  ``isolated(fn)`` runs ``fn`` in a forked

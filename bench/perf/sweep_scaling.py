@@ -1,6 +1,6 @@
 """Sweep throughput on Dask: runs per second with 1, 2, ... worker processes.
 
-    .venv/bin/python bench/sweep_scaling.py [--runs 16] [--stop-time 2] [--workers 1,2]
+    .venv/bin/python -m bench.perf.sweep_scaling [--runs 16] [--stop-time 2] [--workers 1,2]
                                             [--repeats 3]
 
 Each measurement runs ``--runs`` closed-loop 6.1-sine runs of ``--stop-time``
@@ -27,11 +27,10 @@ import tempfile
 import time
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO))
+from harness import sweep
+from harness.sweep import cluster as sweep_dask
 
-from harness import sweep  # noqa: E402
-from harness.sweep import cluster as sweep_dask  # noqa: E402
+REPO = Path(__file__).resolve().parents[2]
 
 FMU_DIR = REPO / "build" / "fmus"
 

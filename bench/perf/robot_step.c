@@ -1,7 +1,7 @@
 /* Cost of one sample of the robot pipeline (core/robot_pipeline.c: the
  * model-based observer, the regression of its estimates, the LSM or MFF step
  * over the base columns and the statistics' share), the same function the
- * RobotObserver FMU and the batch runs call (bench/robot_step_cost.py).
+ * RobotObserver FMU and the batch runs call (bench/perf/robot_step_cost.py).
  * Usage: robot_step MODEL.txt STEPS [lsm|mff]; MODEL.txt: n, then per joint a line
  * "type ax ay az x y z roll pitch yaw m mx my mz Ixx Ixy Iyy Ixz Iyz Izz fv fc",
  * then p and the p base columns.  The trajectory is a sine per joint at 10 kHz,

@@ -1,13 +1,13 @@
 """Are the reported standard errors right?  Against the spread over noise seeds.
 
-    .venv/bin/python bench/standard_errors.py [--seeds 96] [--plants accurate,rk45-1e-4,euler]
+    .venv/bin/python -m bench.reports.standard_errors [--seeds 96] [--plants accurate,rk45-1e-4,euler]
         [--rates 1000] [--noise 1e-5,1e-4,1e-3] [--fmu-dir build/fmus] [--out FILE.md]
         [--set NAME=VALUE ...]
 
 Issue 10: "a standard error for every identified parameter (from the information
 matrix and the residual variance) ... consistent with the spread of the estimates
 over several noise seeds (within a factor 1.5)".  Data set A of
-bench/realdata/plants.py (the pendulum under the open-loop multi-sine torque, 40 s,
+bench/reports/realdata/plants.py (the pendulum under the open-loop multi-sine torque, 40 s,
 Coulomb friction) for each plant kind and rate, the same trajectory measured with
 white noise of each std and each seed; the observer FMU's defaults identify gravity,
 viscous and Coulomb friction and the input gain from a nominal model that is off (b
@@ -27,20 +27,16 @@ noise-free estimate.  Prints a Markdown table (and writes it to --out).
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO))
-sys.path.insert(0, str(REPO / "bench"))
+from bench.reports.realdata import plants
+from harness.identify import Recording, identify
+from harness.scenarios import J
 
-from realdata import plants  # noqa: E402
-
-from harness.identify import Recording, identify  # noqa: E402
-from harness.scenarios import J  # noqa: E402
+REPO = Path(__file__).resolve().parents[2]
 
 PARAMETERS = ("gravity", "viscous", "Coulomb", "b")
 TRUTH = np.array([*plants.C_TRUE, plants.B_TRUE])

@@ -1,12 +1,12 @@
 """Serial robots at rest after an MFF identification: how far the estimates move.
 
-    .venv/bin/python bench/robot_no_excitation.py [--robots double_pendulum,ur5,panda]
+    .venv/bin/python -m bench.investigations.robot_no_excitation [--robots double_pendulum,ur5,panda]
         [--excite 10] [--quiet 60] [--R 0.1] [--rho 1e-6] [--out FILE.md]
         [--logs DIR [--simulate-only]]
 
 Issue 10's target "60 s without excitation: the estimate moves less than 1 %", for the
 robots' regressor identifier (fmu/src/core/regressor_identifier.c, MFF).  Each robot of
-bench/robots.py (same truth, seed 1, 1 kHz) follows the bench's exciting multi-sine under
+bench/reports/robots.py (same truth, seed 1, 1 kHz) follows the bench's exciting multi-sine under
 PD control for --excite seconds; then its reference stops ("rest": the arm settles and
 stays) or moves on at 0.01 rad/s on every joint ("creep": slower than the identifier's
 min_speed 0.05 rad/s), for --quiet seconds.  Logged noise-free and with 17-bit encoders.
@@ -35,22 +35,17 @@ states, against the true torques): the tracking that a leave-out rule must not s
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from robot_trajectories import multisine, quantize, simulate  # noqa: E402
-from robots import pinocchio_truth, truth_of  # noqa: E402
-
-from harness.robot.base_parameters import base_parameters  # noqa: E402
-from harness.robot.examples import example_urdf  # noqa: E402
-from harness.robot.pipeline import JointLog, identify_robot  # noqa: E402
-from harness.robot.urdf import read_urdf  # noqa: E402
+from bench.reports.robot_trajectories import multisine, quantize, simulate
+from bench.reports.robots import pinocchio_truth, truth_of
+from harness.robot.base_parameters import base_parameters
+from harness.robot.examples import example_urdf
+from harness.robot.pipeline import JointLog, identify_robot
+from harness.robot.urdf import read_urdf
 
 RATE = 1000.0
 CREEP = 0.01  # rad/s
@@ -62,7 +57,7 @@ SETTLED = 2.0  # s: the arm has come to rest (or to its creep) by then
 START = 0.2  # s: the identifier starts after the observer's transient
 GAINS = {"double_pendulum": (50.0, 5.0), "ur5": (400.0, 40.0), "panda": (200.0, 20.0)}
 # the observer's (alpha1, alpha2), tuned on the truth for "model obs (ident.)" at 1 kHz
-# (bench/robot_observer_methods.py; docs/robots.md), v_s = 0.02; exact and 17 bit
+# (bench/reports/robot_observer_methods.py; docs/robots.md), v_s = 0.02; exact and 17 bit
 TUNED = {"double_pendulum": ((10.0, 0.95), (0.75, 0.87)), "ur5": ((5.6, 0.71), (0.56, 0.75)),
          "panda": ((4.2, 20.5), (1.0, 1.0))}
 RULES = {"default": {}, "every": {"min_speed": 0.0, "reversal_margin": 0.0}}

@@ -1,11 +1,11 @@
 """What limits the online friction estimates of the RobotObserver (robot_observer.c), on
-the logs of bench/robots.py:
+the logs of bench/reports/robots.py:
 
-    .venv/bin/python bench/robot_online_friction.py [--robot double_pendulum] [--bits 17]
+    .venv/bin/python -m bench.investigations.robot_online_friction [--robot double_pendulum] [--bits 17]
 
-The robot, its truth and its 10 s training log (1 kHz, seed 1) are bench/robots.py's;
+The robot, its truth and its 10 s training log (1 kHz, seed 1) are bench/reports/robots.py's;
 the observer's model is the one the `sg` pipeline identifies from the log, with the
-Coulomb shape sat(q'/0.02) (the truth's) unless stated, and fixed gains (bench/robots.py's
+Coulomb shape sat(q'/0.02) (the truth's) unless stated, and fixed gains (bench/reports/robots.py's
 tuning at 1e4f058, GAINS below).  Each row identifies the base parameters from 0.2 s on and prints
 the largest friction errors over the joints (viscous, Coulomb) and the torque prediction
 error on the validation log:
@@ -18,24 +18,18 @@ error on the validation log:
 from __future__ import annotations
 
 import argparse
-import sys
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from bench.reports.robot_trajectories import quantize, simulate
+from bench.reports.robots import pinocchio_truth, prediction_error, truth_of
+from harness.robot.base_parameters import base_parameters
+from harness.robot.examples import example_urdf
+from harness.robot.filtered_regression import low_pass
+from harness.robot.pipeline import JointLog, identify_robot
+from harness.robot.urdf import read_urdf
 
-from robot_trajectories import quantize, simulate  # noqa: E402
-from robots import pinocchio_truth, prediction_error, truth_of  # noqa: E402
-
-from harness.robot.base_parameters import base_parameters  # noqa: E402
-from harness.robot.examples import example_urdf  # noqa: E402
-from harness.robot.filtered_regression import low_pass  # noqa: E402
-from harness.robot.pipeline import JointLog, identify_robot  # noqa: E402
-from harness.robot.urdf import read_urdf  # noqa: E402
-
-# (alpha1, alpha2) tuned by bench/robots.py at 1e4f058, noise-free and 17 bit (kept so that
+# (alpha1, alpha2) tuned by bench/reports/robots.py at 1e4f058, noise-free and 17 bit (kept so that
 # the documented rows stay reproducible; the current tuning: docs/robots_results.md)
 GAINS = {"double_pendulum": ((10.0, 0.95), (0.75, 0.87)), "ur5": ((5.6, 0.71), (0.56, 0.75)),
          "panda": ((4.2, 20.5), (1.0, 1.0))}
