@@ -1,6 +1,6 @@
 """Where the default FMU's velocity error is on one benchmark condition: within a few
-samples of the velocity reversals or away from them (docs/improvements.md, "Velocity
-reversals with a Coulomb term").
+samples of the velocity reversals or away from them (docs/design/observer.md, "Exact data:
+reversals, the perturbation's trend, the position terms").
 
     .venv/bin/python -m bench.investigations.reversal_errors A,accurate,1000,clean,b-exact
 

@@ -30,7 +30,7 @@ from harness.robot.pipeline import JointLog, identify_robot
 from harness.robot.urdf import read_urdf
 
 # (alpha1, alpha2) tuned by bench/reports/robots.py at 1e4f058, noise-free and 17 bit (kept so that
-# the documented rows stay reproducible; the current tuning: docs/robots_results.md)
+# the documented rows stay reproducible; the current tuning: build/reports/robots_results.md)
 GAINS = {"double_pendulum": ((10.0, 0.95), (0.75, 0.87)), "ur5": ((5.6, 0.71), (0.56, 0.75)),
          "panda": ((4.2, 20.5), (1.0, 1.0))}
 CONTROL = {"double_pendulum": (50.0, 5.0), "ur5": (400.0, 40.0), "panda": (200.0, 20.0)}

@@ -9,8 +9,9 @@ encoders), runs every method on the same samples (the FMU with its defaults and
 with the paper's method; a Kalman filter, an RTS smoother and Savitzky-Golay,
 each with least squares) and scores them side by side.
 
-Writes OUT/results.json (every raw score), OUT/real_measurements.md and .png;
-the full grid also writes docs/real_measurements.md and docs/real_measurements.png
+Writes OUT/results.json (every raw score), OUT/real_measurements.md and .png (OUT:
+--out, default build/real_measurements); without --out the full grid also writes
+build/reports/real_measurements.md and .png, the report docs/benchmarks.md points to
 (generated: edit this script, not the document).  The grid varies one factor at
 a time around the base case (A, accurate, 1 kHz, noise-free, exact b) plus the
 crosses listed in GRID_NOTES.  Runs take their FMUs from a copy made at the start,
@@ -18,8 +19,8 @@ so a rebuild of build/fmus during a run does not mix versions.
 
 --held-out runs the held-out joints instead (bench/reports/realdata/held_out.py: three
 joints of other scales and excitations, 1-10 kHz, sensors partly outside the
-tuning grid) and writes docs/held_out.md and .png: the defaults on data they were
-not tuned on.
+tuning grid) into build/held_out (or --out), and without --out also
+build/reports/held_out.md and .png: the defaults on data they were not tuned on.
 """
 from __future__ import annotations
 
@@ -35,6 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bench.reports import REPORTS
 from bench.reports.realdata import held_out, methods, plants, report, scoring, sensors
 from harness.scenarios import SCENARIOS
 
@@ -333,9 +335,12 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="reduced grid (under 2 minutes)")
     parser.add_argument("--held-out", action="store_true",
-                        help="the held-out joints' grid (writes docs/held_out.md)")
+                        help="the held-out joints' grid (report: held_out.md and .png)")
     parser.add_argument("--out", type=Path, default=None,
-                        help="default build/real_measurements (build/held_out with --held-out)")
+                        help="the run's folder: results, data, FMU copies, the report (default "
+                             "build/real_measurements, build/held_out with --held-out; the full "
+                             "and held-out grids then also write their report into "
+                             "build/reports)")
     parser.add_argument("--fmu-dir", type=Path, default=REPO / "build" / "fmus")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--keep-data", action="store_true",
@@ -392,8 +397,9 @@ def main(argv: list[str] | None = None) -> int:
         head += [""] + notes(data_meta, rows)
     figure = ((tuple(held_out.PLANTS), sensors.HELD_OUT_MODEL.name) if args.held_out
               else (("A",), "b-exact"))
-    targets = [out] + ([] if args.quick else [REPO / "docs"])
+    targets = [out] + ([] if args.quick or args.out else [REPORTS])
     for target in targets:
+        target.mkdir(parents=True, exist_ok=True)
         report.write_markdown(target / f"{stem}.md", rows, head)
         report.write_figure(target / f"{stem}.png", rows, *figure)
     if not args.keep_data:  # regenerated every run; no need to keep 200 MB around

@@ -1,5 +1,5 @@
-"""The generated results document of bench/reports/robots.py (docs/robots_results.md): conditions,
-the issue's targets judged from the rows, one table per sampling rate."""
+"""The generated results document of bench/reports/robots.py (build/reports/robots_results.md):
+conditions, the issue's targets judged from the rows, one table per sampling rate."""
 from __future__ import annotations
 
 import math
@@ -234,7 +234,8 @@ def header(run: dict) -> list[str]:
         f"2-core machine (load average {run['load_start']:.1f} at the start, "
         f"{run.get('load_end', float('nan')):.1f} at the end). Every figure except the "
         "times is deterministic (fixed seeds); the times are wall times under that load. "
-        "Explanations of the methods and of what limits them: [robots.md](robots.md).",
+        "Explanations of the methods and of what limits them: "
+        "[docs/robots.md](../../docs/robots.md).",
         "",
         "## Conditions",
         "",
@@ -304,8 +305,8 @@ def write_document(path: Path, run: dict) -> None:
               "Computed from the tables below: for each method the worst figure over the rows "
               "the target covers (both rates, the robots named), `met` if every such row is "
               "within the limit. The cost target (a 7-joint internal step <= 20 us) is not "
-              "measured by this script: `bench/perf/robot_step_cost.py`, "
-              "[performance.md](performance.md).", ""]
+              "measured by this script: `python -m bench.perf.robot_step_cost`, "
+              "[docs/design/performance.md](../../docs/design/performance.md).", ""]
     lines += targets_table(rows) + [""] + details[split:]
     for rate in sorted({r["rate"] for r in rows}):
         chosen = [r for r in rows if r["rate"] == rate]
@@ -316,4 +317,5 @@ def write_document(path: Path, run: dict) -> None:
     if gains:
         lines += ["", "## The model-based observer's tuned gains (one pair for all joints)", ""]
         lines += gains
+    path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("\n".join(lines) + "\n")

@@ -1,13 +1,13 @@
 """Serial robots (issue 11): identification from joint logs against the field's baselines.
 
     .venv/bin/python -m bench.reports.robots [--rates 1000,10000] [--seconds 20] [--robots ...]
-        [--methods ...] [--model-left-out ROBOT@RATE,...] [--out docs/robots_results.md]
+        [--methods ...] [--model-left-out ROBOT@RATE,...] [--out FILE.md]
         [--results build/robots/results.json]
     .venv/bin/python -m bench.reports.robots --from-results build/robots/results.json --out FILE
 
---out writes the generated results document (bench/reports/robot_report.py: conditions, the
-issue's targets judged from the rows, one table per rate); docs/robots_results.md is
-one (edit the scripts, not the document).  Every row goes to --results as well, after
+--out (default build/reports/robots_results.md) receives the generated results document
+(bench/reports/robot_report.py: conditions, the issue's targets judged from the rows, one
+table per rate; edit the scripts, not the document).  Every row goes to --results as well, after
 each robot and rate, so that the document can be written again without a new run.
 
 Robots: the two-link arm (example-robot-data's double pendulum) with an unknown 0.3 kg
@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from bench.reports import robot_report
+from bench.reports import REPORTS, robot_report
 from bench.reports.realdata.baselines import kalman, tune_log10
 from bench.reports.robot_observer_methods import MODEL_METHODS, model_observer
 from bench.reports.robot_trajectories import quantize, simulate
@@ -230,9 +230,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--model-left-out", default="",
                         help="comma-separated ROBOT@RATE (e.g. ur5@10000) where the model-based "
                              "methods (tuned on the truth: slow at 10 kHz) are not run")
-    parser.add_argument("--out", default=None,
-                        help="write the generated results document (Markdown) here, e.g. "
-                             "docs/robots_results.md")
+    parser.add_argument("--out", type=Path, default=REPORTS / "robots_results.md",
+                        help="the generated results document (Markdown; default %(default)s)")
     parser.add_argument("--results", type=Path, default=REPO / "build" / "robots" / "results.json",
                         help="every row as JSON, rewritten after each robot and rate")
     parser.add_argument("--from-results", type=Path, default=None,
@@ -240,8 +239,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.from_results:
         run = json.loads(args.from_results.read_text())
-        if args.out:
-            robot_report.write_document(Path(args.out), run)
+        robot_report.write_document(args.out, run)
+        print(f"wrote {args.out}")
         return 0
     methods = tuple(args.methods.split(","))
     unknown = set(methods) - set(METHODS)
@@ -258,7 +257,7 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         shutil.copyfile(FMU, fmu)
     run = {
-        "command": shlex.join([".venv/bin/python", "bench/reports/robots.py",
+        "command": shlex.join([".venv/bin/python", "-m", "bench.reports.robots",
                                *(sys.argv[1:] if argv is None else argv)]),
         "commit": _commit(), "seconds": args.seconds, "seed": 1,
         "robots": args.robots.split(","), "rates": [float(r) for r in args.rates.split(",")],
@@ -278,8 +277,8 @@ def main(argv: list[str] | None = None) -> int:
     run["finished"] = True
     args.results.write_text(json.dumps(_json_safe(run), indent=1))
     print(f"total run time {time.perf_counter() - started:.0f} s; rows in {args.results}")
-    if args.out:
-        robot_report.write_document(Path(args.out), json.loads(args.results.read_text()))
+    robot_report.write_document(args.out, json.loads(args.results.read_text()))
+    print(f"wrote {args.out}")
     return 0
 
 
