@@ -1,4 +1,4 @@
-# Drivers over the same objects: instruction counts and step costs (bench/), the
+# Drivers over the same objects: instruction counts and step costs (bench/perf/), the
 # closed loop under valgrind (tools/abuse/) and the platform importer (tools/dist/).
 function(sto_add_fmi2_driver name source id)
     add_executable(${name} "${CMAKE_SOURCE_DIR}/${source}" "${SRC}/fmi2/fmi2_functions.c"

@@ -86,3 +86,25 @@ def test_document_names_its_run_and_what_it_left_out(tmp_path):
     assert "| ur5 | exact | sg | 1 | 0.500 | **0.100 %** |" in text
     assert "| ur5 | exact | SG+LS | 1 | 0.500 | 0.400 % |" in text
     assert "| ur5 | exact | model obs (ident.) | **0.5** | 0.250 |" in text
+
+
+def test_the_document_lands_in_build_reports_unless_out_names_a_file(tmp_path, monkeypatch):
+    """Generated documents stay out of docs/: build/reports/ by default, or --out."""
+    import json
+    from pathlib import Path
+
+    from bench.reports import REPORTS, robots
+
+    assert REPORTS == Path(robots.__file__).resolve().parents[2] / "build" / "reports"
+    results = tmp_path / "results.json"
+    results.write_text(json.dumps({
+        "command": "c", "commit": "abc", "seconds": 1.0, "seed": 1, "robots": ["ur5"],
+        "rates": [1000.0], "methods": ["sg"], "model_left_out": [], "fmu_sha256": None,
+        "load_start": 1.0, "load_end": 1.0, "runtime_s": 1.0, "rows": [row()]}))
+    monkeypatch.setattr(robots, "REPORTS", tmp_path / "reports")
+    assert robots.main(["--from-results", str(results)]) == 0
+    default = tmp_path / "reports" / "robots_results.md"
+    assert "| ur5 | exact | sg |" in default.read_text()
+    named = tmp_path / "elsewhere" / "doc.md"
+    assert robots.main(["--from-results", str(results), "--out", str(named)]) == 0
+    assert named.read_text() == default.read_text()
