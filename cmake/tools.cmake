@@ -1,4 +1,4 @@
-# Drivers over the same objects: instruction counts and step costs (bench/), the
+# Drivers over the same objects: instruction counts and step costs (bench/perf/), the
 # closed loop under valgrind (tools/abuse/) and the platform importer (tools/dist/).
 function(sto_add_fmi2_driver name source id)
     add_executable(${name} "${CMAKE_SOURCE_DIR}/${source}" "${SRC}/fmi2/fmi2_functions.c"
@@ -8,10 +8,10 @@ function(sto_add_fmi2_driver name source id)
     target_compile_options(${name} PRIVATE -g)
     target_compile_definitions(${name} PRIVATE _POSIX_C_SOURCE=200809L)  # clock_gettime
 endfunction()
-sto_add_fmi2_driver(step_driver bench/step_driver.c SuperTwistingObserver)
-sto_add_fmi2_driver(robot_fmu_step bench/robot_fmu_step.c RobotObserver)
+sto_add_fmi2_driver(step_driver bench/perf/step_driver.c SuperTwistingObserver)
+sto_add_fmi2_driver(robot_fmu_step bench/perf/robot_fmu_step.c RobotObserver)
 
-add_executable(robot_step "${CMAKE_SOURCE_DIR}/bench/robot_step.c")
+add_executable(robot_step "${CMAKE_SOURCE_DIR}/bench/perf/robot_step.c")
 target_link_libraries(robot_step PRIVATE sto_core)
 target_compile_definitions(robot_step PRIVATE _POSIX_C_SOURCE=200809L)
 

@@ -38,7 +38,7 @@ def save(fig: Figure, path: Path, dpi: int = 110) -> Path:
     """Lays the figure out (nothing clipped) and writes it.
 
     Agg draws a line of many points in pieces of 5000: drawn whole, a dense line
-    (an oscillating estimate over a 10^4 s log) took 180 MB (bench/identify_long_log.py).
+    (an oscillating estimate over a 10^4 s log) took 180 MB (bench/perf/identify_long_log.py).
     The joints of the pieces are invisible on opaque lines; a translucent line would
     show them darker, so the faint lines are drawn in their blended colour instead."""
     from matplotlib import rc_context

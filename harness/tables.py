@@ -58,7 +58,7 @@ class CsvStream:
                 import pyarrow.parquet as pq
 
                 # no dictionary encoding: measured values rarely repeat, and trying it
-                # made writing 4x slower (bench/identify_long_log.py)
+                # made writing 4x slower (bench/perf/identify_long_log.py)
                 self._writer = pq.ParquetWriter(str(self.path), table.schema,
                                                 use_dictionary=False)
             else:

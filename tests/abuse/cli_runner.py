@@ -12,7 +12,7 @@ import io
 import subprocess
 import sys
 
-from abuse_fmi import REPO, fmu_dir
+from tools.abuse.abuse_fmi import REPO, fmu_dir
 
 FMU_DIR = fmu_dir()  # $STO_FMU_DIR (the sanitized build under sanitize.sh) or build/fmus
 
@@ -36,9 +36,10 @@ def cli(args: list[str]) -> tuple[int, str]:
 
 
 def shell(args: list[str], timeout: float = 120.0, env: dict | None = None,
-          script: str | None = None) -> subprocess.CompletedProcess:
-    """``python -m harness ARGS`` (or ``python SCRIPT ARGS``) in a new process."""
-    command = [sys.executable, script] if script else [sys.executable, "-m", "harness",
+          module: str | None = None) -> subprocess.CompletedProcess:
+    """``python -m harness ARGS`` (or ``python -m MODULE ARGS``) in a new process, from the
+    repository root."""
+    command = [sys.executable, "-m", module] if module else [sys.executable, "-m", "harness",
                                                        "--fmu-dir", str(FMU_DIR)]
     return subprocess.run(command + args, cwd=REPO, capture_output=True, text=True,
                           timeout=timeout, env=env)

@@ -13,7 +13,7 @@ import subprocess
 import tempfile
 from pathlib import Path
 
-from abuse_fmi import CLOCK_SIZE, HEADER_SIZE, REPO
+from tools.abuse.abuse_fmi import CLOCK_SIZE, HEADER_SIZE, REPO
 
 # model identifier -> (model file, name of its data struct)
 DATA_TYPES = {

@@ -22,7 +22,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import pytest
-from abuse_fmi import (
+
+from tools.abuse.abuse_fmi import (
     CLOCK_SIZE,
     DISCARD,
     ERROR,
@@ -815,7 +816,7 @@ def test_the_fmus_under_test(observer_fmu):
     """Under tools/abuse/sanitize.sh every test must load the sanitized FMUs."""
     import os
 
-    from abuse_fmi import fmu_dir
+    from tools.abuse.abuse_fmi import fmu_dir
     if os.environ.get("STO_EXPECT_SANITIZED") != "1":
         return
     assert observer_fmu.parent == fmu_dir(), "tests/conftest.py's fixtures are not redirected"

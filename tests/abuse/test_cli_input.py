@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_runner import REPO, cli, refused, shell
+from cli_runner import cli, refused, shell
 
 pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
 
@@ -219,7 +219,7 @@ def test_reproduce_out_naming_a_file(tmp_path):
 
 # ---- tools/abuse/soak.py ------------------------------------------------------------------------
 
-SOAK = str(REPO / "tools" / "abuse" / "soak.py")
+SOAK = "tools.abuse.soak"
 
 
 @pytest.mark.parametrize("args, words", [
@@ -231,7 +231,7 @@ SOAK = str(REPO / "tools" / "abuse" / "soak.py")
     (["--scenario", "7.1"], "invalid choice"),
 ])
 def test_soak_bad_option(args, words):
-    result = shell(args, script=SOAK, timeout=60)
+    result = shell(args, module=SOAK, timeout=60)
     refused(result.returncode, result.stdout + result.stderr, words)
 
 
@@ -239,7 +239,7 @@ def test_soak_short_chunks_run_and_check_something(tmp_path):
     """--chunk 0.001 (10 steps) used to fail with a ValueError; a tiny --seconds runs a chunk."""
     summary = tmp_path / "soak.json"
     result = shell(["--chunk", "0.001", "--seconds", "0.0005", "--out", str(summary)],
-                   script=SOAK, timeout=120)
+                   module=SOAK, timeout=120)
     assert result.returncode == 0, result.stdout + result.stderr
     import json
     data = json.loads(summary.read_text())

@@ -15,15 +15,13 @@ import ctypes
 import math
 import os
 import struct
-import sys
 from pathlib import Path
 
 import pytest
-from abuse_fmi import ERROR, OK, REPO, Raw, assert_usable_after_reset, forge, isolated
+from fmu.fmi_helpers import RawFMU3
 from state_layout import field_location
 
-sys.path.insert(0, str(REPO / "tests"))
-from fmu.fmi_helpers import RawFMU3  # noqa: E402
+from tools.abuse.abuse_fmi import ERROR, OK, REPO, Raw, assert_usable_after_reset, forge, isolated
 
 OBS, ROBOT = "SuperTwistingObserver", "RobotObserver"
 H = 1e-3

@@ -11,7 +11,8 @@ from __future__ import annotations
 import ctypes
 
 import pytest
-from abuse_fmi import ERROR, MODELS, OK, Raw, isolated
+
+from tools.abuse.abuse_fmi import ERROR, MODELS, OK, Raw, isolated
 
 OBS, PEN, CTL, ROBOT = MODELS
 LAST_SUCCESSFUL_TIME = 2  # fmi2StatusKind fmi2LastSuccessfulTime

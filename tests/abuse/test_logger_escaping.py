@@ -17,7 +17,8 @@ from __future__ import annotations
 import ctypes
 
 import pytest
-from abuse_fmi import (
+
+from tools.abuse.abuse_fmi import (
     ERROR,
     MODELS,
     OK,

@@ -14,7 +14,8 @@ from __future__ import annotations
 import math
 
 import pytest
-from abuse_fmi import MODELS, OK, Raw, isolated
+
+from tools.abuse.abuse_fmi import MODELS, OK, Raw, isolated
 
 OBS = MODELS[0]
 RUN = 0.4  # s of identification before the pulse: trace(Gamma) falls far below I/rho

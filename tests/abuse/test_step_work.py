@@ -14,7 +14,8 @@ import math
 import time
 
 import pytest
-from abuse_fmi import ERROR, MODELS, OK, Raw, assert_usable_after_reset, isolated
+
+from tools.abuse.abuse_fmi import ERROR, MODELS, OK, Raw, assert_usable_after_reset, isolated
 
 OBS, PEN, CTL, ROBOT = MODELS
 DEFAULT_LIMIT = 10_000_000

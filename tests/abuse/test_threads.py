@@ -13,7 +13,8 @@ import threading
 
 import numpy as np
 import pytest
-from abuse_fmi import MODELS, OK, Raw, fmu_dir
+
+from tools.abuse.abuse_fmi import MODELS, OK, Raw, fmu_dir
 
 THREADS = 4
 _LOADING = threading.Lock()

@@ -16,14 +16,12 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 import time
 
 import pytest
-from abuse_fmi import ERROR, MODELS, OK, REPO, Raw, assert_usable_after_reset, isolated
+from fmu.fmi_helpers import RawFMU3
 
-sys.path.insert(0, str(REPO / "tests"))
-from fmu.fmi_helpers import RawFMU3  # noqa: E402
+from tools.abuse.abuse_fmi import ERROR, MODELS, OK, REPO, Raw, assert_usable_after_reset, isolated
 
 OBS, PEN, CTL, ROBOT = MODELS
 BUDGET_VR, WORK_VR, DEFAULT_BUDGET = 121, 122, 1e9

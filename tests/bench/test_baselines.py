@@ -1,11 +1,12 @@
-"""The benchmark's baselines (bench/realdata/baselines.py) on synthetic data with a known
+"""The benchmark's baselines (bench/reports/realdata/baselines.py) on synthetic data with a known
 answer: the FFT implementation equals the plain recursions, the estimators recover the
 derivatives of a sine, least squares recovers exact parameters."""
 from __future__ import annotations
 
 import numpy as np
-from realdata import baselines as bl
 from scipy.signal import savgol_filter
+
+from bench.reports.realdata import baselines as bl
 
 H = 1e-3
 T = np.arange(0.0, 6.0, H)

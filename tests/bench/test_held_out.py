@@ -1,9 +1,10 @@
-"""The held-out joints (bench/realdata/held_out.py) and the accurate plant's long sticks."""
+"""The held-out joints (bench/reports/realdata/held_out.py) and the accurate plant's long sticks."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from realdata import held_out, plants, sensors
+
+from bench.reports.realdata import held_out, plants, sensors
 
 
 def test_a_short_pulse_during_a_long_stick_breaks_the_joint_away():

@@ -1,11 +1,11 @@
 """The open-loop plant kinds with a torque that stops, a damping d(t) and the final stop
-into static friction (bench/no_excitation.py's data)."""
+into static friction (bench/reports/no_excitation.py's data)."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from realdata import plants
 
+from bench.reports.realdata import plants
 from harness.scenarios import A_COULOMB, A_GRAVITY
 
 C = (A_GRAVITY, 0.0, A_COULOMB)

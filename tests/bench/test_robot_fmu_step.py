@@ -1,4 +1,4 @@
-"""bench/robot_step_cost.py --fmu: the driver of the RobotObserver FMU's internal step
+"""bench/perf/robot_step_cost.py --fmu: the driver of the RobotObserver FMU's internal step
 builds with the FMU's flags, sets a 7-joint robot's parameters by value reference, and
 the step it measures is the identifying one (not a timing test)."""
 from __future__ import annotations
@@ -6,7 +6,8 @@ from __future__ import annotations
 import re
 
 import pytest
-import robot_step_cost as cost
+
+from bench.perf import robot_step_cost as cost
 
 
 @pytest.fixture(scope="module")

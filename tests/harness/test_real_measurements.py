@@ -1,7 +1,7 @@
 """The defaults on measurements as users have them (issue 10): noisy, quantized, from a
 plant integrated differently from the observer, with a nominal input gain 10 % off.
 
-Small and fast cases; the full grid is bench/real_measurements.py.  The data are a
+Small and fast cases; the full grid is bench/reports/real_measurements.py.  The data are a
 pendulum (Coulomb friction included) under a multi-sine torque held over each 1 ms
 sample (the Pendulum FMU, RK4), fed to the observer through `harness.identify`.
 """

@@ -1,7 +1,7 @@
 """The paper's section 6 reproduced, and the improved method, pinned by their metrics.
 
 The bounds sit around the figures measured when this test was written
-(docs/scenarios.md, docs/improvements.md), so that a regression fails.
+(docs/scenarios.md, docs/design/observer.md), so that a regression fails.
 """
 from __future__ import annotations
 

@@ -15,12 +15,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-REPO = Path(__file__).resolve().parents[2]
-TOOLS = REPO / "tools" / "importers"
-sys.path.insert(0, str(TOOLS))
+from tools.importers import check
+from tools.importers import make_reference as mr
 
-import check  # noqa: E402
-import make_reference as mr  # noqa: E402
+REPO = Path(__file__).resolve().parents[2]
 
 INSTALL = "run tools/importers/install.sh (FMI4j and fmi-sim), then run the tests again"
 
@@ -37,7 +35,7 @@ def test_every_fmu_agrees_with_its_reference_in_every_importer(observer_fmu, pen
     if problems:
         pytest.fail("importers missing:\n  " + "\n  ".join(problems) + f"\n{INSTALL}")
     fmus = [observer_fmu, pendulum_fmu, controller_fmu, robot_fmu]
-    run = subprocess.run([sys.executable, str(TOOLS / "check.py"), *map(str, fmus)],
+    run = subprocess.run([sys.executable, "-m", "tools.importers.check", *map(str, fmus)],
                          capture_output=True, text=True, cwd=REPO, timeout=1800)
     print(run.stdout)
     assert run.returncode == 0, f"check.py failed:\n{run.stdout}\n{run.stderr}"

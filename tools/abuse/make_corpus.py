@@ -1,6 +1,6 @@
 """Writes the seed corpus of the fuzz targets into tools/abuse/corpus/.
 
-    .venv/bin/python tools/abuse/make_corpus.py     (after ./build.sh fmus)
+    .venv/bin/python -m tools.abuse.make_corpus     (from the repository root, after ./build.sh fmus)
 
 fuzz_deserialize/<model>/: valid serialized states of each FMU (after
 initialization and after some steps, with identification on for the
@@ -12,12 +12,11 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
-import sys
 from pathlib import Path
 
+from tools.abuse.abuse_fmi import MODELS, OK, Raw
+
 ROOT = Path(__file__).resolve().parent
-sys.path.insert(0, str(ROOT.parents[1] / "tests" / "abuse"))
-from abuse_fmi import MODELS, OK, Raw  # noqa: E402
 
 CORPUS = ROOT / "corpus"
 

@@ -22,7 +22,7 @@ fi
 ./build.sh fmus >/dev/null
 mkdir -p "$OUT"
 CLOSED_LOOP=build/cmake/bin/closed_loop
-"$PY" tools/abuse/plan.py "$SCENARIO" build build/fmus > "$OUT/plan.txt"
+"$PY" -m tools.abuse.plan "$SCENARIO" build build/fmus > "$OUT/plan.txt"
 SECONDS_=${2:-$("$PY" -c "from harness.scenarios import SCENARIOS; print(SCENARIOS['$SCENARIO'].stop_time)")}
 
 start=$(date +%s)

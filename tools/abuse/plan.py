@@ -1,6 +1,6 @@
 """Writes the plan of a closed-loop scenario for tools/abuse/closed_loop.c.
 
-    python tools/abuse/plan.py SCENARIO LIBRARY_ROOT FMU_DIR > plan.txt
+    python -m tools.abuse.plan SCENARIO LIBRARY_ROOT FMU_DIR > plan.txt
 
 The values come from harness/scenarios.py (parameters, links, step order,
 probes); LIBRARY_ROOT/<model>/binaries/linux64/<model>.so are the shared
@@ -13,9 +13,7 @@ from pathlib import Path
 
 from fmpy import read_model_description
 
-REPO = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(REPO))
-from harness.scenarios import COMMUNICATION_STEP, PROBES, SCENARIOS, bench_links  # noqa: E402
+from harness.scenarios import COMMUNICATION_STEP, PROBES, SCENARIOS, bench_links
 
 # harness.scenarios.build: instance name -> model, in initialization (data-flow) order
 INSTANCES = {"plant": "Pendulum", "controller": "TwistingController",

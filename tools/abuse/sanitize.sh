@@ -49,7 +49,6 @@ log "tests against the sanitized FMUs"
 export STO_FMU_DIR=$OUT/fmus
 export STO_FMI3_DIR=$OUT/fmi3
 export STO_EXPECT_SANITIZED=1
-export PYTHONPATH=$REPO/tools/abuse${PYTHONPATH:+:$PYTHONPATH}
 # Python itself leaks by design at exit: leaks are memcheck.sh's business.
 export ASAN_OPTIONS=detect_leaks=0:abort_on_error=0:halt_on_error=1:exitcode=86:print_summary=1:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1:exitcode=87
@@ -58,7 +57,7 @@ status=0
 # The tests marked cli drive the harness command line (matplotlib, dask), not the
 # FMUs' C code beyond what the other tests call, and matplotlib's C++ extension
 # aborts under a preloaded libasan (__cxa_throw CHECK).
-LD_PRELOAD=$LIBASAN "$PY" -m pytest -q -p sanitized_fmus -p no:cacheprovider -m "not cli" \
+LD_PRELOAD=$LIBASAN "$PY" -m pytest -q -p tools.abuse.sanitized_fmus -p no:cacheprovider -m "not cli" \
     --ignore=tests/fmu/test_binaries.py \
     tests/abuse tests/fmu tests/harness/test_master.py "$@" || status=$?
 log "sanitized tests: exit status $status ($(( $(date +%s) - start )) s)"

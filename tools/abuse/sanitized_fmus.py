@@ -1,4 +1,4 @@
-"""pytest plugin (``-p sanitized_fmus``, with tools/abuse on PYTHONPATH) for
+"""pytest plugin (``-p tools.abuse.sanitized_fmus``, from the repository root) for
 tools/abuse/sanitize.sh: points every FMU fixture of tests/conftest.py at the
 FMUs in $STO_FMU_DIR (FMI 2) and $STO_FMI3_DIR (FMI 3) (the tests in tests/abuse read that variable themselves),
 and keeps the sanitizer runtime out of the processes that the tests start

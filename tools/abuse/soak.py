@@ -1,8 +1,8 @@
 """Soak run: a very long closed loop with identification on, in chunks through
 the harness's native loop, checking that nothing drifts or leaks.
 
-    .venv/bin/python tools/abuse/soak.py                    1e4 s of scenario 6.2 (1e8 steps)
-    .venv/bin/python tools/abuse/soak.py --seconds 200      a short one
+    .venv/bin/python -m tools.abuse.soak               1e4 s of scenario 6.2 (1e8 steps)
+    .venv/bin/python -m tools.abuse.soak --seconds 200      a short one
 
 Default: scenario 6.2 (LSM identification, the paper's method) for 1e4 s of
 model time at H = h = 1e-4 s, i.e. 1e8 macro steps, 1e8 internal steps of the
@@ -30,11 +30,11 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.master import initialize, run
+from harness.scenarios import COMMUNICATION_STEP, PROBES, SCENARIOS, build
+from harness.values import BadValue, argparse_type, real
+
 REPO = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(REPO))
-from harness.master import initialize, run  # noqa: E402
-from harness.scenarios import COMMUNICATION_STEP, PROBES, SCENARIOS, build  # noqa: E402
-from harness.values import BadValue, argparse_type, real  # noqa: E402
 
 # The first chunks settle the allocator (glibc raises its mmap threshold after the
 # first large temporary array is freed, and keeps later ones on the heap).

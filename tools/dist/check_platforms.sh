@@ -54,7 +54,7 @@ for id in "${MODELS[@]}"; do
         [ -f "$fmu" ] || die "$fmu missing: run ./build.sh dist"
         work=$OUT/fmi$fmi-$id
         mkdir -p "$work" && (cd "$work" && "$PY" -m zipfile -e "$OLDPWD/$fmu" .)
-        "$PY" tools/dist/plan.py "$fmu" "$work/plan.txt" >/dev/null
+        "$PY" -m tools.dist.plan "$fmu" "$work/plan.txt" >/dev/null
         for run in "${RUNS[@]}"; do
             IFS='|' read -r version runner platform ext importer <<< "$run"
             [ "$version" = "$fmi" ] || continue

@@ -3,7 +3,7 @@
 the value references of its Real (FMI 2) or Float64 (FMI 3) outputs, and the reference
 result it ships (FMI-LS-REF), as plain text a small C program can read.
 
-    python tools/dist/plan.py FMU PLAN [--tolerance T]
+    python -m tools.dist.plan FMU PLAN [--tolerance T]
 
 Integer and Boolean outputs are left out (run_reference reads Float64 only); the
 plan says how many outputs it compares.
@@ -14,9 +14,7 @@ import argparse
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "importers"))
-
-import make_reference as mr  # noqa: E402
+from tools.importers import make_reference as mr
 
 REAL_TYPES = ("Real", "Float64")
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Run every FMU through independent FMI importers and compare with the reference it ships.
 
-    .venv/bin/python tools/importers/check.py [FMU ...] [--keep DIR] [--tolerance 1e-9]
+    .venv/bin/python -m tools.importers.check [FMU ...] [--keep DIR] [--tolerance 1e-9]
 
 FMUs default to build/fmus/*.fmu. For each FMU:
 
@@ -49,16 +49,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
+from tools.importers import make_reference as mr
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
-sys.path.insert(0, str(HERE))
-import make_reference as mr  # noqa: E402  (sibling module)
 
 try:
     import numpy as np
 except ImportError:
-    sys.exit(f"check.py: FAIL: numpy is not importable by {sys.executable}: run check.py with the "
-             f"project's .venv/bin/python (./build.sh creates it)")
+    sys.exit(f"check.py: FAIL: numpy is not importable by {sys.executable}: run "
+             f"python -m tools.importers.check with the project's .venv/bin/python (./build.sh creates it)")
 
 CACHE = Path(os.environ.get("STO_TOOLS_CACHE", Path.home() / ".cache" / "sto-tools")).expanduser()
 FMI4J = CACHE / "fmi4j"
@@ -128,7 +128,7 @@ def check_tools() -> list[str]:
     try:
         import fmpy  # noqa: F401
     except ImportError:
-        problems.append(f"fmpy is not importable by {sys.executable}: run check.py with the "
+        problems.append(f"fmpy is not importable by {sys.executable}: run python -m tools.importers.check with the "
                         f"project's .venv/bin/python (./build.sh creates it)")
     for probe in (fmi4j_command, fmi_sim_command):
         try:

@@ -115,4 +115,4 @@ else
 fi
 
 log "done in $((SECONDS - started)) s: FMI4j driver $out, fmi-sim $fmi_sim"
-log "next: .venv/bin/python tools/importers/check.py"
+log "next: .venv/bin/python -m tools.importers.check"

@@ -79,7 +79,7 @@ def test_identified_model_reads_back_with_the_values_as_nominals(identified):
 def test_validate_on_the_pulses_log_is_the_cross_test(identified, tmp_path, capsys):
     """Measured: 5.953 %. The benchmark publishes 5.98 % for IDIM-LS; through this
     pipeline the published parameters give 5.954 % and IDIM-LS refitted 5.948 %
-    (bench/emps.py): a tie, not a win."""
+    (bench/reports/emps.py): a tie, not a win."""
     out = tmp_path / "validate"
     assert main(["validate", str(VALIDATION), "--model",
                  str(identified[2] / "identified.toml"), "--out", str(out)]) == 0
