@@ -43,17 +43,18 @@ def candidate_windows(h: float, samples: int) -> list[int]:
     return sorted(set(windows)) or [ORDER + 3]
 
 
-def joint_velocity(x: np.ndarray, h: float, chunk: int = CHUNK) -> tuple[np.ndarray, float]:
+def joint_velocity(x: np.ndarray, h: float, chunk: int | None = None
+                   ) -> tuple[np.ndarray, float]:
     """One joint's velocity and the window chosen [s].  Lepski's rule: the longest
     candidate whose velocity is within KAPPA standard deviations (of white noise of the
     estimated level) of every shorter candidate's, compared away from the log's ends.
 
-    The comparisons run over `chunk` samples at a time (every candidate still in the
+    The comparisons run over `chunk` samples at a time (None: CHUNK) (every candidate still in the
     running over the same samples), so that memory does not grow with the number of
     candidates; a candidate whose differences already exceed the bound ends the
     candidates after it.  Only the chosen window's velocity is computed over the whole log."""
     windows = candidate_windows(h, x.size)
-    chosen = windows[_lepski(x, h, windows, chunk)]
+    chosen = windows[_lepski(x, h, windows, chunk or CHUNK)]
     return savgol_filter(x, chosen, ORDER, deriv=1, delta=h), chosen * h
 
 
