@@ -10,9 +10,9 @@ analytic multi-sine (tests/harness/robot/robot_helpers.py: exact positions, torq
 the C core's inverse dynamics), its positions rounded to 17-bit encoders, into a
 temporary folder; then runs the command line on it in a child process and reports the
 child's wall time and peak resident memory (its own rusage from wait4: ru_maxrss).
---imports-only measures a child that only imports what the command imports
-(harness.cli, harness.robot.pipeline, harness.robot.cli) for the split between the
-imports and the work.  The log is written by another child, and this process imports
+--imports-only measures children that only import what the command imports (before
+it reads the log; and with the reader's pandas and the plot's matplotlib) for the
+split between the imports and the work.  The log is written by another child, and this process imports
 neither numpy nor the harness: Linux carries the peak memory of the process that
 starts a program over into the program's ru_maxrss, so a large parent would be counted.
 The target: 10^6 samples of 2 joints within 300 MB.
@@ -28,8 +28,15 @@ import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
-IMPORTS = ("import harness.cli, harness.robot.cli, harness.robot.pipeline; "
-           "harness.cli.build_parser()")
+# what the command imports before it reads the log, and with what the reader (pandas)
+# and the plot (matplotlib) import on the way
+IMPORTS = {
+    "the command": "import harness.cli, harness.robot.cli, harness.robot.pipeline; "
+                   "harness.cli.build_parser()",
+    "all it imports": "import harness.cli, harness.robot.cli, harness.robot.pipeline, pandas, "
+                      "matplotlib; matplotlib.use('Agg'); import matplotlib.pyplot; "
+                      "harness.cli.build_parser()",
+}
 
 
 def write_log(path: Path, samples: int, h: float = 1e-3, bits: int = 17,
@@ -86,10 +93,14 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as name:
         folder = Path(name)
         if args.imports_only:
-            wall, peak, status, errors = measure([sys.executable, "-c", IMPORTS], folder)
-            print(f"imports ({IMPORTS}): {wall:.1f} s wall, peak resident memory "
-                  f"{peak:.0f} MB, exit status {status}")
-            return 0 if status == 0 else 1
+            for what, code in IMPORTS.items():
+                wall, peak, status, errors = measure([sys.executable, "-c", code], folder)
+                if status:
+                    print(errors, file=sys.stderr)
+                    return 1
+                print(f"imports, {what} ({code}): {wall:.1f} s wall, peak resident memory "
+                      f"{peak:.0f} MB")
+            return 0
         log = folder / "log.csv"
         start = time.perf_counter()
         subprocess.run([sys.executable, __file__, "--samples", str(args.samples),
