@@ -366,7 +366,7 @@ def build_parser() -> argparse.ArgumentParser:
     from .robot.cli import register_fmu_parameters
     register_fmu_parameters(sub, parents=[common])
     register_sweep(sub, parents=[common])
-    from .model.commands import register_validate
+    from .validate_cli import register_validate
     register_validate(sub, parents=[common])
     from .model.fmu_export import register_fmu
     register_fmu(sub, parents=[common])

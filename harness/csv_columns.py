@@ -1,6 +1,7 @@
 """Numeric columns of a CSV log with a header row, as every log reader of the harness
-takes them (the robots' and the model files'): read in chunks by pandas' C parser, so
-that a long log takes little more than its numbers' memory; a problem raises
+takes them (the robots' and the model files'): read in chunks by pandas' C parser into
+one array sized by the file's line count, so that a long log takes little more than its
+numbers' memory; a problem raises
 :class:`CsvColumnError` naming the file, and the line where there is one."""
 from __future__ import annotations
 
@@ -69,18 +70,31 @@ def read_columns(path: Path, header: Header, columns: list[str],
 
     indices = [header.index(column) for column in columns]
     order = np.argsort(indices)  # pandas returns the used columns in file order
-    chunks = []
+    # one array for every row (at most one a line), filled chunk by chunk: no copies
+    data = np.empty((_line_count(path) + 1, len(indices)))
+    rows = 0
     try:
         reader = pd.read_csv(path, header=None, skiprows=1 if header.present else 0,
                              usecols=indices, dtype=float, engine="c", chunksize=CHUNK_ROWS)
         for chunk in reader:
-            block = np.empty((len(chunk), len(indices)))
-            block[:, order] = chunk.to_numpy()
-            chunks.append(block)
+            if rows + len(chunk) > len(data):  # lines that end in a lone carriage return
+                data = np.concatenate([data[:rows], np.empty((rows + 2 * len(chunk),
+                                                              len(indices)))])
+            data[rows:rows + len(chunk), order] = chunk.to_numpy()
+            rows += len(chunk)
     except (ValueError, pd.errors.ParserError) as error:
         line, role = _first_bad_value(path, indices, roles, header.present)
         raise CsvColumnError(f"{path} line {line}: {role} is not a number ({error})") from None
-    return np.concatenate(chunks) if chunks else np.empty((0, len(indices)))
+    return data[:rows] if rows > 0.9 * len(data) else data[:rows].copy()
+
+
+def _line_count(path: Path, block: int = 1 << 20) -> int:
+    """The number of line feeds in the file (the rows of a CSV file, but the last)."""
+    count = 0
+    with path.open("rb") as handle:
+        while chunk := handle.read(block):
+            count += chunk.count(b"\n")
+    return count
 
 
 def uneven_step(t: np.ndarray, tolerance: float, role: str = "t") -> tuple[int, str] | None:

@@ -40,6 +40,8 @@ from .urdf import Robot
 # be identified), fewer than FEW_ROWS a warning
 TOO_FEW_ROWS, FEW_ROWS = 0.01, 0.1
 # what write_results writes into the output folder
+WRITE_ROWS = 1 << 16  # rows of velocities.csv formatted at a time
+PLOT_BINS = 4000      # stretches of a long log's velocity plot (plot_samples)
 OUTPUT_NAMES = ("velocities.csv", "parameters.csv", "identified.urdf", "summary.json",
                 "velocities.png")
 
@@ -117,14 +119,28 @@ def _odd(count: int) -> int:
     return count if count % 2 else count + 1
 
 
-def savitzky_golay(log: JointLog, window: float, order: int = 4):
-    """(q, q', q'', u) smoothed by one zero-phase Savitzky-Golay filter of `window` s."""
+def savitzky_golay(log: JointLog, window: float, order: int = 4,
+                   at: np.ndarray | None = None):
+    """(q, q', q'', u) smoothed by one zero-phase Savitzky-Golay filter of `window` s,
+    at the samples `at` (None: every sample); a column at a time, so that a long log
+    needs one column's work space, not four arrays of the log's length."""
+    rows = slice(None) if at is None else at
+    out = []
+    for x, deriv in ((log.q, 0), (log.q, 1), (log.q, 2), (log.u, 0)):
+        smooth = np.empty((len(x) if at is None else len(at), x.shape[1]))
+        for i in range(x.shape[1]):
+            smooth[:, i] = _smooth(log, x[:, i], window, order, deriv)[rows]
+        out.append(smooth)
+    return tuple(out)
+
+
+def _smooth(log: JointLog, x: np.ndarray, window: float, order: int = 4,
+            deriv: int = 0) -> np.ndarray:
+    """One column x (N,) of the log through the Savitzky-Golay filter of `window` s."""
     length = _odd(max(order + 2, round(window / log.step)))
     if length > len(log.t):
         raise LogError(f"the Savitzky-Golay window ({length} samples) is longer than the log")
-    smooth = [savgol_filter(x, length, order, deriv=d, delta=log.step, axis=0)
-              for x, d in ((log.q, 0), (log.q, 1), (log.q, 2), (log.u, 0))]
-    return tuple(smooth)
+    return savgol_filter(x, length, order, deriv=deriv, delta=log.step)
 
 
 def observer_velocities(log: JointLog, acceleration_bound: np.ndarray) -> np.ndarray:
@@ -169,37 +185,51 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     body = robot.rigid_body()
     types = robot.arrays()["types"]
     base = base_parameters(body, types, robot.joint_names, unknown)
+    if min_speed is None:
+        min_speed = core_defaults().min_speed
+    # each joint's velocity over the whole log is needed only for its friction rows
+    # (friction_rows): one column at a time, the regression's signals at `used` only
     if method == "sg":
-        q, qd, qdd, u = savitzky_golay(log, window)
-        velocity, velocity_window = adaptive_velocities(log.q, log.step)
-        Y, torque = body.regressor(q[used], qd[used], qdd[used]), u[used]
+        q, qd, qdd, u = savitzky_golay(log, window, at=used)
+        Y, torque = body.regressor(q, qd, qdd), u
         margin, slow_margin, memory = window, 0.0, window
+        velocity, velocity_window = adaptive_velocities(log.q, log.step)
+
+        def joint_speed(i: int) -> np.ndarray:
+            return _smooth(log, log.q[:, i], window, deriv=1)
     else:
-        bound = 1.5 * np.abs(savitzky_golay(log, max(window, 0.05))[2]).max(axis=0) + 1e-3
+        bound = 1.5 * np.array([np.abs(_smooth(log, log.q[:, i], max(window, 0.05), deriv=2)
+                                       ).max() for i in range(robot.n)]) + 1e-3
         velocity, velocity_window = observer_velocities(log, bound), None
         Y, torque = filtered_regression(body, log.q, velocity, log.u, log.step, tau, used)
-        qd = low_pass(velocity, log.step, tau)
         margin = slow_margin = max(window, 4 * tau)
         memory = max(window, tau)
+
+        def joint_speed(i: int) -> np.ndarray:
+            return low_pass(velocity[:, i], log.step, tau)
     # the known part of the model (all but the unknown columns) moves to the left side
     known = np.setdiff1d(np.arange(12 * robot.n), np.union1d(base.base, base.dependent))
     nominal = robot.parameters()
     z = torque - Y[:, :, known] @ nominal[known]
     correlation = max(1, int(np.ceil(2 * memory / (stride * log.step))))
-    if min_speed is None:
-        min_speed = core_defaults().min_speed
-    mask = friction_rows(qd, log.step, margin, min_speed, slow_margin)[used]
-    check_friction_rows(mask, qd[used], robot.joint_names, min_speed)
+    mask, speed = np.empty((len(used), robot.n), dtype=bool), np.empty((len(used), robot.n))
+    for i in range(robot.n):
+        x = joint_speed(i)
+        mask[:, i] = joint_friction_rows(x, log.step, margin, min_speed, slow_margin, used)
+        speed[:, i] = x[used]
+    check_friction_rows(mask, speed, robot.joint_names, min_speed)
     fit = torque_least_squares(base.regressor(Y), z, batch=correlation, mask=mask)
     pi = consistent_parameters(robot, base, fit.beta, fit.std_error)
     return Identification(base, fit, pi, velocity, used, velocity_window)
 
 
 def friction_rows(velocity: np.ndarray, h: float, margin: float,
-                  min_speed: float | None = None, slow_margin: float = 0.0) -> np.ndarray:
+                  min_speed: float | None = None, slow_margin: float = 0.0,
+                  at: np.ndarray | None = None) -> np.ndarray:
     """(N, n) True for the joint equations whose friction is f_v q' + f_c sign(q'):
     away from the joint's reversals (away_from_reversals) and at |q'| >= min_speed,
-    also over the slow_margin s on both sides.
+    also over the slow_margin s on both sides; at the samples `at` only (increasing
+    indices; None: every sample), (len(at), n).
 
     At low speed a joint's Coulomb friction is not f_c sign(q') (stiction, the
     Stribeck effect, a simulator's smoothing), also where the joint slows down
@@ -207,14 +237,24 @@ def friction_rows(velocity: np.ndarray, h: float, margin: float,
     regression (filtered_regression) carries the friction of the filter's memory:
     its rows need the speed over that memory, slow_margin.  min_speed None: the core's
     default (core_defaults)."""
+    rows = [joint_friction_rows(velocity[:, i], h, margin, min_speed, slow_margin, at)
+            for i in range(velocity.shape[1])]
+    return (np.column_stack(rows) if rows else
+            np.zeros((len(velocity) if at is None else len(at), 0), dtype=bool))
+
+
+def joint_friction_rows(velocity: np.ndarray, h: float, margin: float,
+                        min_speed: float | None = None, slow_margin: float = 0.0,
+                        at: np.ndarray | None = None) -> np.ndarray:
+    """friction_rows of one joint: velocity (N,), the result (N,) or (len(at),)."""
     if min_speed is None:
         min_speed = core_defaults().min_speed
     if not min_speed >= 0.0:
         raise ValueError(f"min_speed must be >= 0, not {min_speed!r}")
-    flips = np.zeros(velocity.shape, dtype=bool)
-    flips[1:] = np.signbit(velocity[1:]) != np.signbit(velocity[:-1])
-    slow = np.abs(velocity) < min_speed
-    return ~_near(flips, h, max(margin, h)) & ~_near(slow, h, slow_margin)
+    at = np.arange(len(velocity)) if at is None else np.asarray(at)
+    flips = np.flatnonzero(np.signbit(velocity[1:]) != np.signbit(velocity[:-1])) + 1
+    slow = np.flatnonzero(np.abs(velocity) < min_speed)
+    return ~_near(flips, at, h, max(margin, h)) & ~_near(slow, at, h, slow_margin)
 
 
 def check_friction_rows(mask: np.ndarray, velocity: np.ndarray, names: list[str],
@@ -246,19 +286,15 @@ def away_from_reversals(velocity: np.ndarray, h: float, margin: float) -> np.nda
     Filtering does not commute with the Coulomb term f_c sign(q'): near a reversal
     the filtered torque and the friction of the filtered velocity differ, so those
     joint equations are left out (the other joints' equations of the sample stay)."""
-    flips = np.zeros(velocity.shape, dtype=bool)
-    flips[1:] = np.signbit(velocity[1:]) != np.signbit(velocity[:-1])
-    return ~_near(flips, h, max(margin, h))
+    return friction_rows(velocity, h, margin, min_speed=0.0)
 
 
-def _near(events: np.ndarray, h: float, margin: float) -> np.ndarray:
-    """(N, n) True where an event of the joint lies within +-margin s (0: at the sample)."""
+def _near(events: np.ndarray, at: np.ndarray, h: float, margin: float) -> np.ndarray:
+    """True for each sample of `at` within +-margin s of one of the `events` (sample
+    indices, increasing; margin 0: the sample itself is one)."""
     half = int(round(margin / h))
-    counts = np.cumsum(np.vstack([np.zeros((1, events.shape[1])), events]), axis=0)
-    index = np.arange(len(events))
-    upper = counts[np.minimum(index + half + 1, len(events))]
-    lower = counts[np.maximum(index - half, 0)]
-    return (upper - lower) > 0
+    return (np.searchsorted(events, at + half, side="right")
+            > np.searchsorted(events, at - half, side="left"))
 
 
 def write_results(out: Path, robot: Robot, log: JointLog, result: Identification,
@@ -267,8 +303,12 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
     out.mkdir(parents=True, exist_ok=True)
     names = robot.joint_names
     velocities = out / "velocities.csv"
-    np.savetxt(velocities, np.column_stack([log.t, result.velocity]), delimiter=",",
-               header=",".join(["t"] + [f"qd{i + 1}" for i in range(robot.n)]), comments="")
+    with velocities.open("w") as handle:  # in chunks: no copy of the log's length
+        header = ",".join(["t"] + [f"qd{i + 1}" for i in range(robot.n)])
+        for start in range(0, max(len(log.t), 1), WRITE_ROWS):
+            rows = slice(start, start + WRITE_ROWS)
+            np.savetxt(handle, np.column_stack([log.t[rows], result.velocity[rows]]),
+                       delimiter=",", header=header if start == 0 else "", comments="")
     parameters = out / "parameters.csv"
     nominal_beta = result.base.project(robot.parameters())
     consistent_beta = result.base.project(result.pi)
@@ -303,10 +343,31 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
     import matplotlib.pyplot as plt
     figure, axes = plt.subplots(n, 1, sharex=True, figsize=(8, 1.6 * n + 1), squeeze=False)
     for i in range(n):
-        axes[i, 0].plot(log.t, result.velocity[:, i], lw=0.8)
+        shown = plot_samples(result.velocity[:, i])
+        axes[i, 0].plot(log.t[shown], result.velocity[shown, i], lw=0.8)
         axes[i, 0].set_ylabel(f"qd{i + 1}")
     axes[-1, 0].set_xlabel("t [s]")
     figure.tight_layout()
     figure.savefig(plot, dpi=90)
     plt.close(figure)
     return [velocities, parameters, urdf, summary, plot]
+
+
+def plot_samples(x: np.ndarray, bins: int = PLOT_BINS) -> np.ndarray | slice:
+    """The samples of x (N,) that a line plot needs: all of a short signal; of a long
+    one, the first and last and each of `bins` stretches' smallest and largest value
+    in time order (the
+    envelope the dense line fills at the plot's resolution, for a small part of the
+    memory matplotlib takes for every point)."""
+    if len(x) <= 2 * bins:
+        return slice(None)
+    width = -(-len(x) // bins)  # samples a stretch
+    whole = len(x) // width * width
+    stretches = x[:whole].reshape(-1, width)
+    starts = np.arange(0, whole, width)[:, None]
+    extremes = [starts + np.column_stack([stretches.argmin(axis=1), stretches.argmax(axis=1)])]
+    if whole < len(x):
+        rest = x[whole:]
+        extremes.append(whole + np.array([[rest.argmin(), rest.argmax()]]))
+    ends = np.array([[0, len(x) - 1]])  # the plot's time axis as the log's
+    return np.unique(np.concatenate([ends, *extremes]))

@@ -12,6 +12,7 @@ filter's on the robot bench's logs (docs/robots.md).
 from __future__ import annotations
 
 import numpy as np
+from scipy.ndimage import convolve1d
 from scipy.signal import savgol_coeffs, savgol_filter
 
 ORDER = 4      # polynomial order of the fits
@@ -20,6 +21,7 @@ KAPPA = 2.0    # a longer window is kept while it differs from each shorter one 
 #               than KAPPA times that one's noise (1 failed on 17-bit encoders at 10 kHz,
 #               whose rounding is not white over 7 samples; 4 chose windows too long)
 LONGEST = 0.3  # [s]
+CHUNK = 1 << 15  # samples compared at a time
 
 
 def noise_std(x: np.ndarray) -> float:
@@ -41,30 +43,56 @@ def candidate_windows(h: float, samples: int) -> list[int]:
     return sorted(set(windows)) or [ORDER + 3]
 
 
-def joint_velocity(x: np.ndarray, h: float) -> tuple[np.ndarray, float]:
+def joint_velocity(x: np.ndarray, h: float, chunk: int | None = None
+                   ) -> tuple[np.ndarray, float]:
     """One joint's velocity and the window chosen [s].  Lepski's rule: the longest
     candidate whose velocity is within KAPPA standard deviations (of white noise of the
-    estimated level) of every shorter candidate's, compared away from the log's ends."""
+    estimated level) of every shorter candidate's, compared away from the log's ends.
+
+    The comparisons run over `chunk` samples at a time (None: CHUNK) (every candidate still in the
+    running over the same samples), so that memory does not grow with the number of
+    candidates; a candidate whose differences already exceed the bound ends the
+    candidates after it.  Only the chosen window's velocity is computed over the whole log."""
     windows = candidate_windows(h, x.size)
-    margin = windows[-1] // 2 + 1
-    inside = slice(margin, x.size - margin)
+    chosen = windows[_lepski(x, h, windows, chunk or CHUNK)]
+    return savgol_filter(x, chosen, ORDER, deriv=1, delta=h), chosen * h
+
+
+def _lepski(x: np.ndarray, h: float, windows: list[int], chunk: int) -> int:
+    """The index of the window Lepski's rule keeps (joint_velocity): the window before
+    the first whose velocity differs from a shorter one's by more than KAPPA times that
+    one's noise (root mean square over the samples at least the longest window's half
+    away from the ends, where every candidate is the same convolution of x)."""
+    half = windows[-1] // 2
+    start, stop = half + 1, x.size - half - 1
+    count = max(stop - start, 0)
     sigma = max(noise_std(x), 1e-15 * (1.0 + float(np.max(np.abs(x)))))
-    kept: list[tuple[np.ndarray, float]] = []  # each shorter velocity and its noise std
-    chosen = windows[0]
-    for length in windows:
-        velocity = savgol_filter(x, length, ORDER, deriv=1, delta=h)
-        if any(np.sqrt(np.mean((velocity[inside] - shorter[inside]) ** 2)) > KAPPA * std
-               for shorter, std in kept):
-            break
-        coefficients = savgol_coeffs(length, ORDER, deriv=1, delta=h)
-        kept.append((velocity, sigma * float(np.sqrt(np.sum(coefficients ** 2)))))
-        chosen = length
-    return kept[-1][0], chosen * h
+    coefficients = [savgol_coeffs(length, ORDER, deriv=1, delta=h) for length in windows]
+    # a shorter window s fails a longer one when the sum of squares exceeds this
+    bound = [count * (KAPPA * sigma * float(np.sqrt(np.sum(c ** 2)))) ** 2
+             for c in coefficients]
+    squares = np.zeros((len(windows), len(windows)))  # [longer, shorter]
+    running = len(windows)  # the windows still in the running: 0 .. running - 1
+    for first in range(start, stop, chunk):
+        last = min(stop, first + chunk)
+        segment = x[first - half:last + half]
+        velocities = [convolve1d(segment, c, mode="constant")[half:half + last - first]
+                      for c in coefficients[:running]]
+        for longer in range(1, running):
+            for shorter in range(longer):
+                squares[longer, shorter] += np.sum(
+                    (velocities[longer] - velocities[shorter]) ** 2)
+            if np.any(squares[longer, :longer] > bound[:longer]):
+                running = longer  # it fails however the other samples compare
+                break
+    return running - 1
 
 
 def adaptive_velocities(q: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
     """Every joint's zero-phase velocity (N, n) and the window each chose [s] (n,)."""
     if q.shape[0] < 3 * (ORDER + 3):
         raise ValueError(f"the log ({q.shape[0]} samples) is too short for the velocities")
-    columns = [joint_velocity(q[:, i], h) for i in range(q.shape[1])]
-    return np.column_stack([c[0] for c in columns]), np.array([c[1] for c in columns])
+    velocity, windows = np.empty(q.shape), np.empty(q.shape[1])
+    for i in range(q.shape[1]):
+        velocity[:, i], windows[i] = joint_velocity(q[:, i], h)
+    return velocity, windows

@@ -20,10 +20,11 @@ def payload_link(link: np.ndarray) -> np.ndarray:
     return out
 
 
-def multisine_log(truth, seconds: float, h: float):
+def multisine_log(truth, seconds: float, h: float, start: float = 0.0):
     """(t, q, qd, qdd, tau) of a two-joint arm (`truth`, a RigidBody) along an analytic
-    multi-sine: exact velocities and accelerations, torques by inverse dynamics."""
-    t = np.arange(0.0, seconds, h)
+    multi-sine: exact velocities and accelerations, torques by inverse dynamics; the
+    `seconds` from t = `start` (a long log in pieces)."""
+    t = start + np.arange(0.0, seconds, h)
     f = np.array([0.2, 0.45, 0.8, 1.3])
     rng = np.random.default_rng(0)
     phase, amplitude = rng.uniform(0, 2 * np.pi, (2, 4)), np.array([[0.5], [0.4]]) / np.sqrt(f)

@@ -1,0 +1,61 @@
+"""The validate command's parser: ``validate LOG --model MODEL.toml --out DIR`` (the
+model files, harness.model.commands) or ``validate LOG --robot URDF --out DIR`` (the
+serial robots, harness.robot.validate).  Apart from both, so that building the command
+line imports neither (the model files' sympy and pint, the robots' scipy.signal): each
+command imports what it runs."""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+
+def register_validate(sub, parents) -> None:
+    """The validate command's parser: a model file (--model) or a serial robot (--robot)."""
+    p = sub.add_parser("validate", parents=parents,
+                       help="score a model file or a robot's URDF on a log (the cross-test "
+                            "of an identified model)",
+                       description="With --model: reconstructs each equation's known side "
+                       "(the inputs) from the model's nominal values through the zero-phase "
+                       "pipeline. With --robot: predicts the log's joint torques by the "
+                       "URDF's inverse dynamics (the maker's URDF, or identified.urdf). "
+                       "Writes validation.json (relative_error, per equation or joint and "
+                       "pooled) and validation.png.")
+    p.add_argument("data", metavar="LOG",
+                   help="CSV (header row) or, with --model, MATLAB .mat")
+    what = p.add_mutually_exclusive_group(required=True)
+    what.add_argument("--model", metavar="MODEL.toml",
+                      help="the model file (e.g. an identify run's identified.toml)")
+    what.add_argument("--robot", metavar="URDF",
+                      help="a serial robot's URDF; the log has columns t, q1..qn, u1..un")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    robot = p.add_argument_group("serial robots (with --robot)")
+    robot.add_argument("--columns", default="", metavar="q1=NAME,...",
+                       help="log column of each role t, q1..qn, u1..un")
+    robot.add_argument("--lock", action="append", default=[], metavar="JOINT",
+                       help="a URDF joint held at 0 (e.g. gripper fingers); repeatable")
+    robot.add_argument("--window", type=_positive_window, default=0.05,
+                       help="Savitzky-Golay window of the derivatives [s] (default 0.05)")
+    p.set_defaults(func=_validate)
+
+
+def _positive_window(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0.0):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number > 0")
+    return value
+
+
+def _validate(args: argparse.Namespace) -> int:
+    if args.robot:
+        from .robot.validate import validate_command as validate_robot
+        return validate_robot(args)
+    if args.columns or args.lock or args.window != 0.05:
+        print("harness validate: --columns, --lock and --window go with --robot; a model "
+              "file maps its columns in [columns]", file=sys.stderr)
+        return 2
+    from .model.commands import validate_command
+    return validate_command(args)
