@@ -1,7 +1,7 @@
 """identify --robot on a long log: wall time and peak memory of
 ``sto-harness identify LOG --robot URDF``.
 
-    python bench/identify_robot_log.py [--samples 1000000] [--velocity sg|observer]
+    python -m bench.perf.identify_robot_log [--samples 1000000] [--velocity sg|observer]
                                        [--imports-only]
 
 Writes a log of N samples at 1 kHz of the two-link arm (example-robot-data's double
@@ -27,7 +27,7 @@ import tempfile
 import time
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 # what the command imports before it reads the log, and with what the reader (pandas)
 # and the plot (matplotlib) import on the way
 IMPORTS = {
@@ -47,9 +47,16 @@ def write_log(path: Path, samples: int, h: float = 1e-3, bits: int = 17,
     import pyarrow as pa
     import pyarrow.csv as pacsv
 
-    sys.path.insert(0, str(REPO / "tests" / "harness" / "robot"))
-    sys.path.insert(0, str(REPO))
-    from robot_helpers import FRICTION, multisine_log, payload_link
+    import importlib.util
+
+    # the robot tests' helpers, loaded from their file (tests/ is not a package)
+    spec = importlib.util.spec_from_file_location(
+        "robot_helpers", REPO / "tests" / "harness" / "robot" / "robot_helpers.py")
+    assert spec is not None and spec.loader is not None
+    helpers = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(helpers)
+    FRICTION, multisine_log, payload_link = (helpers.FRICTION, helpers.multisine_log,
+                                             helpers.payload_link)
 
     from harness.robot.examples import example_urdf
     from harness.robot.urdf import read_urdf
@@ -103,7 +110,8 @@ def main() -> int:
             return 0
         log = folder / "log.csv"
         start = time.perf_counter()
-        subprocess.run([sys.executable, __file__, "--samples", str(args.samples),
+        subprocess.run([sys.executable, "-m", "bench.perf.identify_robot_log",
+                        "--samples", str(args.samples),
                         "--write-log", str(log)], check=True, cwd=REPO)
         print(f"log: {args.samples} samples of 2 joints, {log.stat().st_size / 1e6:.0f} MB "
               f"(written in {time.perf_counter() - start:.1f} s)")
