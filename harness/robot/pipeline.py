@@ -169,7 +169,9 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
         raise LogError(f"the log has {log.q.shape[1]} joints, the robot {robot.n}")
     if method not in ("sg", "observer"):
         raise ValueError(f"unknown method {method!r}: 'sg' or 'observer'")
-    first, last = int(skip / log.step), len(log.t) - int(window / log.step) - 1
+    # whole samples, rounded: a step of 1 ms read as 1.0000000000000002 ms (a log in ms)
+    # must not move the first sample used
+    first, last = round(skip / log.step), len(log.t) - round(window / log.step) - 1
     if last - first < 10:
         raise LogError(f"the log ({log.t[-1] - log.t[0]:g} s) is too short")
     stride = max(1, (last - first) // max_samples)
@@ -193,7 +195,7 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     known = np.setdiff1d(np.arange(12 * robot.n), np.union1d(base.base, base.dependent))
     nominal = robot.parameters()
     z = torque - Y[:, :, known] @ nominal[known]
-    correlation = max(1, int(np.ceil(2 * memory / (stride * log.step))))
+    correlation = max(1, int(np.ceil(2 * memory / (stride * log.step) - 1e-9)))
     if min_speed is None:
         min_speed = core_defaults().min_speed
     mask = friction_rows(qd, log.step, margin, min_speed, slow_margin)[used]

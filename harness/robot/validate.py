@@ -24,7 +24,7 @@ def torque_errors(robot: Robot, log: JointLog, window: float
     """(t, measured, predicted torques, relative error per joint, pooled) on the samples
     a window away from the log's ends."""
     q, qd, qdd, u = savitzky_golay(log, window)
-    edge = int(np.ceil(window / log.step))
+    edge = int(np.ceil(window / log.step - 1e-9))  # not one more for a step's rounding
     inside = slice(edge, len(log.t) - edge)
     if inside.stop - inside.start < 10:
         raise LogError(f"the log ({log.t[-1] - log.t[0]:g} s) is too short for a "
