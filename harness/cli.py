@@ -4,7 +4,7 @@
     identify DATA.csv --out DIR [--columns t=time,y=theta,u=tau] [--param NAME=VALUE ...]
                                                 offline identification of a recorded log
     identify DATA.csv --robot ROBOT.urdf --out DIR   a serial robot (harness.robot)
-    identify LOG --model MODEL.toml --out DIR   a model file's unknowns from a log (CSV, .mat)
+    identify LOG --model MODEL.toml --out DIR   a model file's unknowns (CSV, Parquet, .mat log)
     validate LOG --model MODEL.toml --out DIR   a model file's input reconstruction error
     validate LOG --robot ROBOT.urdf --out DIR   a URDF's torque prediction error (harness.robot)
     robot-fmu-parameters ROBOT.urdf --out FILE.ssv   the RobotObserver FMU's parameters

@@ -15,8 +15,8 @@ import numpy as np
 from . import csv_columns
 from .csv_columns import CHUNK_ROWS, Header, column_of, uneven_step
 
-__all__ = ["FORMATS", "Header", "LogColumnError", "column_of", "log_format", "read_columns",
-           "read_header", "uneven_step"]
+__all__ = ["FORMATS", "Header", "LogColumnError", "column_of", "log_format", "note_slow_step",
+           "read_columns", "read_header", "uneven_step"]
 
 #: The log formats read, by extension.
 FORMATS = {".csv": "csv", ".txt": "csv", ".parquet": "parquet", ".pq": "parquet"}
@@ -24,6 +24,20 @@ _NAMES = {"csv": "CSV", "parquet": "Parquet"}
 
 #: The error of every log reader (a CSV file's names its line).
 LogColumnError = csv_columns.CsvColumnError
+
+#: Samples this far apart [s] or more are likely not in seconds (a robot's or a
+#: machine's log is sampled at 10 Hz or faster).
+SLOW_STEP = 0.5
+
+
+def note_slow_step(path: Path, step: float, hint: str) -> None:
+    """A warning (counted: the command then exits 1) when the time column, read as
+    seconds without a unit being given, has samples SLOW_STEP or more apart: likely
+    milliseconds.  `hint` says how to give the unit."""
+    if step >= SLOW_STEP:
+        from .messages import note
+        note(f"{path}: samples {step:g} s apart, the time column read as seconds: if it is "
+             f"in milliseconds (or us, ns), {hint}")
 
 
 def supported(others: Mapping[str, str] | None = None) -> str:
@@ -86,8 +100,8 @@ def read_columns(path: Path, header: Header, columns: list[str],
             if not (pa.types.is_integer(kind) or pa.types.is_floating(kind)
                     or pa.types.is_decimal(kind)):
                 raise LogColumnError(f"{path}: column {column!r} ({role}) holds {kind}, not "
-                                     "numbers (store the time as a number of seconds, or of "
-                                     "the unit the time unit option names)")
+                                     "numbers (the columns read must be numeric: time stamps "
+                                     "too, e.g. as seconds)")
         wanted = list(dict.fromkeys(columns))
         chunks = []
         for batch in table.iter_batches(batch_size=CHUNK_ROWS, columns=wanted):

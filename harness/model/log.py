@@ -18,6 +18,7 @@ from ..log_columns import (
     LogColumnError,
     column_of,
     log_format,
+    note_slow_step,
     read_columns,
     read_header,
     uneven_step,
@@ -75,8 +76,11 @@ def read_log(path: str | Path, model: Model) -> ModelLog:
         if bad.size:
             raise LogFileError(f"{path}: column {column!r} ({name}) has {bad.size} NaN or "
                                f"infinite value(s), the first at sample {bad[0] + 1}")
-    t = columns[wanted[TIME]] * factor(model.time_unit, "s")  # [units] t, checked to be time
+    t = columns[wanted[TIME]] * factor(model.time_unit or "s", "s")  # [units] t: a time
     _check_time(path, wanted[TIME], t)
+    if model.time_unit is None:
+        note_slow_step(path, (t[-1] - t[0]) / (len(t) - 1), 'write t = "ms" in the model '
+                       'file\'s [units] (t = "s" confirms seconds)')
     q = np.column_stack([columns[wanted[c]] for c in model.coordinates])
     u = (np.column_stack([columns[wanted[u]] for u in model.inputs]) if model.inputs
          else np.empty((len(t), 0)))

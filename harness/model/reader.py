@@ -84,7 +84,7 @@ def parse_model(text: str, source: str | Path | None = None) -> Model:
 
     symbols = Symbols.of(coordinates, inputs, [p.name for p in parameters],
                          [k.name for k in constants])
-    unit_table, time_unit = data.get("units"), "s"
+    unit_table, time_unit = data.get("units"), None
     if unit_table is not None and TIME in unit_table:  # the log's time column
         unit_table = {k: v for k, v in unit_table.items() if k != TIME}
         time_unit = _time_unit(data["units"][TIME], fail)

@@ -27,6 +27,7 @@ class LogUnits:
     time: float
     position: np.ndarray
     torque: np.ndarray
+    time_unit: str | None = None  # as given (None: s by default, not stated)
 
 
 def parse_gains(text: str) -> tuple[float, ...]:
@@ -80,4 +81,4 @@ def log_units(kinds: Sequence[str], time: str | None = None, angle: str | None =
         if bad.size:
             raise UnitError(f"--torque-gains: gain {bad[0] + 1} ({torque[bad[0]]!r}) is not "
                             "a finite number > 0")
-    return LogUnits(seconds, position, torque)
+    return LogUnits(seconds, position, torque, time)

@@ -29,7 +29,14 @@ from pathlib import Path
 import numpy as np
 from scipy.signal import savgol_filter
 
-from ..log_columns import LogColumnError, column_of, read_columns, read_header, uneven_step
+from ..log_columns import (
+    LogColumnError,
+    column_of,
+    note_slow_step,
+    read_columns,
+    read_header,
+    uneven_step,
+)
 from .base_parameters import BaseParameters, base_parameters
 from .consistency import consistent_parameters, write_identified_urdf
 from .filtered_regression import filtered_regression, low_pass
@@ -118,6 +125,9 @@ def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
     uneven = uneven_step(t, relative_tolerance)
     if uneven:
         raise LogError(f"{path} {header.place(uneven[0])}: {uneven[1]}")
+    if units is None or units.time_unit is None:
+        note_slow_step(path, (t[-1] - t[0]) / (len(t) - 1),
+                       "give --time-unit ms (--time-unit s confirms seconds)")
     return JointLog(t, data[:, 1:1 + n], data[:, 1 + n:])
 
 
