@@ -331,12 +331,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     p.set_defaults(func=cmd_compare)
 
-    p = sub.add_parser("identify", parents=[common], help="identify from a recorded log (CSV)",
+    p = sub.add_parser("identify", parents=[common],
+                       help="identify from a recorded log (CSV, Parquet)",
                        description="Feeds a recorded experiment through the observer FMU and "
                        "writes estimates.csv, estimates.json and identification.png.")
-    p.add_argument("data", help="CSV file with a header row naming the time, position and "
-                   "input columns (with --robot or --model also a Parquet file, .parquet; "
-                   "with --model a MATLAB .mat file)")
+    p.add_argument("data", help="the log: CSV (.csv, .txt) with a header row naming the time, "
+                   "position and input columns, or Parquet (.parquet, .pq); with --model "
+                   "also MATLAB (.mat). The format is told by the extension")
     p.add_argument("--model", metavar="MODEL.toml",
                    help="a model file (docs/model_files.md): identify its unknowns from the "
                         "log; writes parameters.csv, identified.toml, estimates.csv and a plot")
