@@ -4,6 +4,7 @@ rad as CSV; a time unit that is no time and a file of another format exit 2."""
 from __future__ import annotations
 
 import csv
+import json
 from pathlib import Path
 
 import numpy as np
@@ -68,8 +69,17 @@ def test_time_in_ms_and_parquet_give_the_same_parameters(tmp_path, capsys, emps)
     assert np.allclose(in_ms, reference, rtol=1e-9, atol=0), in_ms / reference - 1
     parquet = _identify(tmp_path, tmp_path / "ms.parquet", model, "parquet")
     assert np.array_equal(parquet, in_ms)  # the same numbers from either format
-    # identified.toml keeps the time unit, and reads back
+    # identified.toml keeps the time unit, and reads back; validate takes it and Parquet
     assert read_model(tmp_path / "ms" / "identified.toml").time_unit == "ms"
+    pooled = {}
+    for name, log, model in (("s", "s.csv", tmp_path / "s" / "identified.toml"),
+                             ("ms", "ms.parquet", tmp_path / "ms" / "identified.toml")):
+        out = tmp_path / f"validate_{name}"
+        assert main(["validate", str(tmp_path / log), "--model", str(model), "--out",
+                     str(out)]) == 0
+        pooled[name] = json.loads((out / "validation.json").read_text())["relative_error"]
+    assert pooled["ms"]["pooled"] == pytest.approx(pooled["s"]["pooled"], rel=1e-9)
+    assert 0.0 < pooled["s"]["pooled"] < 0.5
     # without [units] t the log in ms is read as seconds: other values (M 1e6 times
     # larger), and a warning that says how to give the unit (exit status 1)
     out = tmp_path / "wrong"
