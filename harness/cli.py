@@ -4,7 +4,7 @@
     identify DATA.csv --out DIR [--columns t=time,y=theta,u=tau] [--param NAME=VALUE ...]
                                                 offline identification of a recorded log
     identify DATA.csv --robot ROBOT.urdf --out DIR   a serial robot (harness.robot)
-    identify LOG --model MODEL.toml --out DIR   a model file's unknowns from a log (CSV, .mat)
+    identify LOG --model MODEL.toml --out DIR   a model file's unknowns (CSV, Parquet, .mat log)
     validate LOG --model MODEL.toml --out DIR   a model file's input reconstruction error
     fmu --model MODEL.toml --out DIR            a model file's observer/identifier FMU
     validate LOG --robot ROBOT.urdf --out DIR   a URDF's torque prediction error (harness.robot)
@@ -27,6 +27,7 @@ import argparse
 import json
 import os
 import sys
+from collections.abc import Mapping
 from pathlib import Path
 
 from .fmus import FMUError
@@ -34,6 +35,7 @@ from .inputs import InputError
 from .messages import Console
 from .outputs import OutputError, Outputs, Terminated
 from .paths import default_fmu_dir
+from .units import TIME_UNITS
 from .values import INT32_MAX, BadValue, argparse_type, integer, real
 
 
@@ -130,35 +132,50 @@ def _fmu_files(fmu_dir: Path) -> list[Path]:
     return sorted(fmu_dir.glob("*.fmu"))
 
 
-# identify's options for a recorded log of t, y, u, and their defaults: the robot path
-# reads its log itself and refuses them rather than ignoring them
+# identify's options for a recorded log of t, y, u, and their defaults: the robot and
+# model-file paths read their logs themselves and refuse them rather than ignoring them
+# (the robot path takes --time-unit)
 LOG_OPTIONS = {"identifier": ("--identifier", "lsm"), "param": ("--param", []),
                "time_unit": ("--time-unit", None), "time_tolerance": ("--time-tolerance", 0.01),
                "resample": ("--resample", None), "input_hold": ("--input-hold", "zoh"),
                "csv_decimation": ("--csv-decimation", 1), "format": ("--format", "csv")}
+# the options of the robot path (harness.robot.cli), refused without --robot
+ROBOT_OPTIONS = {"lock": ("--lock", []), "unknown": ("--unknown", "all"),
+                 "velocity": ("--velocity", "sg"), "window": ("--window", 0.05),
+                 "min_speed": ("--min-speed", None), "angle_unit": ("--angle-unit", None),
+                 "length_unit": ("--length-unit", None),
+                 "torque_gains": ("--torque-gains", None)}
+
+
+def _given(args, options: Mapping[str, tuple[str, object]]) -> list[str]:
+    """The options of `options` given a value other than their default."""
+    return [option for dest, (option, default) in options.items()
+            if getattr(args, dest) != default]
+
+
+def _refuse(given: list[str], path: str, why: str) -> None:
+    if given:
+        raise InputError(f"harness identify: {', '.join(given)} not available with {path} "
+                         f"({why}); leave {'them' if len(given) > 1 else 'it'} out")
 
 
 def cmd_identify(args) -> int:
     if args.model:  # a model file: harness.model.commands
-        given = [option for dest, (option, default) in LOG_OPTIONS.items()
-                 if getattr(args, dest) != default]
+        given = _given(args, LOG_OPTIONS) + _given(args, ROBOT_OPTIONS)
         given += ["--robot"] if args.robot else []
         given += ["--columns"] if args.columns else []
-        if given:
-            raise InputError(f"harness identify: {', '.join(given)} not available with "
-                             f"--model (the model file's [columns] maps the log); leave "
-                             f"{'them' if len(given) > 1 else 'it'} out")
+        _refuse(given, "--model", "the model file's [columns] maps the log, its [units] "
+                "gives the columns' units, t = \"ms\" the time's")
         from .model.commands import identify_command as identify_model
         return identify_model(args)
     if args.robot:  # a serial robot from its URDF: harness.robot
         from .robot.cli import identify_command
-        given = [option for dest, (option, default) in LOG_OPTIONS.items()
-                 if getattr(args, dest) != default]
-        if given:
-            raise InputError(f"harness identify: {', '.join(given)} not available with "
-                             f"--robot (the robot log is read as t, q1..qn, u1..un in seconds, "
-                             f"evenly sampled); leave {'them' if len(given) > 1 else 'it'} out")
+        given = [option for option in _given(args, LOG_OPTIONS) if option != "--time-unit"]
+        _refuse(given, "--robot", "the robot log is read as t, q1..qn, u1..un, evenly "
+                "sampled; --time-unit, --angle-unit, --length-unit and --torque-gains give "
+                "its units")
         return identify_command(args)
+    _refuse(_given(args, ROBOT_OPTIONS), "a t, y, u log", "they go with --robot")
     from .fmus import check_parameters
     from .identify import DataError, ReadOptions, identify_file
     from .recording import parse_columns
@@ -315,11 +332,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     p.set_defaults(func=cmd_compare)
 
-    p = sub.add_parser("identify", parents=[common], help="identify from a recorded log (CSV)",
+    p = sub.add_parser("identify", parents=[common],
+                       help="identify from a recorded log (CSV, Parquet)",
                        description="Feeds a recorded experiment through the observer FMU and "
                        "writes estimates.csv, estimates.json and identification.png.")
-    p.add_argument("data", help="CSV file with a header row naming the time, position and "
-                   "input columns (with --model also a MATLAB .mat file)")
+    p.add_argument("data", help="the log: CSV (.csv, .txt) with a header row naming the time, "
+                   "position and input columns, or Parquet (.parquet, .pq); with --model "
+                   "also MATLAB (.mat). The format is told by the extension")
     p.add_argument("--model", metavar="MODEL.toml",
                    help="a model file (docs/model_files.md): identify its unknowns from the "
                         "log; writes parameters.csv, identified.toml, estimates.csv and a plot")
@@ -334,11 +353,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the file's names of the time, position and input columns (default: "
                         "t or time, y, u; any case), e.g. t=time,y=theta,u=tau; with --robot "
                         "the roles are t, q1..qn, u1..un, e.g. q1=shoulder_pos")
-    p.add_argument("--time-unit", default=LOG_OPTIONS["time_unit"][1],
-                   choices=["s", "ms", "us", "ns", "min"],
+    p.add_argument("--time-unit", default=LOG_OPTIONS["time_unit"][1], choices=TIME_UNITS,
                    help="unit of the time column (default: seconds, with a warning when whole-"
                         "number stamps 1 or more apart look like milliseconds); epoch time "
-                        "stamps are fine")
+                        "stamps are fine; also with --robot (with --model: [units] t)")
     p.add_argument("--time-tolerance", type=TOLERANCE, default=LOG_OPTIONS["time_tolerance"][1],
                    metavar="FRACTION",
                    help="how far a sampling step may differ from the recording's step, as a "
@@ -358,7 +376,9 @@ def build_parser() -> argparse.ArgumentParser:
                    default=LOG_OPTIONS["csv_decimation"][1],
                    help="write every Nth sample to the estimates table (default 1: all)")
     p.add_argument("--format", choices=["csv", "parquet"], default=LOG_OPTIONS["format"][1],
-                   help="estimates.csv (default) or estimates.parquet (faster for long logs)")
+                   help="the written table: estimates.csv (default) or estimates.parquet "
+                        "(faster for long logs); the log's own format is told by its "
+                        "extension")
     from .robot.cli import add_arguments as add_robot_arguments
     add_robot_arguments(p)
     p.set_defaults(func=cmd_identify)

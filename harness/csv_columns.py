@@ -18,10 +18,19 @@ class CsvColumnError(ValueError):
 
 
 class Header(list):
-    """The column names of a CSV file; for a file without a header row (its first row
-    all numbers) the column numbers "1", "2", ... and `present` False."""
+    """The column names of a log file; for a CSV file without a header row (its first row
+    all numbers) the column numbers "1", "2", ... and `present` False.  `format` is the
+    file's ("csv", or "parquet" from harness.log_columns)."""
 
     present: bool = True
+    format: str = "csv"
+
+    def place(self, index: int) -> str:
+        """Where the data row `index` (0: the first) is in the file, for messages: its
+        line in a CSV file, its row in a Parquet file."""
+        if self.format == "csv":
+            return f"line {index + (2 if self.present else 1)}"
+        return f"row {index + 1}"
 
 
 def read_header(path: Path) -> Header:

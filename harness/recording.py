@@ -1,11 +1,13 @@
 """Reading a recorded experiment (time, position, input) for identification.
 
-A recording is a CSV file with a header row.  Three of its columns are used:
+A recording is a CSV file with a header row, or a Parquet file (told by the extension,
+harness.log_columns.log_format: any other is refused).  Three of its columns are used:
 the time stamps ``t``, the measured position ``y`` and the applied input
 ``u``; ``columns`` maps them to the file's own names (``{"t": "time", "y":
 "theta", "u": "tau"}``; by default ``t`` or ``time``, ``y``, ``u``, any case).
 
-Time stamps may be in any unit (``time_unit``) and start anywhere (epoch
+Time stamps may be in any unit (``time_unit``, converted by pint: harness.units, as
+every log's) and start anywhere (epoch
 seconds included): inside, time runs from 0 at the first sample, in seconds; the
 stamps themselves are kept as written for the outputs.  Samples must be
 uniformly spaced within ``tolerance`` (a fraction of the step, default 1 %:
@@ -14,7 +16,8 @@ recording on a uniform grid first (linear interpolation of y; u held or
 interpolated, see :func:`harness.identify.held_input`).
 
 Long logs are read in blocks of whole lines, each parsed by pyarrow's CSV
-reader: memory does not grow with the length of the file.  A file the fast
+reader (a Parquet file: in row batches, by pyarrow): memory does not grow with the
+length of the file.  A file the fast
 reader refuses is read again by a careful line-by-line parser
 (:func:`_exact_error`) only to name the line and the problem.
 """
@@ -29,10 +32,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .units import TIME_UNITS
+
 if TYPE_CHECKING:
     import pyarrow as pa
 
-TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9, "min": 60.0}
 DEFAULT_TOLERANCE = 0.01  # of the sampling step
 BLOCK_BYTES = 1 << 20  # 1 MB of CSV text per block (about 2 10^4 rows of t, y, u)
 # --resample fills gaps of at most this many grid steps (a longer one would be made-up
@@ -144,10 +148,19 @@ def read_blocks(path: str | Path, options: ReadOptions | None = None) -> Iterato
         raise DataError(f"time tolerance {options.tolerance!r}: expected a number >= 0")
     if path.is_dir():
         raise DataError(f"{path}: cannot read a folder as a recording")
-    header = _header(path)
+    from .log_columns import LogColumnError, log_format
+    from .log_columns import read_header as read_table_header
+    try:
+        parquet = log_format(path) == "parquet"
+        header = list(read_table_header(path)) if parquet else _header(path)
+    except LogColumnError as error:
+        raise DataError(str(error)) from None
     index = _locate(path, header, options.columns)
-    blocks = _fast_blocks(path, header, index, options)
-    checked = _checked(path, blocks, options)
+    if parquet:
+        blocks = _parquet_blocks(path, header, index, options)
+        checked = _checked(path, blocks, options, place=("row", 0))
+    else:
+        checked = _checked(path, _fast_blocks(path, header, index, options), options)
     if options.resample is not None:
         return _resampled(checked, options.resample, _scale(options))
     return checked
@@ -233,12 +246,64 @@ def _since_first(stamps: pa.StringArray, values: np.ndarray, origin):
     return values - origin, origin
 
 
+def _parquet_blocks(path: Path, header: list[str], index: dict[str, int],
+                    options: ReadOptions) -> Iterator[tuple[pa.StringArray, np.ndarray,
+                                                            np.ndarray, np.ndarray,
+                                                            np.ndarray]]:
+    """The blocks of _fast_blocks from a Parquet file's row batches: the stamps as text
+    (pyarrow's shortest decimal of each number), a value that is missing or not finite
+    named with its row."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+    import pyarrow.parquet as pq
+
+    wanted = {role: header[i] for role, i in index.items()}
+    origin = None
+    rows = 0
+    try:
+        source = pq.ParquetFile(path)
+        for role, column in wanted.items():
+            kind = source.schema_arrow.field(column).type
+            if not (pa.types.is_integer(kind) or pa.types.is_floating(kind)
+                    or pa.types.is_decimal(kind)):
+                raise DataError(f"{path}: column {column!r} ({role}) holds {kind}, not "
+                                "numbers (time stamps too must be numbers, e.g. seconds)")
+        for batch in source.iter_batches(batch_size=BLOCK_BYTES // 64,
+                                         columns=list(dict.fromkeys(wanted.values()))):
+            time = batch.column(wanted["t"])
+            stamps = pc.cast(time, pa.string())
+            values, y, u = (pc.cast(batch.column(wanted[role]), pa.float64())
+                            .to_numpy(zero_copy_only=False) for role in ("t", "y", "u"))
+            bad = ~(np.isfinite(values) & np.isfinite(y) & np.isfinite(u))
+            if bad.any():
+                k = int(np.argmax(bad))
+                role = next(r for r, v in (("t", values), ("y", y), ("u", u))
+                            if not np.isfinite(v[k]))
+                raise DataError(f"{path} row {rows + k + 1}: {wanted[role]} is missing or not "
+                                "finite (NaN or Inf rows must be removed or interpolated "
+                                "first)")
+            if not batch.num_rows:
+                continue
+            since, origin = _since_first(stamps, values, origin)
+            rows += batch.num_rows
+            yield stamps, values, since, y, u
+    except (pa.ArrowException, OSError) as error:
+        raise DataError(f"{path}: not a readable Parquet file ({error})") from None
+    if rows < 3:
+        raise DataError(f"{path}: {rows} data row(s); at least 3 are needed")
+
+
 def _scale(options: ReadOptions) -> float:
-    """Seconds per unit of the time column."""
-    return TIME_UNITS[options.time_unit or "s"]
+    """Seconds per unit of the time column (pint's factor, harness.units)."""
+    from .units import factor
+    return factor(options.time_unit or "s", "s")
 
 
-def _checked(path: Path, blocks, options: ReadOptions) -> Iterator[Block]:
+def _checked(path: Path, blocks, options: ReadOptions,
+             place: tuple[str, int] = ("line", 1)) -> Iterator[Block]:
+    """The blocks checked; `place`: what a message calls a row of the file and how many
+    lines come before the first data row (a CSV file's header line; 0 in Parquet)."""
+    word, before_data = place
     scale = _scale(options)
     step = None
     previous = None  # the last time [s] of the previous block, relative
@@ -249,12 +314,12 @@ def _checked(path: Path, blocks, options: ReadOptions) -> Iterator[Block]:
         time = since * scale
         joined = time if previous is None else np.concatenate([[previous], time])
         dt = np.diff(joined)
-        first_line = rows + 2 - (previous is not None)  # the file line of joined[0]
+        first_line = rows + 1 + before_data - (previous is not None)  # joined[0]'s line
         if dt.size and not (dt > 0).all():
             i = int(np.argmin(dt > 0))
-            k = first_line + i - (rows + 2)  # index in this block of the earlier stamp
+            k = first_line + i - (rows + 1 + before_data)  # this block's index of the earlier
             before = stamps[k].as_py() if k >= 0 else "the previous block's last"
-            raise DataError(f"{path} line {first_line + i + 1}: time does not increase "
+            raise DataError(f"{path} {word} {first_line + i + 1}: time does not increase "
                             f"(t = {before}, then {stamps[k + 1].as_py()})")
         if step is None and dt.size:
             step = float(np.median(dt[: 1000]))
@@ -270,7 +335,7 @@ def _checked(path: Path, blocks, options: ReadOptions) -> Iterator[Block]:
             if wide.size:
                 i = int(wide[0])
                 raise DataError(
-                    f"{path} line {first_line + i + 1}: a gap of {dt[i]:.9g} s in the time "
+                    f"{path} {word} {first_line + i + 1}: a gap of {dt[i]:.9g} s in the time "
                     f"stamps, {dt[i] / grid:.3g} steps of the --resample grid ({grid:g} s); "
                     f"--resample fills gaps of at most {MAX_GAP_STEPS} steps: split the log "
                     f"at the gap")
@@ -282,7 +347,7 @@ def _checked(path: Path, blocks, options: ReadOptions) -> Iterator[Block]:
             if bad.size:
                 i = int(bad[0])
                 raise DataError(
-                    f"{path} line {first_line + i + 1}: sampling step {dt[i] / scale:.9g} "
+                    f"{path} {word} {first_line + i + 1}: sampling step {dt[i] / scale:.9g} "
                     f"{options.time_unit} differs from the step {step / scale:.9g} "
                     f"{options.time_unit} by more than the tolerance "
                     f"({100 * options.tolerance:g} % of the step); identify needs uniform "

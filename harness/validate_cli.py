@@ -22,7 +22,7 @@ def register_validate(sub, parents) -> None:
                        "Writes validation.json (relative_error, per equation or joint and "
                        "pooled) and validation.png.")
     p.add_argument("data", metavar="LOG",
-                   help="CSV (header row) or, with --model, MATLAB .mat")
+                   help="CSV (header row), Parquet (.parquet) or, with --model, MATLAB .mat")
     what = p.add_mutually_exclusive_group(required=True)
     what.add_argument("--model", metavar="MODEL.toml",
                       help="the model file (e.g. an identify run's identified.toml)")
@@ -36,6 +36,8 @@ def register_validate(sub, parents) -> None:
                        help="a URDF joint held at 0 (e.g. gripper fingers); repeatable")
     robot.add_argument("--window", type=_positive_window, default=0.05,
                        help="Savitzky-Golay window of the derivatives [s] (default 0.05)")
+    from .robot.cli import add_unit_arguments
+    add_unit_arguments(robot, time=True)
     p.set_defaults(func=_validate)
 
 
@@ -53,9 +55,15 @@ def _validate(args: argparse.Namespace) -> int:
     if args.robot:
         from .robot.validate import validate_command as validate_robot
         return validate_robot(args)
-    if args.columns or args.lock or args.window != 0.05:
-        print("harness validate: --columns, --lock and --window go with --robot; a model "
-              "file maps its columns in [columns]", file=sys.stderr)
+    given = [option for option, value, default in (
+        ("--columns", args.columns, ""), ("--lock", args.lock, []),
+        ("--window", args.window, 0.05), ("--time-unit", args.time_unit, None),
+        ("--angle-unit", args.angle_unit, None), ("--length-unit", args.length_unit, None),
+        ("--torque-gains", args.torque_gains, None)) if value != default]
+    if given:
+        print(f"harness validate: the option(s) {', '.join(given)} go with --robot; a model "
+              "file maps its columns in [columns] and gives their units in [units] (t = \"ms\" "
+              "for the time)", file=sys.stderr)
         return 2
     from .model.commands import validate_command
     return validate_command(args)

@@ -43,11 +43,11 @@ def write_log(path: Path, samples: int, h: float = 1e-3, bits: int = 17,
               chunk: int = 100_000) -> None:
     """The arm's log (t, q1, q2, u1, u2) in chunks: the multi-sine and friction of the
     robot tests, torques by inverse dynamics."""
+    import importlib.util
+
     import numpy as np
     import pyarrow as pa
     import pyarrow.csv as pacsv
-
-    import importlib.util
 
     # the robot tests' helpers, loaded from their file (tests/ is not a package)
     spec = importlib.util.spec_from_file_location(

@@ -200,4 +200,3 @@ def validate_command(args: argparse.Namespace) -> int:
               + ("n/a (its known side is zero)" if e is None else f"{100 * e:.3f} %"))
     print(f"  pooled: {100 * pooled:.3f} %")
     return 0
-

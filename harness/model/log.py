@@ -1,8 +1,11 @@
 """A measured log for a model file: time, positions and inputs, by the model's [columns].
 
-CSV files (a header row naming the columns) and MATLAB files (``scipy.io.loadmat``,
-one vector per variable) are read; every problem raises :class:`LogFileError`, whose
-message starts with the file's path and names the column or line.
+CSV and Parquet files (harness.log_columns, the reader of the robots' logs too) and
+MATLAB files (``scipy.io.loadmat``, one vector per variable) are read, told by their
+extension; every problem raises :class:`LogFileError`, whose message starts with the
+file's path and names the column or line.  The time column is in the unit of the model
+file's ``[units] t`` (default s) and is brought to seconds; the other columns stay in
+the file's units (the regressor scales them, harness.model.model).
 """
 from __future__ import annotations
 
@@ -11,7 +14,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ..csv_columns import CsvColumnError, column_of, read_columns, read_header, uneven_step
+from ..log_columns import (
+    LogColumnError,
+    column_of,
+    log_format,
+    note_slow_step,
+    read_columns,
+    read_header,
+    uneven_step,
+)
+from ..units import factor
 from .model import Model
 from .reader import TIME
 
@@ -47,10 +59,14 @@ def read_log(path: str | Path, model: Model) -> ModelLog:
     path = Path(path)
     names = [TIME, *model.coordinates, *model.inputs]
     wanted = {name: model.column(name) for name in names}
-    if path.suffix.lower() == ".mat":
+    try:
+        kind = log_format(path, {".mat": "MATLAB"})
+    except LogColumnError as error:
+        raise LogFileError(str(error)) from None
+    if kind == "MATLAB":
         columns = _read_mat(path, list(wanted.values()))
     else:
-        columns = _read_csv(path, list(wanted.values()))
+        columns = _read_table(path, list(wanted.values()))
     lengths = {len(v) for v in columns.values()}
     if len(lengths) != 1:
         sizes = ", ".join(f"{k} {len(v)}" for k, v in columns.items())
@@ -60,8 +76,11 @@ def read_log(path: str | Path, model: Model) -> ModelLog:
         if bad.size:
             raise LogFileError(f"{path}: column {column!r} ({name}) has {bad.size} NaN or "
                                f"infinite value(s), the first at sample {bad[0] + 1}")
-    t = columns[wanted[TIME]]
+    t = columns[wanted[TIME]] * factor(model.time_unit or "s", "s")  # [units] t: a time
     _check_time(path, wanted[TIME], t)
+    if model.time_unit is None:
+        note_slow_step(path, (t[-1] - t[0]) / (len(t) - 1), 'write t = "ms" in the model '
+                       'file\'s [units] (t = "s" confirms seconds)')
     q = np.column_stack([columns[wanted[c]] for c in model.coordinates])
     u = (np.column_stack([columns[wanted[u]] for u in model.inputs]) if model.inputs
          else np.empty((len(t), 0)))
@@ -106,7 +125,8 @@ def _read_mat(path: Path, wanted: list[str]) -> dict[str, np.ndarray]:
     return out
 
 
-def _read_csv(path: Path, wanted: list[str]) -> dict[str, np.ndarray]:
+def _read_table(path: Path, wanted: list[str]) -> dict[str, np.ndarray]:
+    """The columns of a CSV or Parquet log."""
     try:
         header = read_header(path)
         named = [column_of(header, column) for column in wanted]  # names or column numbers
@@ -115,6 +135,6 @@ def _read_csv(path: Path, wanted: list[str]) -> dict[str, np.ndarray]:
                 raise _missing(path, column, header)
         data = read_columns(path, header, [str(name) for name in named],
                             [f"column {c!r}" for c in wanted])
-    except CsvColumnError as error:
+    except LogColumnError as error:
         raise LogFileError(str(error)) from None
     return {column: data[:, k].copy() for k, column in enumerate(wanted)}

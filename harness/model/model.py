@@ -68,6 +68,7 @@ class Model:
     columns: Mapping[str, str]
     equations: tuple[Equation, ...]
     symbols: Symbols = field(repr=False)
+    time_unit: str | None = None  # the log's time column's unit ([units] t; None: s)
 
     @property
     def parameter_names(self) -> tuple[str, ...]:

@@ -16,6 +16,7 @@ else:  # Python 3.10
 
 import sympy
 
+from ..units import factor
 from .errors import ModelFileError
 from .expressions import RESERVED, ExpressionError, Symbols, free_names, parse_equation
 from .linear import check_accelerations, split_linear
@@ -83,7 +84,12 @@ def parse_model(text: str, source: str | Path | None = None) -> Model:
 
     symbols = Symbols.of(coordinates, inputs, [p.name for p in parameters],
                          [k.name for k in constants])
-    units = _units(data.get("units"), coordinates, inputs, parameters, constants, fail)
+    unit_table, time_unit = data.get("units"), None
+    if unit_table is not None and TIME in unit_table:  # the log's time column
+        unit_table = {k: v for k, v in unit_table.items() if k != TIME}
+        time_unit = _time_unit(data["units"][TIME], fail)
+        unit_table = unit_table or None  # t alone: nothing else scaled or checked
+    units = _units(unit_table, coordinates, inputs, parameters, constants, fail)
     columns = _columns(data.get("columns", {}), coordinates, inputs, fail)
     equations = _equations(model, coordinates, symbols, units,
                            {p.name: p.unit for p in parameters},
@@ -94,7 +100,7 @@ def parse_model(text: str, source: str | Path | None = None) -> Model:
         raise fail(f"parameter(s) {', '.join(unused)} appear in no equation")
     return Model(str(source) if source is not None else "<model>", tuple(coordinates),
                  tuple(inputs), tuple(parameters), tuple(constants), units, columns,
-                 tuple(equations), symbols)
+                 tuple(equations), symbols, time_unit)
 
 
 def _names(model: Mapping[str, Any], key: str, fail: Fail, required: bool) -> list[str]:
@@ -168,10 +174,21 @@ def _check_names(coordinates: list[str], inputs: list[str], parameters: list[str
             seen[name] = kind
 
 
+def _time_unit(unit: Any, fail: Fail) -> str:
+    """[units] t: the unit of the log's time column, a unit of time."""
+    unit = _unit(unit, "t (the log's time column)", fail)
+    try:
+        factor(unit, "s")
+    except ValueError as exc:
+        raise fail(f"[units] t: {exc} (the log's time column: s, ms, us, ...)") from None
+    return unit
+
+
 def _units(table: Any, coordinates: list[str], inputs: list[str],
            parameters: list[Parameter], constants: list[Constant],
            fail: Fail) -> dict[str, str]:
-    """The [units] table, complete for coordinates and inputs, or {} without one."""
+    """The [units] table (t taken out), complete for coordinates and inputs, or {}
+    without one."""
     if table is None:
         return {}
     unknown = set(table) - set(coordinates) - set(inputs)

@@ -1,41 +1,14 @@
-"""Units with pint: parse the file's unit strings, check each equation's dimensions and
-give the factor that brings each name to SI base units."""
+"""Units of a model file: each equation's dimensions checked with pint (the registry and
+the unit strings are harness.units', shared with the log readers)."""
 from __future__ import annotations
-
-import re
-from functools import lru_cache
 
 import pint
 import sympy
 
+from ..units import quantity, registry, si_factor
 from .expressions import ExpressionError
 
-# '.' as a product between unit names ("N.s/m", "kg.m^2"), never inside a number ("1.5").
-_DOT_PRODUCT = re.compile(r"(?<=[A-Za-z0-9_)\]])\.(?=[A-Za-z_(])")
-
-
-@lru_cache(maxsize=1)
-def registry() -> pint.UnitRegistry:
-    """One registry for the process (building one takes a while)."""
-    return pint.UnitRegistry()
-
-
-def quantity(unit: str) -> pint.Quantity:
-    """One of ``unit``: "kg", "N.s/m", "kN", "deg", "" (dimensionless). Raises ValueError."""
-    text = _DOT_PRODUCT.sub("*", unit.strip())
-    if not text:
-        return registry().Quantity(1.0)
-    try:
-        value = registry().Quantity(1.0, text)
-    except Exception as exc:  # pint raises several unrelated types for a bad string
-        raise ValueError(f"'{unit}' is not a unit pint knows ({type(exc).__name__}: {exc})") \
-            from None
-    return value
-
-
-def si_factor(unit: str) -> float:
-    """What one ``unit`` is in SI base units (1000 for "kN", pi/180 for "deg")."""
-    return float(quantity(unit).to_base_units().magnitude)
+__all__ = ["check_equation", "quantity", "registry", "si_factor"]
 
 
 def _dimension(expr: sympy.Expr, units: dict[sympy.Symbol, pint.Quantity]) -> pint.Quantity:

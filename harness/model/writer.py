@@ -40,8 +40,9 @@ def model_toml(model: Model, values: Sequence[float] | np.ndarray,
         lines += ["", "[constants]"]
         lines += [f"{k.name} = {{ value = {_number(k.value)}, unit = {_string(k.unit)} }}"
                   for k in model.constants]
-    if model.units:
+    if model.units or model.time_unit is not None:
         lines += ["", "[units]"]
+        lines += [f"t = {_string(model.time_unit)}"] if model.time_unit is not None else []
         lines += [f"{name} = {_string(unit)}" for name, unit in model.units.items()]
     lines += ["", "[columns]"]
     lines += [f"{name} = {_string(column)}" for name, column in model.columns.items()]

@@ -8,6 +8,7 @@ import math
 import sys
 from pathlib import Path
 
+from ..units import ANGLE_UNITS, LENGTH_UNITS, TIME_UNITS
 from ..values import argparse_type, real
 
 
@@ -30,6 +31,40 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--min-speed", type=_non_negative, default=None, metavar="V",
                        help="leave out joint equations at |q'| < V [rad/s or m/s], where "
                             "Coulomb friction is not f_c sign(q') (default 0.05)")
+    add_unit_arguments(group, time=False)  # identify's --time-unit serves every log
+
+
+def add_unit_arguments(group, time: bool) -> None:
+    """The options that give a robot log's units (harness.robot.log_units): --angle-unit,
+    --length-unit, --torque-gains, and --time-unit when `time` (identify has its own,
+    for every kind of log)."""
+    if time:
+        group.add_argument("--time-unit", choices=TIME_UNITS, default=None,
+                           help="unit of the time column (default s)")
+    group.add_argument("--angle-unit", choices=ANGLE_UNITS, default=None,
+                       help="unit of the revolute joints' position columns (default rad)")
+    group.add_argument("--length-unit", choices=LENGTH_UNITS, default=None,
+                       help="unit of the prismatic joints' position columns (default m)")
+    group.add_argument("--torque-gains", type=_gains, default=None, metavar="K1,K2,...",
+                       help="the torque columns hold drive currents [A]: one gain per joint "
+                            "[N.m/A, N/A for a prismatic joint], torque = gain x current "
+                            "(default: the columns are torques [N.m, N])")
+
+
+def _gains(text: str) -> tuple[float, ...]:
+    """An argparse type: --torque-gains K1,K2,... (argparse names the option)."""
+    from .log_units import UnitError, parse_gains
+    try:
+        return parse_gains(text)
+    except UnitError as error:
+        raise argparse.ArgumentTypeError(str(error).partition(": ")[2]) from None
+
+
+def units_of(args, robot):
+    """The LogUnits of the command's unit options for `robot` (UnitError names a bad one)."""
+    from .log_units import log_units
+    return log_units([joint.kind for joint in robot.joints], time=args.time_unit,
+                     angle=args.angle_unit, length=args.length_unit, gains=args.torque_gains)
 
 
 def _non_negative(text: str) -> float:
@@ -69,6 +104,7 @@ def column_mapping(text: str, command: str) -> dict[str, str] | None:
 
 def identify_command(args) -> int:
     from ..outputs import Outputs
+    from .log_units import UnitError
     from .pipeline import OUTPUT_NAMES, LogError, identify_robot, read_log, write_results
     from .urdf import UrdfError, read_urdf
     mapping = column_mapping(args.columns, "identify")
@@ -78,12 +114,12 @@ def identify_command(args) -> int:
         with Outputs(args.out, "identify", inputs=[args.data, args.robot],
                      names=OUTPUT_NAMES) as outputs:
             robot = read_urdf(args.robot, locked=tuple(args.lock))
-            log = read_log(args.data, robot.n, mapping)
+            log = read_log(args.data, robot.n, mapping, units=units_of(args, robot))
             speed = {} if args.min_speed is None else {"min_speed": args.min_speed}
             result = identify_robot(robot, log, unknown=args.unknown, method=args.velocity,
                                     window=args.window, **speed)
             written = write_results(outputs.staging, robot, log, result, Path(args.data).name)
-    except (UrdfError, LogError) as error:
+    except (UrdfError, LogError, UnitError) as error:
         print(f"harness identify: {error}", file=sys.stderr)
         return 2
     print("wrote " + ", ".join(str(outputs.final(path)) for path in written))

@@ -2,8 +2,10 @@
 
     python -m harness identify DATA.csv --robot ROBOT.urdf --out DIR
 
-DATA.csv has a header and columns t, q1..qn (rad, or m for prismatic joints), u1..un
-(N.m or N); other names map with --column q1=shoulder_pos etc.  Steps:
+DATA.csv (or a Parquet file) has columns t, q1..qn (rad, or m for prismatic joints),
+u1..un (N.m or N); other names map with --columns q1=shoulder_pos etc., other units
+with --time-unit, --angle-unit, --length-unit and --torque-gains (currents times the
+drives' gains; harness.robot.log_units).  Steps:
 1. velocities: Savitzky-Golay (zero-phase, the default: the regression's signals over
    a fixed window, accelerations and torques filtered alike; the velocities written over
    a window each joint chooses, harness.robot.smoothing) or a causal, model-free
@@ -27,11 +29,19 @@ from pathlib import Path
 import numpy as np
 from scipy.signal import savgol_filter
 
-from ..csv_columns import CsvColumnError, column_of, read_columns, read_header, uneven_step
+from ..log_columns import (
+    LogColumnError,
+    column_of,
+    note_slow_step,
+    read_columns,
+    read_header,
+    uneven_step,
+)
 from .base_parameters import BaseParameters, base_parameters
 from .consistency import consistent_parameters, write_identified_urdf
 from .filtered_regression import filtered_regression, low_pass
 from .least_squares import Fit, torque_least_squares
+from .log_units import LogUnits
 from .native import core_defaults
 from .smoothing import adaptive_velocities
 from .urdf import Robot
@@ -63,17 +73,21 @@ class JointLog:
 
 
 def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
-             relative_tolerance: float = 0.01) -> JointLog:
+             relative_tolerance: float = 0.01, units: LogUnits | None = None) -> JointLog:
     """Columns t, q1..qn, u1..un (or the names or 1-based column numbers `mapping` gives
-    them; a file without a header row has them in that order), evenly sampled:
-    every step within `relative_tolerance` of the mean step (a logger's jitter, the
-    rounding of epoch time stamps), the samples then taken as evenly spaced.  Read in
-    chunks, so that a long log takes little more than its numbers' memory."""
+    them; a CSV file without a header row has them in that order) of a CSV or Parquet
+    log (harness.log_columns), evenly sampled: every step within `relative_tolerance`
+    of the mean step (a logger's jitter, the rounding of epoch time stamps), the samples
+    then taken as evenly spaced.  `units` (harness.robot.log_units) brings the columns
+    to s, rad or m and N.m or N (None: they are in these units).  Read in chunks, so
+    that a long log takes little more than its numbers' memory."""
     path, mapping = Path(path), dict(mapping or {})
     wanted = ["t"] + [f"q{i}" for i in range(1, n + 1)] + [f"u{i}" for i in range(1, n + 1)]
+    if units is not None and len(units.position) != n:
+        raise ValueError(f"units for {len(units.position)} joints, the robot has {n}")
     try:
         header = read_header(path)
-    except CsvColumnError as error:
+    except LogColumnError as error:
         raise LogError(str(error)) from None
     if not header.present and not mapping:
         # no header row: the columns in the roles' order, t, q1..qn, u1..un
@@ -95,23 +109,27 @@ def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
         columns.append(column)
     if len(positions) > n and not mapping:
         raise LogError(f"{path}: {len(positions)} position columns for a robot of {n} joints")
-    first_line = 2 if header.present else 1
     try:
         data = read_columns(path, header, columns, wanted)
-    except CsvColumnError as error:
+    except LogColumnError as error:
         raise LogError(str(error)) from None
     bad = ~np.isfinite(data)
     if bad.any():
         row = int(np.argmax(bad.any(axis=1)))
         which = [wanted[k] for k in range(len(wanted)) if bad[row, k]]
-        raise LogError(f"{path} line {row + first_line}: {', '.join(which)} is NaN, "
+        raise LogError(f"{path} {header.place(row)}: {', '.join(which)} is NaN, "
                        "infinite or missing")
     if len(data) < 10:
         raise LogError(f"{path}: {len(data)} samples; identification needs many more")
+    if units is not None:  # to s, rad or m, N.m or N; a factor of 1 leaves the numbers
+        data *= np.concatenate([[units.time], units.position, units.torque])
     t = data[:, 0]
     uneven = uneven_step(t, relative_tolerance)
     if uneven:
-        raise LogError(f"{path} line {uneven[0] + first_line}: {uneven[1]}")
+        raise LogError(f"{path} {header.place(uneven[0])}: {uneven[1]}")
+    if units is None or units.time_unit is None:
+        note_slow_step(path, (t[-1] - t[0]) / (len(t) - 1),
+                       "give --time-unit ms (--time-unit s confirms seconds)")
     return JointLog(t, data[:, 1:1 + n], data[:, 1 + n:])
 
 
@@ -177,7 +195,9 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
         raise LogError(f"the log has {log.q.shape[1]} joints, the robot {robot.n}")
     if method not in ("sg", "observer"):
         raise ValueError(f"unknown method {method!r}: 'sg' or 'observer'")
-    first, last = int(skip / log.step), len(log.t) - int(window / log.step) - 1
+    # whole samples, rounded: a step of 1 ms read as 1.0000000000000002 ms (a log in ms)
+    # must not move the first sample used
+    first, last = round(skip / log.step), len(log.t) - round(window / log.step) - 1
     if last - first < 10:
         raise LogError(f"the log ({log.t[-1] - log.t[0]:g} s) is too short")
     stride = max(1, (last - first) // max_samples)
@@ -211,7 +231,7 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     known = np.setdiff1d(np.arange(12 * robot.n), np.union1d(base.base, base.dependent))
     nominal = robot.parameters()
     z = torque - Y[:, :, known] @ nominal[known]
-    correlation = max(1, int(np.ceil(2 * memory / (stride * log.step))))
+    correlation = max(1, int(np.ceil(2 * memory / (stride * log.step) - 1e-9)))
     mask, speed = np.empty((len(used), robot.n), dtype=bool), np.empty((len(used), robot.n))
     for i in range(robot.n):
         x = joint_speed(i)

@@ -24,7 +24,7 @@ def torque_errors(robot: Robot, log: JointLog, window: float
     """(t, measured, predicted torques, relative error per joint, pooled) on the samples
     a window away from the log's ends."""
     q, qd, qdd, u = savitzky_golay(log, window)
-    edge = int(np.ceil(window / log.step))
+    edge = int(np.ceil(window / log.step - 1e-9))  # not one more for a step's rounding
     inside = slice(edge, len(log.t) - edge)
     if inside.stop - inside.start < 10:
         raise LogError(f"the log ({log.t[-1] - log.t[0]:g} s) is too short for a "
@@ -75,7 +75,8 @@ def validate_command(args) -> int:
     import sys
 
     from ..outputs import Outputs
-    from .cli import column_mapping
+    from .cli import column_mapping, units_of
+    from .log_units import UnitError
     from .pipeline import read_log
     from .urdf import UrdfError, read_urdf
 
@@ -86,11 +87,11 @@ def validate_command(args) -> int:
         with Outputs(args.out, "validate", inputs=[args.data, args.robot],
                      names=OUTPUT_NAMES) as outputs:
             robot = read_urdf(args.robot, locked=tuple(args.lock))
-            log = read_log(args.data, robot.n, mapping)
+            log = read_log(args.data, robot.n, mapping, units=units_of(args, robot))
             t, measured, predicted, per_joint, pooled = torque_errors(robot, log, args.window)
             write_validation(outputs.staging, args.robot, args.data, args.window, t,
                              measured, predicted, per_joint, pooled)
-    except (UrdfError, LogError) as error:
+    except (UrdfError, LogError, UnitError) as error:
         print(f"harness validate: {error}", file=sys.stderr)
         return 2
     print(f"wrote {', '.join(str(p) for p in outputs.written)}")

@@ -86,3 +86,113 @@ def test_columns_by_number_in_the_robots_own_order(tmp_path):
     assert np.array_equal(log.q, plain.q) and np.array_equal(log.u, plain.u)
     with pytest.raises(LogError, match="no column '9'"):
         read_log(shuffled, 2, {"t": "9", "q1": "5", "q2": "2", "u1": "4", "u2": "1"})
+
+
+def _frame(t):
+    import pandas as pd
+    q = np.column_stack([0.8 * np.sin(1.3 * t), 0.6 * np.sin(2.1 * t)])
+    u = np.column_stack([5.0 * np.sin(1.3 * t), 2.0 * np.cos(2.1 * t)])
+    return pd.DataFrame({"t": t, "q1": q[:, 0], "q2": q[:, 1], "u1": u[:, 0], "u2": u[:, 1]})
+
+
+@pytest.mark.parametrize("command", ["identify", "validate"])
+@pytest.mark.parametrize("options, words", [
+    (["--torque-gains", "1,2,3"], ["--torque-gains", "3 gain(s) for a robot of 2 joints"]),
+    (["--torque-gains", "1"], ["--torque-gains", "1 gain(s) for a robot of 2 joints"]),
+    (["--torque-gains", "1,0"], ["--torque-gains", "gain 2 ('0')", "> 0"]),
+    (["--torque-gains=-1,2"], ["--torque-gains", "gain 1 ('-1')"]),
+    (["--torque-gains", "1,nan"], ["--torque-gains", "gain 2 ('nan')"]),
+    (["--torque-gains", "1,inf"], ["--torque-gains", "gain 2 ('inf')"]),
+    (["--torque-gains", "1,amps"], ["--torque-gains", "gain 2 ('amps')"]),
+    (["--torque-gains", "1,,2"], ["--torque-gains", "gain 2 is empty"]),
+    (["--angle-unit", "grad"], ["--angle-unit", "grad"]),
+    (["--time-unit", "h"], ["--time-unit", "'h'"]),
+    (["--length-unit", "mm"], ["--length-unit mm", "no prismatic joint"]),
+])
+def test_bad_units_and_gains_exit_2_naming_them(tmp_path, arm, command, options, words):
+    from cli_runner import cli, refused
+    urdf, _ = arm
+    data = _log(tmp_path / "log.csv", np.arange(6000) * 1e-3)
+    out = tmp_path / "out"
+    code, text = cli([command, str(data), "--robot", str(urdf), "--out", str(out), *options])
+    assert code == 2, text
+    refused(code, text, *words)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("command", ["identify", "validate"])
+@pytest.mark.parametrize("name", ["log.xlsx", "log.json", "log.mat", "log", "log.csv.gz"])
+def test_other_formats_exit_2_naming_the_file_and_the_formats(tmp_path, arm, command, name):
+    from cli_runner import cli, refused
+    urdf, _ = arm
+    data = tmp_path / name
+    _log(data, np.arange(6000) * 1e-3)  # CSV text, whatever the name says
+    code, text = cli([command, str(data), "--robot", str(urdf), "--out", str(tmp_path / "o")])
+    assert code == 2, text
+    refused(code, text, str(data), "CSV (.csv, .txt), Parquet (.parquet, .pq)")
+    assert "MATLAB" not in text  # the robots read no .mat file
+
+
+def test_a_parquet_log_reads_as_its_csv_and_its_problems_are_named(tmp_path, arm):
+    frame = _frame(np.arange(6000) * 1e-3)
+    frame.to_parquet(tmp_path / "log.parquet")
+    frame.to_csv(tmp_path / "log.csv", index=False, float_format="%.17g")
+    parquet, text = read_log(tmp_path / "log.parquet", 2), read_log(tmp_path / "log.csv", 2)
+    for a, b in ((parquet.t, text.t), (parquet.q, text.q), (parquet.u, text.u)):
+        assert np.array_equal(a, b)
+    # integer time stamps in ns, a float32 column: numbers of any numeric type
+    stamps = frame.assign(t=np.arange(6000, dtype=np.int64) * 1_000_000,
+                          q2=frame.q2.astype(np.float32))
+    stamps.to_parquet(tmp_path / "ns.pq")
+    from harness.robot.log_units import log_units
+    log = read_log(tmp_path / "ns.pq", 2, units=log_units(["revolute"] * 2, time="ns"))
+    assert log.step == pytest.approx(1e-3, rel=1e-12)
+    assert np.allclose(log.q[:, 1], frame.q2, rtol=1e-6, atol=1e-7)
+    # a missing value, a column of words, a column not there, a file that is no Parquet
+    frame.assign(q2=frame.q2.where(frame.index != 41)).to_parquet(tmp_path / "null.parquet")
+    with pytest.raises(LogError, match=r"null.parquet row 42: q2 is NaN"):
+        read_log(tmp_path / "null.parquet", 2)
+    frame.assign(u1=frame.u1.astype(str)).to_parquet(tmp_path / "words.parquet")
+    with pytest.raises(LogError, match=r"words.parquet: column 'u1' \(u1\) holds (large_)?string, not numbers"):
+        read_log(tmp_path / "words.parquet", 2)
+    with pytest.raises(LogError, match=r"no column 'q3'.*found: t, q1, q2, u1, u2"):
+        read_log(tmp_path / "log.parquet", 2, {"q2": "q3"})
+    (tmp_path / "fake.parquet").write_text("t,q1\n0,1\n")
+    with pytest.raises(LogError, match=r"fake.parquet: not a readable Parquet file"):
+        read_log(tmp_path / "fake.parquet", 2)
+    with pytest.raises(LogError, match=r"absent.parquet: cannot open"):
+        read_log(tmp_path / "absent.parquet", 2)
+
+
+@pytest.mark.parametrize("options", [["--angle-unit", "deg"], ["--length-unit", "mm"],
+                                     ["--torque-gains", "1,2"], ["--lock", "j1"]])
+def test_robot_unit_options_without_robot_are_refused(tmp_path, options):
+    from cli_runner import cli, refused
+    data = _log(tmp_path / "log.csv", np.arange(6000) * 1e-3)
+    code, text = cli(["identify", str(data), "--out", str(tmp_path / "o"), *options])
+    assert code == 2, text
+    refused(code, text, options[0], "--robot")
+    code, text = cli(["identify", str(data), "--model", "m.toml", "--out", str(tmp_path / "o"),
+                      *options])
+    assert code == 2, text
+    refused(code, text, options[0], "--model", "[units]")
+    code, text = cli(["validate", str(data), "--model", "m.toml", "--out", str(tmp_path / "o"),
+                      *options])
+    assert code == 2, text
+    refused(code, text, options[0], "go with --robot", "[units]")
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_log_in_ms_read_as_seconds_is_warned_of(tmp_path, arm):
+    from cli_runner import cli
+    urdf, _ = arm
+    data = _log(tmp_path / "ms.csv", np.arange(6000) * 1.0)  # ms, no --time-unit
+    code, text = cli(["identify", str(data), "--robot", str(urdf), "--out", str(tmp_path / "o"),
+                      "--unknown", "payload"])
+    # read as seconds the swing is a thousand times slower: too slow for the friction
+    assert code == 2 and "samples 1 s apart" in text and "--time-unit ms" in text, text
+    code, text = cli(["validate", str(data), "--robot", str(urdf), "--out", str(tmp_path / "v")])
+    assert code == 1 and "samples 1 s apart" in text and "--time-unit ms" in text, text
+    code, text = cli(["validate", str(data), "--robot", str(urdf), "--out", str(tmp_path / "w"),
+                      "--time-unit", "s"])  # seconds confirmed: no warning
+    assert code == 0 and "apart" not in text, text

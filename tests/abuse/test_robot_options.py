@@ -1,6 +1,7 @@
 """Options of the robot commands: every number finite and in its range (exit status
 2 naming the option, nothing written), and identify's options for a t, y, u log
-refused with --robot instead of silently ignored."""
+refused with --robot instead of silently ignored (but --time-unit, which the robot
+path honours: tests/abuse/test_robot_logs.py)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -43,7 +44,7 @@ def test_identify_robot_refuses_a_bad_window(tmp_path, urdf, value):
 
 
 @pytest.mark.parametrize("options", [
-    ["--time-unit", "ms"], ["--resample"], ["--resample", "0.001"],
+    ["--resample"], ["--resample", "0.001"],
     ["--time-tolerance", "0.5"], ["--format", "parquet"], ["--param", "h=0.001"],
     ["--identifier", "mff"], ["--input-hold", "sampled"], ["--csv-decimation", "10"],
 ])

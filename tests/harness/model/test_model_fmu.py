@@ -11,6 +11,7 @@ from pathlib import Path
 import fmpy
 import numpy as np
 import pytest
+from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
 from scipy.integrate import solve_ivp
@@ -161,7 +162,7 @@ def test_a_state_of_another_model_file_is_refused(tmp_path, capsys):
         slaves.append(slave)
     try:
         state = slaves[0].serializeFMUstate(slaves[0].getFMUstate())
-        with pytest.raises(Exception):
+        with pytest.raises(FMICallException):
             slaves[1].setFMUstate(slaves[1].deSerializeFMUstate(state))
         assert "written with another model file" in capsys.readouterr().out
         slaves[0].setFMUstate(slaves[0].deSerializeFMUstate(state))  # its own: accepted
