@@ -11,6 +11,11 @@ if(SKBUILD)
     file(GLOB wheel_fmus "${STO_WHEEL_FMU_DIR}/*.fmu")
     if(wheel_fmus)
         install(FILES ${wheel_fmus} DESTINATION harness/data)
+        # the FMI 3 binary `sto-harness fmu --model --fmi-version 3` writes model FMUs from
+        set(fmi3_template "${STO_WHEEL_FMU_DIR}/../fmi3/ModelObserver.fmu")
+        if(EXISTS "${fmi3_template}")
+            install(FILES "${fmi3_template}" DESTINATION harness/data/fmi3)
+        endif()
     else()
         message(WARNING "No FMUs in ${STO_WHEEL_FMU_DIR}: the wheel ships none "
                         "(build them first: ./build.sh fmus)")

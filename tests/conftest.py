@@ -5,10 +5,12 @@ from pathlib import Path
 
 import pytest
 
+from tools.fmu_models import models
+
 REPO = Path(__file__).resolve().parents[1]
 FMU_DIR = REPO / "build" / "fmus"
 FMI3_DIR = REPO / "build" / "fmi3"
-MODEL_IDENTIFIERS = ("SuperTwistingObserver", "Pendulum", "TwistingController", "RobotObserver")
+MODEL_IDENTIFIERS = models()
 
 
 def fmu_path(model_identifier: str, fmi_version: int = 2) -> Path:

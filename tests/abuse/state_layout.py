@@ -19,6 +19,7 @@ from tools.abuse.abuse_fmi import CLOCK_SIZE, HEADER_SIZE, REPO
 DATA_TYPES = {
     "SuperTwistingObserver": ("observer.c", "ObserverData"),
     "RobotObserver": ("robot_observer.c", "RobotData"),
+    "ModelObserver": ("model_observer.c", "ModelData"),
     "Pendulum": ("pendulum.c", "PendulumData"),
     "TwistingController": ("twisting_controller.c", "ControllerData"),
 }

@@ -43,7 +43,7 @@ from tools.abuse.abuse_fmi import (
 )
 
 NAN, INF = float("nan"), float("inf")
-OBS, PEN, CTL, ROBOT = MODELS
+OBS, PEN, CTL, ROBOT, *_ = MODELS
 
 # Per model: an input, an output, a fixed Real parameter with its valid range, and the
 # gap in its value references.
@@ -52,6 +52,8 @@ INFO = {
     PEN: dict(input="u", output="theta", parameter="M", unused_vr=17),
     CTL: dict(input="theta", output="u", parameter="k1", unused_vr=10),
     ROBOT: dict(input="q[1]", output="qd_hat[1]", parameter="tau", unused_vr=10),
+    "ModelObserver": dict(input="position_1", output="velocity_1", parameter="tau_identifier",
+                          unused_vr=2),
 }
 
 
@@ -427,7 +429,7 @@ for m in MODELS:
     case("instantiate-NULL-callbacks", m, lambda f: instantiated(f, f.instantiate(callbacks=None)))
 
 
-def _life_with(callbacks: Callbacks, resources=b"file:///tmp") -> Callable[[Raw], int]:
+def _life_with(callbacks: Callbacks, resources=b"default") -> Callable[[Raw], int]:
     """An instance made with these callbacks lives a normal life, bad calls included."""
     def action(f: Raw) -> int:
         other = Raw(f.model, instantiate=False, callbacks=callbacks)
@@ -463,8 +465,18 @@ for m in MODELS:
          expect=OK)
     case("all-callbacks-NULL-accepted", m, lambda f: _life_with(Callbacks(False, False))(f),
          expect=OK)
-    case("NULL-resource-location-accepted", m, lambda f: _life_with(Callbacks(), None)(f),
-         expect=OK)
+    if Raw(m, instantiate=False).reads_resources:
+        case("NULL-resource-location-refused", m, lambda f: _no_resources(f),
+             words="no resource location given")
+    else:
+        case("NULL-resource-location-accepted", m, lambda f: _life_with(Callbacks(), None)(f),
+             expect=OK)
+
+
+def _no_resources(f: Raw) -> int:
+    """A model that reads its resources: no location, no instance (and a message)."""
+    assert not f.instantiate(name="other", resources=None)
+    return ERROR
 
 
 # ---- steps and experiment times ----------------------------------------------------------------

@@ -14,7 +14,7 @@ import pytest
 
 from tools.abuse.abuse_fmi import ERROR, MODELS, OK, Raw, isolated
 
-OBS, PEN, CTL, ROBOT = MODELS
+OBS, PEN, CTL, ROBOT, *_ = MODELS
 LAST_SUCCESSFUL_TIME = 2  # fmi2StatusKind fmi2LastSuccessfulTime
 
 # Per model: parameters, and inputs set before the failing step, that make the model fail
@@ -24,6 +24,7 @@ DIVERGING = {
     PEN: ({}, {"u": 1e308}),
     CTL: None,  # its outputs are bounded by its parameters: it fails by itself, see below
     ROBOT: ({}, {"u[1]": 1e306, "u[2]": -1e306}),
+    "ModelObserver": ({}, {"input_1": 1e308}),
 }
 
 

@@ -102,6 +102,10 @@ def _instance_name(model: str, name: str):
 def _resource_location(model: str, location: str):
     f = Raw(model, instantiate=False, callbacks=PrintfLogger())
     f.c = f.instantiate(resources=location.encode())
+    if f.reads_resources:  # refused, the location named in the (escaped) message
+        assert not f.c
+        _check(f, f"cannot open the model file {location.removeprefix('file://')}/model.txt")
+        return
     assert f.c, f.messages()
     assert normal_run(f) == [OK] * 6, f.messages()
     assert not f.instantiate(resources=location.encode(), guid=b"{%s#}")

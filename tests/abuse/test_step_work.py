@@ -17,7 +17,7 @@ import pytest
 
 from tools.abuse.abuse_fmi import ERROR, MODELS, OK, Raw, assert_usable_after_reset, isolated
 
-OBS, PEN, CTL, ROBOT = MODELS
+OBS, PEN, CTL, ROBOT, *_ = MODELS
 DEFAULT_LIMIT = 10_000_000
 LIMIT_VR = 120
 INT_MAX = 2**31 - 1
@@ -25,10 +25,11 @@ INT_MAX = 2**31 - 1
 QUICK = 0.5  # s
 TIMEOUT = 20.0  # s, per case
 
-DEFAULT_H = {OBS: 1e-4, PEN: 1e-5, CTL: 1e-4, ROBOT: 1e-3}
+DEFAULT_H = {OBS: 1e-4, PEN: 1e-5, CTL: 1e-4, ROBOT: 1e-3, "ModelObserver": 1e-3}
 OUTPUTS = {OBS: ["x1_hat[1]", "x2_hat[1]", "theta_hat[1,1]", "gamma_trace"],
            PEN: ["theta", "omega", "acceleration"], CTL: ["u", "theta_d", "omega_d"],
-           ROBOT: ["q_hat[1]", "qd_hat[2]", "base_estimate[1]", "gamma_trace"]}
+           ROBOT: ["q_hat[1]", "qd_hat[2]", "base_estimate[1]", "gamma_trace"],
+           "ModelObserver": ["position_estimate_1", "velocity_1", "theta_1", "theta_std_1"]}
 
 
 def _limit_message(f: Raw, needed: int, limit: int):

@@ -18,7 +18,7 @@ from tools.abuse.abuse_fmi import MODELS, OK, Raw, fmu_dir
 
 THREADS = 4
 _LOADING = threading.Lock()
-OBS, PEN, CTL, ROBOT = MODELS
+OBS, PEN, CTL, ROBOT, *_ = MODELS
 
 # Per model: parameters that differ per thread, an input signal, and the outputs read.
 SETUPS = {
@@ -38,6 +38,11 @@ SETUPS = {
             lambda i, t: {"q[1]": 0.3 * math.sin((2 + i) * t), "q[2]": 0.2 * math.cos(t),
                           "u[1]": 0.1 * math.cos(t), "u[2]": 0.05 * math.sin(t)},
             ["q_hat[1]", "qd_hat[1]", "qd_hat[2]", "base_estimate[1]", "gamma_trace"]),
+    # the pendulum's model file (the template's resources)
+    "ModelObserver": (lambda i: {"identifier": 1 + i % 2, "tau_identifier": 0.01 * (1 + i)},
+                      lambda i, t: {"position_1": 0.3 * math.sin((2 + i) * t),
+                                    "input_1": math.cos(t)},
+                      ["position_estimate_1", "velocity_1", "theta_1", "theta_2"]),
 }
 
 

@@ -23,7 +23,7 @@ from fmu.fmi_helpers import RawFMU3
 
 from tools.abuse.abuse_fmi import ERROR, MODELS, OK, REPO, Raw, assert_usable_after_reset, isolated
 
-OBS, PEN, CTL, ROBOT = MODELS
+OBS, PEN, CTL, ROBOT, *_ = MODELS
 BUDGET_VR, WORK_VR, DEFAULT_BUDGET = 121, 122, 1e9
 QUICK = 0.5   # s: a refused step returns at once
 SLOW = 4.0    # s: about 1 s unloaded; twice the 2 s target on a machine shared by three

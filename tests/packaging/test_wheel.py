@@ -50,6 +50,7 @@ def test_the_wheel_ships_the_fmus_types_and_native_library(wheel):
     names = zipfile.ZipFile(wheel).namelist()
     for name in ("harness/data/SuperTwistingObserver.fmu", "harness/data/Pendulum.fmu",
                  "harness/data/TwistingController.fmu", "harness/data/RobotObserver.fmu",
+                 "harness/data/ModelObserver.fmu", "harness/data/fmi3/ModelObserver.fmu",
                  "harness/py.typed", "harness/lib/libsto_native.so"):
         assert name in names
 

@@ -27,9 +27,11 @@ from fmpy.fmi2 import (
     fmi2CallbackLoggerTYPE,
 )
 
+from tools.fmu_models import models
+
 REPO = Path(__file__).resolve().parents[2]
 OK, WARNING, DISCARD, ERROR, FATAL = 0, 1, 2, 3, 4
-MODELS = ("SuperTwistingObserver", "Pendulum", "TwistingController", "RobotObserver")
+MODELS = models()
 CO_SIMULATION, MODEL_EXCHANGE = 1, 0
 
 
@@ -111,6 +113,9 @@ class Raw:
         self.model = model
         self.md, directory = unzipped(model)
         self.guid = self.md.guid
+        self.resources = (Path(directory) / "resources").as_uri().encode()
+        # the FMU reads a file of its resources at instantiation (ModelObserver)
+        self.reads_resources = any((Path(directory) / "resources").glob("*"))
         self.slave = FMU2Slave(guid=self.guid, unzipDirectory=directory,
                                modelIdentifier=self.md.coSimulation.modelIdentifier,
                                instanceName=name)
@@ -125,8 +130,9 @@ class Raw:
 
     # -- instance --------------------------------------------------------------------------
     def instantiate(self, name="abuse", fmu_type=CO_SIMULATION, guid="default",
-                    resources=b"file:///tmp", callbacks="default"):
+                    resources=b"default", callbacks="default"):
         cb = self.cb if callbacks == "default" else callbacks
+        resources = self.resources if resources == b"default" else resources
         guid = self.guid.encode() if guid == "default" else guid
         name = name.encode() if isinstance(name, str) else name
         pointer = ctypes.byref(cb.struct) if cb is not None else None

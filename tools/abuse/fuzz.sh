@@ -20,7 +20,7 @@ PY=$REPO/.venv/bin/python
 OUT=$REPO/build/fuzz
 SECONDS_EACH=${FUZZ_SECONDS:-30}
 TARGETS=(${1:-fuzz_deserialize fuzz_calls fuzz_fmi3_calls})
-MODELS=(${2:-SuperTwistingObserver Pendulum TwistingController RobotObserver})
+MODELS=(${2:-$("$PY" -m tools.fmu_models)})
 die() { echo "fuzz.sh: $*" >&2; exit 1; }
 log() { printf '\033[1m== %s\033[0m\n' "$*"; }
 

@@ -70,10 +70,18 @@ static inline void counting_free(void *p)
 static const fmi2CallbackFunctions FUZZ_CALLBACKS = {fuzz_logger, counting_calloc, counting_free,
                                                      NULL, NULL};
 
+/* The resources of a model that reads them (cmake/fuzz.cmake defines where). */
+#ifndef FUZZ_RESOURCE_URI
+#define FUZZ_RESOURCE_URI NULL
+#endif
+#ifndef FUZZ_RESOURCE_PATH
+#define FUZZ_RESOURCE_PATH NULL
+#endif
+
 static inline fmi2Component fuzz_instantiate(const fmi2CallbackFunctions *callbacks)
 {
-    return fmi2Instantiate("fuzz", fmi2CoSimulation, MD.guid, NULL, callbacks, fmi2False,
-                           fmi2False);
+    return fmi2Instantiate("fuzz", fmi2CoSimulation, MD.guid, FUZZ_RESOURCE_URI, callbacks,
+                           fmi2False, fmi2False);
 }
 
 /* ---- the model's variables ------------------------------------------------------ */

@@ -31,7 +31,8 @@ static void log_message(fmi3InstanceEnvironment env, fmi3Status status, fmi3Stri
 
 static fmi3Instance instantiate(int logging)
 {
-    return fmi3InstantiateCoSimulation("fuzz", MD.guid, NULL, fmi3False, logging ? fmi3True : fmi3False,
+    return fmi3InstantiateCoSimulation("fuzz", MD.guid, FUZZ_RESOURCE_PATH, fmi3False,
+                                       logging ? fmi3True : fmi3False,
                                        fmi3False, fmi3False, NULL, 0, NULL,
                                        logging ? log_message : NULL, NULL);
 }

@@ -16,7 +16,7 @@ cd "$(dirname "$0")/../.."
 REPO=$PWD
 PY=$REPO/.venv/bin/python
 OUT=$REPO/build/sanitize
-MODELS=(SuperTwistingObserver Pendulum TwistingController RobotObserver)
+MODELS=($("$PY" -m tools.fmu_models))
 CC=${CC:-gcc}
 
 log() { printf '\033[1m== %s\033[0m\n' "$*"; }

@@ -10,6 +10,8 @@ from pathlib import Path
 
 import pytest
 
+from tools.fmu_models import models
+
 DIRECTORY = Path(os.environ["STO_FMU_DIR"]).resolve()
 FMI3_DIRECTORY = Path(os.environ.get("STO_FMI3_DIR", DIRECTORY.parent / "fmi3")).resolve()
 os.environ.pop("LD_PRELOAD", None)
@@ -31,7 +33,7 @@ def pytest_sessionstart(session):
     for plugin in session.config.pluginmanager.get_plugins():
         _redirect(plugin)
     missing = [str(d / f"{m}.fmu")
-               for m in ("SuperTwistingObserver", "Pendulum", "TwistingController", "RobotObserver")
+               for m in models()
                for d in (DIRECTORY, FMI3_DIRECTORY) if not (d / f"{m}.fmu").exists()]
     if missing:
         raise pytest.UsageError(f"{DIRECTORY} lacks {missing}: run tools/abuse/sanitize.sh")

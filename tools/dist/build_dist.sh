@@ -22,7 +22,7 @@ cd "$(dirname "$0")/../.."
 PY=$PWD/.venv/bin/python
 BUILD=build
 OUT=$BUILD/dist
-MODELS=(SuperTwistingObserver Pendulum TwistingController RobotObserver)
+MODELS=($("$PY" -m tools.fmu_models))
 
 log() { printf '\033[1m== %s\033[0m\n' "$*"; }
 die() { echo "build_dist.sh: $*" >&2; exit 1; }

@@ -17,7 +17,7 @@ cd "$(dirname "$0")/../.."
 PY=$PWD/.venv/bin/python
 DIST=build/dist
 OUT=build/dist/check
-MODELS=(SuperTwistingObserver Pendulum TwistingController RobotObserver)
+MODELS=($("$PY" -m tools.fmu_models))
 
 log() { printf '\033[1m== %s\033[0m\n' "$*"; }
 die() { echo "check_platforms.sh: $*" >&2; exit 1; }
