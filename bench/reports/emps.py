@@ -1,5 +1,6 @@
 """EMPS end to end: identify --model on the estimation log, validate on the pulses log, the
-benchmark's IDIM-LS computed in the same run, and the causal velocity against a zero-phase
+model file's FMU (fmu --model) fed the estimation log through fmpy, the benchmark's
+IDIM-LS computed in the same run, and the causal velocities against a zero-phase
 reference. Prints a markdown table (not a test).
 
     .venv/bin/python -m bench.reports.emps [--data examples/emps/data] [--out DIR]
@@ -76,6 +77,33 @@ def observer_velocity(path: Path) -> np.ndarray:
     return causal_estimates(log, derivatives(log, ZeroPhase.for_step(log.step)).qdd).velocity[:, 0]
 
 
+def fmu_run(path: Path, out: Path) -> tuple[np.ndarray, np.ndarray, float]:
+    """The model file's FMU (FMI 2) fed the log at its rate through fmpy: its final
+    parameters, its velocity der(x) at every sample (at a communication point the FMU has
+    the measurements up to the previous one: a prediction one sample ahead), and the wall
+    time (export and simulation)."""
+    import fmpy
+
+    from harness.model import read_model
+    from harness.model.log import read_log
+
+    start = time.perf_counter()
+    model_file = REPO / "examples" / "emps" / "emps.toml"
+    if main(["fmu", "--model", str(model_file), "--out", str(out / "fmu")]):
+        raise SystemExit("fmu failed")
+    model = read_model(model_file)
+    log = read_log(path, model)
+    signals = np.zeros(log.samples, dtype=[("time", float), ("x", float), ("vir", float)])
+    signals["time"], signals["x"], signals["vir"] = log.t - log.t[0], log.q[:, 0], log.inputs[:, 0]
+    result = fmpy.simulate_fmu(str(out / "fmu" / "emps.fmu"), input=signals, step_size=log.step,
+                               output_interval=log.step, stop_time=float(signals["time"][-1]),
+                               start_values={"observer.h": log.step},
+                               output=[*PUBLISHED, "der(x)"])
+    seconds = time.perf_counter() - start
+    return (np.array([result[n][-1] for n in PUBLISHED]), np.asarray(result["der(x)"]),
+            seconds)
+
+
 def validate_pipeline(path: Path):
     """The cross-test of validate (its zero-phase pipeline) for any EMPS parameters."""
     from harness.model import read_model
@@ -108,6 +136,7 @@ def run(data: Path, out: Path) -> str:
     idim_seconds = time.perf_counter() - start
     Xv, yv = benchmark_rows(validation)
     ours_pipeline = validate_pipeline(validation)
+    fmu_theta, fmu_velocity, fmu_seconds = fmu_run(estimation, out)
 
     def row(name, values, own, bench_est, bench_cross, secs):
         cells = [f"{v:.4f}" for v in values]
@@ -119,16 +148,23 @@ def run(data: Path, out: Path) -> str:
              "(validate) | time |", "|---|---|---|---|---|---|---|---|---|",
              row("identify --model", theta, cross, relative(X, y, theta),
                  relative(Xv, yv, theta), f"{seconds:.2f} s (command)"),
+             row("fmu --model (causal, fmpy)", fmu_theta, ours_pipeline(fmu_theta),
+                 relative(X, y, fmu_theta), relative(Xv, yv, fmu_theta),
+                 f"{fmu_seconds:.2f} s (export + run)"),
              row("IDIM-LS, this run", idim, ours_pipeline(idim), relative(X, y, idim),
                  relative(Xv, yv, idim), f"{idim_seconds:.2f} s (LS only)"),
              "| IDIM-LS, published | " + " | ".join(f"{v:.4f}" for v in PUBLISHED.values())
              + f" | {100 * PUBLISHED_ERRORS[0]:.2f} % | {100 * PUBLISHED_ERRORS[1]:.2f} % | "
              f"{100 * ours_pipeline(np.array(list(PUBLISHED.values()))):.3f} % | - |"]
-    lines += ["", "| log | causal observer velocity vs zero-phase reference | raw backward "
-              "difference vs the same |", "|---|---|---|"]
+    lines += ["", "| log | causal observer velocity (identify) vs zero-phase reference | the "
+              "FMU's der(x) (one step ahead) vs the same | raw backward difference vs the same |",
+              "|---|---|---|---|"]
     for path in (estimation, validation):
         observer, backward = velocity_rms(path, observer_velocity(path))
-        lines.append(f"| {path.name} | {observer:.3f} mm/s RMS | {backward:.3f} mm/s RMS |")
+        from_fmu = (f"{velocity_rms(path, fmu_velocity)[0]:.3f} mm/s RMS"
+                    if path == estimation else "-")
+        lines.append(f"| {path.name} | {observer:.3f} mm/s RMS | {from_fmu} | "
+                     f"{backward:.3f} mm/s RMS |")
     return "\n".join(lines)
 
 

@@ -156,7 +156,7 @@ static void publish(ModelData *d)
     mp_estimates(&d->pipe, &d->program, d->theta, d->theta_std);
     for (int i = 0; i < n; ++i) {
         d->position[i] = d->pipe.obs.x1_hat[i];
-        d->velocity[i] = d->pipe.velocity[i];
+        d->velocity[i] = d->pipe.obs.x2_hat[i]; /* for the end of the step, as x1_hat */
     }
     d->excitation = d->pipe.identifying ? d->pipe.statistics.excitation : 0.0;
     d->identifier_active = d->pipe.identifying;
