@@ -74,7 +74,7 @@ def observer_velocity(path: Path) -> np.ndarray:
 
     model = read_model(REPO / "examples" / "emps" / "emps.toml")
     log = read_log(path, model)
-    return causal_estimates(log, derivatives(log, ZeroPhase.for_step(log.step)).qdd).velocity[:, 0]
+    return causal_estimates(log, derivatives(log, ZeroPhase.for_log(log)).qdd).velocity[:, 0]
 
 
 def fmu_run(path: Path, out: Path) -> tuple[np.ndarray, np.ndarray, float]:

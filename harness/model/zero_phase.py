@@ -1,14 +1,17 @@
 """The zero-phase derivative pipeline of inverse-model least squares (the EMPS benchmark's
-IDIM-LS), with settings that follow the sample rate:
+IDIM-LS), with settings that follow the sample rate and the measurement noise:
 
-1. positions through a 4th-order Butterworth low-pass at a tenth of the sample rate,
-   forward and backward (filtfilt: no phase lag); the inputs through the same filter;
+1. positions through a 4th-order Butterworth low-pass, forward and backward (filtfilt: no
+   phase lag); the inputs through the same filter. Its cut-off is a tenth of the sample
+   rate, lowered on a noisy or coarsely quantized log to twice the highest frequency
+   at which the positions stand 20 dB above their noise floor (see cutoff_for);
 2. velocities and accelerations by central differences of the filtered positions;
 3. the regressor Y and the known side r at every sample, the ends dropped (filter and
    difference transients);
 4. Y and r decimated (8th-order Chebyshev anti-aliasing, zero phase, every 10th sample).
 
-At 1 kHz these are the benchmark's own choices: 100 Hz, decimation by 10.
+At 1 kHz and with a fine encoder these are the benchmark's own choices: 100 Hz,
+decimation by 10.
 """
 from __future__ import annotations
 
@@ -29,6 +32,13 @@ DECIMATION = 10
 BORDER_PERIODS = 5.0
 #: Fewest decimated rows per unknown.
 ROWS_PER_UNKNOWN = 10
+#: The positions' content counts up to where their spectrum stands this factor (20 dB)
+#: above the noise floor (the median power above a quarter of the sample rate) ...
+SIGNAL_TO_FLOOR = 100.0
+#: ... and the cut-off is this multiple of that frequency (the Butterworth's knee must not
+#: cut the motion), between a 500th and a tenth of the sample rate.
+CUTOFF_MARGIN = 2.0
+LOWEST_CUTOFF_FRACTION = 0.002
 
 
 @dataclass(frozen=True)
@@ -42,11 +52,18 @@ class ZeroPhase:
     border: int          # samples dropped at each end before decimation
 
     @classmethod
-    def for_step(cls, step: float) -> ZeroPhase:
-        """The defaults at sampling step ``step`` [s]."""
-        cutoff = CUTOFF_FRACTION / step
+    def for_step(cls, step: float, cutoff: float | None = None) -> ZeroPhase:
+        """The settings at sampling step ``step`` [s] with the Butterworth cut-off
+        ``cutoff`` [Hz] (default: a tenth of the sample rate)."""
+        cutoff = CUTOFF_FRACTION / step if cutoff is None else cutoff
         border = math.ceil(BORDER_PERIODS / (cutoff * step))
         return cls(step, cutoff, ORDER, DECIMATION, border)
+
+    @classmethod
+    def for_log(cls, log: ModelLog) -> ZeroPhase:
+        """The settings for a log: its step, and the cut-off its noise allows
+        (:func:`cutoff_for`)."""
+        return cls.for_step(log.step, cutoff_for(log))
 
     def as_dict(self) -> dict[str, float | int]:
         return {"step_s": self.step, "cutoff_hz": self.cutoff, "butterworth_order": self.order,
@@ -56,6 +73,30 @@ class ZeroPhase:
         """``x`` (samples, ...) through the Butterworth filter, forward and backward."""
         b, a = scipy.signal.butter(self.order, 2.0 * self.cutoff * self.step)
         return scipy.signal.filtfilt(b, a, x, axis=0)
+
+
+def cutoff_for(log: ModelLog) -> float:
+    """The Butterworth cut-off [Hz] for a log: a tenth of the sample rate, unless some
+    coordinate's position spectrum (Welch) falls to within SIGNAL_TO_FLOOR of its noise
+    floor below that; then CUTOFF_MARGIN times the highest frequency where it stands
+    above, at least LOWEST_CUTOFF_FRACTION of the sample rate. A fine encoder keeps the
+    benchmark's tenth (EMPS: its content reaches 100 Hz); a 12-bit encoder on a slow
+    pendulum gets a few hertz, where central differences of quantization steps would
+    otherwise swamp the accelerations."""
+    rate = 1.0 / log.step
+    highest, lowest = CUTOFF_FRACTION * rate, LOWEST_CUTOFF_FRACTION * rate
+    cutoff = highest
+    for i in range(log.q.shape[1]):
+        q = log.q[:, i]
+        if not np.ptp(q) > 0.0:
+            continue  # a coordinate at rest says nothing about the noise
+        f, power = scipy.signal.welch(q, fs=rate, nperseg=min(4096, max(16, len(q) // 4)),
+                                      detrend="linear")
+        floor = float(np.median(power[f >= rate / 4]))
+        above = np.flatnonzero(power > SIGNAL_TO_FLOOR * floor)
+        if floor > 0.0 and len(above):
+            cutoff = min(cutoff, max(CUTOFF_MARGIN * float(f[above[-1]]), lowest))
+    return cutoff
 
 
 @dataclass(frozen=True)
@@ -104,7 +145,7 @@ def minimum_samples(settings: ZeroPhase, unknowns: int) -> int:
 def regression(model: Model, log: ModelLog, settings: ZeroPhase | None = None) -> Regression:
     """Steps 1-4 of the pipeline: the decimated rows of ``Y theta = r`` over the log.
     Raises LogFileError for a log too short for them."""
-    settings = settings or ZeroPhase.for_step(log.step)
+    settings = settings or ZeroPhase.for_log(log)
     needed = minimum_samples(settings, len(model.parameters))
     if log.samples < needed:
         raise LogFileError(
