@@ -55,7 +55,8 @@ def causal_estimates(log: ModelLog, acceleration: np.ndarray) -> Estimates:
     from ..robot.native import observe_adaptive
 
     bound = BOUND_MARGIN * np.max(np.abs(acceleration), axis=0) + 1e-12
-    out = observe_adaptive(log.q, log.step, bound)
+    out = observe_adaptive(log.q, log.step, bound, with_position=True)
+    assert out.position is not None
     position_std = np.empty_like(out.noise)
     velocity_std = np.empty_like(out.noise)
     for omega in np.unique(out.bandwidth):
@@ -63,7 +64,5 @@ def causal_estimates(log: ModelLog, acceleration: np.ndarray) -> Estimates:
         sx, sv = kalman_std(float(omega), log.step)
         position_std[where] = sx * out.noise[where]
         velocity_std[where] = sv * out.noise[where]
-    # The super-twisting corrector lands on the measurement (deadbeat); a linear member
-    # moves its estimate by less than the noise: the measurement is the position given.
-    return Estimates(log.q.copy(), out.velocity, position_std, velocity_std, out.noise,
+    return Estimates(out.position, out.velocity, position_std, velocity_std, out.noise,
                      out.bandwidth)

@@ -49,7 +49,8 @@ def load() -> ctypes.CDLL:
     dll.rn_observe_adaptive.restype = ctypes.c_int
     dll.rn_observe_adaptive.argtypes = [ctypes.c_void_p, ctypes.c_int, count, ctypes.c_double,
                                         _double_p, ctypes.c_void_p, _double_p, ctypes.c_double,
-                                        _double_p, _double_p, _double_p, _double_p]
+                                        _double_p, _double_p, _double_p, _double_p,
+                                        ctypes.c_void_p]
     dll.rn_robot_run_size.restype = ctypes.c_size_t
     dll.rn_robot_observe.restype = ctypes.c_long
     dll.rn_robot_observe.argtypes = [
@@ -89,10 +90,12 @@ class AdaptiveVelocities:
     acceleration: np.ndarray  # the published perturbation: without a model, q''
     noise: np.ndarray         # the estimated measurement noise std [rad or m]
     bandwidth: np.ndarray     # of the published observer [rad/s] (1/h: super-twisting)
+    position: np.ndarray | None = None  # its corrected position at the sample (if asked)
 
 
 def observe_adaptive(q: np.ndarray, h: float, acceleration_bound, tau: float = 0.002,
-                     nominal: np.ndarray | None = None) -> AdaptiveVelocities:
+                     nominal: np.ndarray | None = None,
+                     with_position: bool = False) -> AdaptiveVelocities:
     """Each joint's positions q (count, n) sampled every h through the observer FMU's
     default estimator without a model: the implicit super-twisting observer beside the
     bank of noise-adaptive linear observers (fmu/src/core/noise_adaptive.c), which
@@ -101,7 +104,8 @@ def observe_adaptive(q: np.ndarray, h: float, acceleration_bound, tau: float = 0
     acceleration_bound (per joint) bounds |q''| (Theorem 3.1 gains of the
     super-twisting observer); tau filters its injection (the FMU's default 2 ms).
     nominal (count, n), if given, is a known acceleration held over the interval that
-    starts at each sample (the FMU's F input); without it the observer is model-free."""
+    starts at each sample (the FMU's F input); without it the observer is model-free.
+    with_position: also the published observer's corrected position at each sample."""
     q = np.ascontiguousarray(np.atleast_2d(q), dtype=np.float64)
     count, n = q.shape
     bound = np.ascontiguousarray(np.broadcast_to(np.asarray(acceleration_bound, float), (n,)))
@@ -111,9 +115,11 @@ def observe_adaptive(q: np.ndarray, h: float, acceleration_bound, tau: float = 0
     if nominal is not None:
         nominal = np.ascontiguousarray(np.broadcast_to(nominal, q.shape), dtype=np.float64)
     pointer = None if nominal is None else nominal.ctypes.data
-    if dll.rn_observe_adaptive(bank, n, count, h, q, pointer, bound, tau, *out) != 0:
+    position = np.empty_like(q) if with_position else None
+    if dll.rn_observe_adaptive(bank, n, count, h, q, pointer, bound, tau, *out,
+                               None if position is None else position.ctypes.data) != 0:
         raise ValueError(f"no observer gains for the acceleration bounds {bound.tolist()}")
-    return AdaptiveVelocities(*out)
+    return AdaptiveVelocities(*out, position)
 
 
 STATUS = {-1: "the number of joints is not between 1 and 7",

@@ -371,6 +371,9 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
             bank->velocity[i] = published == ADAPTIVE_SUPER_TWISTING
                                     ? trace->velocity[i][k]
                                     : adaptive_member_at(bank, i, published)->x2_now;
+            bank->position[i] = published == ADAPTIVE_SUPER_TWISTING
+                                    ? trace->position[i][k]
+                                    : adaptive_member_at(bank, i, published)->z1;
             if (selected != ADAPTIVE_SUPER_TWISTING) {
                 /* the published velocity: the selected member's; the
                  * regressors' (the trace): the centre's, the member the

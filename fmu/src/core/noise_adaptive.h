@@ -153,6 +153,7 @@ typedef struct {
     double noise_std[STO_MAX_DOF];       /* estimated measurement noise [rad] */
     double bandwidth[STO_MAX_DOF];       /* omega of the published member (1/h: super-twisting) */
     double velocity[STO_MAX_DOF];        /* the published velocity at the last sample */
+    double position[STO_MAX_DOF];        /* and the published observer's corrected position */
 } AdaptiveBank;
 
 /* Gains of the members for step h (steady-state Riccati, at initialization). */

@@ -144,13 +144,15 @@ int rn_identify(const RigidBodyModel *model, RegressorIdentifier *identifier, in
  * (of the published observer, 1/h for the super-twisting one).  The bank is
  * allocated by the caller (rn_adaptive_size() bytes).  nominal (count x n, or
  * NULL: model-free) is a known acceleration held over the interval that starts
- * at each sample.  Returns 0, or -1 for a bound that gives no gains. */
+ * at each sample.  position (count x n, or NULL: not wanted) receives the published
+ * observer's corrected position at each sample.  Returns 0, or -1 for a bound that
+ * gives no gains. */
 size_t rn_adaptive_size(void) { return sizeof(AdaptiveBank); }
 
 int rn_observe_adaptive(AdaptiveBank *bank, int n, long count, double h, const double y[],
                         const double nominal[], const double f_plus[], double tau,
                         double velocity[], double acceleration[], double noise[],
-                        double bandwidth[])
+                        double bandwidth[], double position[])
 {
     for (int i = 0; i < n; ++i) {
         double alpha1 = 0.0, alpha2 = 0.0, zero = 0.0, y0 = y[i];
@@ -164,6 +166,7 @@ int rn_observe_adaptive(AdaptiveBank *bank, int n, long count, double h, const d
             const StoAcceleration a = {.held = nominal ? nominal[k * n + i] : 0.0};
             adaptive_run(&o, bank, y + k * n + i, &a, 1, &trace);
             velocity[k * n + i] = bank->velocity[0];
+            if (position) position[k * n + i] = bank->position[0];
             acceleration[k * n + i] = trace.z_filtered[0][0];
             adaptive_outputs(&o, bank);
             noise[k * n + i] = bank->noise_std[0];
