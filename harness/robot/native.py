@@ -119,7 +119,8 @@ def observe_adaptive(q: np.ndarray, h: float, acceleration_bound, tau: float = 0
     if dll.rn_observe_adaptive(bank, n, count, h, q, pointer, bound, tau, *out,
                                None if position is None else position.ctypes.data) != 0:
         raise ValueError(f"no observer gains for the acceleration bounds {bound.tolist()}")
-    return AdaptiveVelocities(*out, position)
+    velocity, acceleration, noise, bandwidth = out
+    return AdaptiveVelocities(velocity, acceleration, noise, bandwidth, position)
 
 
 STATUS = {-1: "the number of joints is not between 1 and 7",
