@@ -10,10 +10,10 @@ angle read by a 12-bit encoder (2 pi / 4096 rad steps).
 from __future__ import annotations
 
 import argparse
-import csv
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 from scipy.integrate import solve_ivp
 
 TRUTH = {"J": 0.95, "ML": 1.05, "Vs": 0.25, "Ps": 0.35}
@@ -45,11 +45,7 @@ def simulate(seed: int) -> dict[str, np.ndarray]:
 
 
 def write(path: Path, columns: dict[str, np.ndarray]) -> None:
-    with path.open("w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(list(columns))
-        for row in zip(*columns.values()):
-            writer.writerow([repr(float(v)) for v in row])
+    pd.DataFrame(columns).to_csv(path, index=False, float_format="%.17g")
 
 
 def main() -> None:

@@ -10,10 +10,10 @@ positions read by encoders of 1 um.
 from __future__ import annotations
 
 import argparse
-import csv
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 from scipy.integrate import solve_ivp
 
 TRUTH = {"m1": 2.4, "m2": 0.8, "c1": 0.8, "c2": 0.3, "k": 350.0, "d": 1.5}
@@ -44,11 +44,7 @@ def simulate(seed: int) -> dict[str, np.ndarray]:
 
 
 def write(path: Path, columns: dict[str, np.ndarray]) -> None:
-    with path.open("w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(list(columns))
-        for row in zip(*columns.values()):
-            writer.writerow([repr(float(v)) for v in row])
+    pd.DataFrame(columns).to_csv(path, index=False, float_format="%.17g")
 
 
 def main() -> None:

@@ -38,10 +38,10 @@ TEMPLATE = "ModelObserver"
 #: The base units FMI's <BaseUnit> takes, by pint's dimension name.
 _BASE_UNITS = {"[mass]": "kg", "[length]": "m", "[time]": "s", "[current]": "A",
                "[temperature]": "K", "[substance]": "mol", "[luminosity]": "cd"}
-#: The generic variables that are the model's own, by prefix.
-_PER_COORDINATE = ("position_", "position_estimate_", "velocity_", "f_plus_")
-_PER_INPUT = ("input_",)
-_PER_PARAMETER = ("theta_std_", "theta_")
+#: The generic variables that are the model's own: prefix -> what they are one of.
+_PREFIXES = {"position_": "coordinates", "position_estimate_": "coordinates",
+             "velocity_": "coordinates", "f_plus_": "coordinates", "input_": "inputs",
+             "theta_": "parameters", "theta_std_": "parameters"}
 
 
 class ExportError(ValueError):
@@ -80,51 +80,41 @@ def limits_of(description: etree._Element) -> Limits:
     return Limits(_count(names, "position_"), _count(names, "input_"), _count(names, "theta_"))
 
 
-def _element_index(name: str, prefixes: tuple[str, ...]) -> tuple[str, int] | None:
-    for prefix in prefixes:
-        match = re.fullmatch(re.escape(prefix) + r"(\d+)", name)
-        if match:
-            return prefix, int(match.group(1)) - 1
+def _element_index(name: str) -> tuple[str, int] | None:
+    """(prefix, 0-based index) of a generic element name such as ``theta_std_3``."""
+    match = re.fullmatch(r"([a-z_]+_)(\d+)", name)
+    if match and match.group(1) in _PREFIXES:
+        return match.group(1), int(match.group(2)) - 1
     return None
 
 
 def _rename(model: Model, name: str) -> tuple[str | None, str, str]:
     """The variable's name in the model's FMU (None: left out), its unit and its
     description, for a generic variable of the template."""
-    units = model.units
-    found = _element_index(name, _PER_COORDINATE)
-    if found:
-        prefix, i = found
-        if i >= len(model.coordinates):
-            return None, "", ""
-        c = model.coordinates[i]
-        unit = units.get(c, "")
-        return {
-            "position_": (c, unit, f"Measured {c}"),
-            "position_estimate_": (f"{c}_hat", unit, f"Estimate of {c}"),
-            "velocity_": (f"der({c})", f"{unit}/s" if unit else "",
-                          f"Velocity estimate of {c}"),
-            "f_plus_": (f"observer.f_plus_{c}", f"{unit}/s^2" if unit else "",
-                        f"Bound of the nominal model's acceleration error of {c}: the "
-                        "super-twisting gains by Theorem 3.1"),
-        }[prefix]
-    found = _element_index(name, _PER_INPUT)
-    if found:
-        _, j = found
-        if j >= len(model.inputs):
-            return None, "", ""
-        u = model.inputs[j]
-        return u, units.get(u, ""), f"Known input {u}"
-    found = _element_index(name, _PER_PARAMETER)
-    if found:
-        prefix, k = found
-        if k >= len(model.parameters):
-            return None, "", ""
-        p = model.parameters[k]
-        if prefix == "theta_":
-            return p.name, p.unit, f"Estimate of the unknown {p.name}"
-        return f"{p.name}_std", p.unit, f"Standard error of {p.name} (1 sigma)"
-    return f"observer.{name}", "", ""
+    found = _element_index(name)
+    if found is None:
+        return f"observer.{name}", "", ""
+    prefix, i = found
+    owners = getattr(model, _PREFIXES[prefix])
+    if i >= len(owners):
+        return None, "", ""
+    if _PREFIXES[prefix] == "parameters":
+        p = model.parameters[i]
+        return ((p.name, p.unit, f"Estimate of the unknown {p.name}") if prefix == "theta_"
+                else (f"{p.name}_std", p.unit, f"Standard error of {p.name} (1 sigma)"))
+    owner = owners[i]
+    unit = model.units.get(owner, "")
+    per = {"velocity_": "/s", "f_plus_": "/s^2"}.get(prefix, "")
+    return {
+        "input_": (owner, unit, f"Known input {owner}"),
+        "position_": (owner, unit, f"Measured {owner}"),
+        "position_estimate_": (f"{owner}_hat", unit, f"Estimate of {owner}"),
+        "velocity_": (f"der({owner})", unit + per if unit else "",
+                      f"Velocity estimate of {owner}"),
+        "f_plus_": (f"observer.f_plus_{owner}", unit + per if unit else "",
+                    f"Bound of the nominal model's acceleration error of {owner}: the "
+                    "super-twisting gains by Theorem 3.1"),
+    }[prefix]
 
 
 def _base_unit(unit: str) -> dict[str, str]:
