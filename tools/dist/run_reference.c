@@ -15,6 +15,9 @@
  *
  * Exit status 0 when every reference value is matched within tolerance *
  * max(1, max |reference column|), 1 otherwise, 2 on errors (all printed). */
+#if !defined(_WIN32)
+#define _XOPEN_SOURCE 700 /* realpath */
+#endif
 #if defined(_WIN32)
 #include <windows.h>
 #else
@@ -149,9 +152,15 @@ static char RESOURCE_PATH[4096], RESOURCE_URI[4200];
 
 static void find_resources(const char *binary)
 {
-    const size_t length = strlen(binary);
-    if (length + 16 > sizeof RESOURCE_PATH) die("the binary's path is too long");
-    memcpy(RESOURCE_PATH, binary, length + 1);
+    /* absolute, so that the FMI 2 URI names the same folder from anywhere */
+#if defined(_WIN32)
+    if (!_fullpath(RESOURCE_PATH, binary, sizeof RESOURCE_PATH - 16))
+        die("cannot make %s absolute", binary);
+#else
+    if (strlen(binary) >= sizeof RESOURCE_PATH || !realpath(binary, RESOURCE_PATH))
+        die("cannot make %s absolute", binary);
+#endif
+    if (strlen(RESOURCE_PATH) + 16 > sizeof RESOURCE_PATH) die("the binary's path is too long");
     for (int up = 0; up < 3; ++up) { /* the file, its platform and binaries/ */
         char *cut = NULL;
         for (char *c = RESOURCE_PATH; *c; ++c)
