@@ -23,11 +23,12 @@ from state_layout import field_location
 
 from tools.abuse.abuse_fmi import ERROR, OK, REPO, Raw, assert_usable_after_reset, forge, isolated
 
-OBS, ROBOT = "SuperTwistingObserver", "RobotObserver"
+OBS, ROBOT, MODEL = "SuperTwistingObserver", "RobotObserver", "ModelObserver"
 H = 1e-3
 STEPS = 300  # past the robot's t_id = 0.2 s: its identifier and statistics job run
 # identifier 1: LSM in information form, whose block scores hold the pair lists
-SETUP = {OBS: {"identifier": 1}, ROBOT: {"f_plus[1]": 1000.0, "f_plus[2]": 1000.0}}
+SETUP = {OBS: {"identifier": 1}, ROBOT: {"f_plus[1]": 1000.0, "f_plus[2]": 1000.0},
+         MODEL: {"t_id": 0.0}}
 FORMAT = {"i": "<i", "u": "<I", "d": "<d"}
 INT_MAX = 2**31 - 1
 
@@ -73,13 +74,28 @@ CASES = [
     (ROBOT, [("obs.dof[0].z1", "d", math.nan)], "obs (its byte"),
     (ROBOT, [("statistics.age", "d", math.nan)], "statistics.age"),
     (ROBOT, [("model.axis[0][0]", "d", 1e300)], "model"),
+    # the model file's program (its resources) cannot be patched: it is this instance's
+    (MODEL, [("program.op[0]", "i", 99)], "another model file"),
+    (MODEL, [("program.start[0][0]", "i", 100000)], "another model file"),
+    (MODEL, [("program.n", "i", 4)], "another model file"),
+    (MODEL, [("pipe.id.p", "i", 84)], "id.p"),
+    (MODEL, [("pipe.id.run_end[0][0]", "i", 100000)], "id.run_end"),
+    (MODEL, [("pipe.warm_samples", "i", -1)], "warm_samples"),
+    (MODEL, [("pipe.warm_samples", "i", 100000)], "warm_samples"),
+    (MODEL, [("pipe.statistics.stage", "i", 9)], "statistics.stage"),
+    (MODEL, [("pipe.bank.follow", "i", 15)], "an index of pipe.bank"),
+    (MODEL, [("pipe.obs.n", "i", 0)], "obs.n"),
+    (MODEL, [("pipe.identifying", "i", 2)], "identifying"),
+    (MODEL, [("pipe.Y.row[0][0]", "d", math.nan)], "the model data (its byte"),
 ]
 IDS = [f"{model[:5]}-{'+'.join(p[0] for p in patches)}={patches[-1][2]}"
        for model, patches, _ in CASES]
 
 
 def _drive(set_inputs, model: str, t: float):
-    if model == OBS:
+    if model == MODEL:  # the template's pendulum
+        set_inputs({"position_1": 0.3 * math.sin(2 * t), "input_1": 2.0 * math.cos(3 * t)})
+    elif model == OBS:
         set_inputs({"y": 0.5 * math.sin(3 * t), "u": math.cos(2 * t)})
     else:
         set_inputs({"q": [0.3 * math.sin(2 * t), 0.2 * math.sin(3 * t)],
@@ -175,6 +191,7 @@ CONFIGURATIONS = [
              **{f"base_columns[{k + 1}]": k for k in range(84)}}),
     (OBS, {"identifier": 2, "nominal_model": 2, "n": 2, "l": 4, "mff_drift": True}),
     ("Pendulum", {}), ("TwistingController", {}),
+    (MODEL, {"t_id": 0.0}), (MODEL, {"identifier": 2}), (MODEL, {"scheme": 2}),
 ]
 
 
@@ -195,7 +212,7 @@ def test_fmi2_states_the_fmu_wrote_are_accepted_and_continue_exactly(model, para
         assert f.initialize(parameters) <= 1, f.messages()
         t = 0.0
         for k in range(1500):
-            if model in (OBS, ROBOT):
+            if model in (OBS, ROBOT, MODEL):
                 _drive(_fmi2_inputs(f, model), model, t)
             if k % 149 == 0:
                 copy = Raw(model, "copy")
@@ -234,8 +251,10 @@ def _fmi3_run(model: str, steps: int) -> tuple[RawFMU3, float]:
     assert f.call("EnterInitializationMode", False, 0.0, 0.0, False, 0.0) == OK
     if model == OBS:
         assert f.set("Int32", {"identifier": [1]}) == OK, f.messages()
-    else:
+    elif model == ROBOT:
         assert f.set("Float64", {"f_plus": [1000.0] * f.size["f_plus"]}) == OK, f.messages()
+    else:
+        assert f.set("Float64", {k: [v] for k, v in SETUP[model].items()}) == OK, f.messages()
     assert f.call("ExitInitializationMode") == OK, f.messages()
     t = 0.0
     for _ in range(steps):

@@ -3,6 +3,7 @@ logger that records messages, status codes instead of exceptions, and NULL point
 from __future__ import annotations
 
 import ctypes
+import os
 from pathlib import Path
 
 import numpy as np
@@ -145,6 +146,8 @@ class RawFMU3:
                                modelIdentifier=self.md.coSimulation.modelIdentifier,
                                instanceName=name)
         self.f = self.slave._functions
+        # the resource path as FMI 3 gives it: native, with a trailing separator
+        self.resources = os.path.join(RawFMU3._extracted[fmu], "resources", "")
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.size = {v.name: int(np.prod(v.shape)) if v.shape else 1
                      for v in self.md.modelVariables}
@@ -161,7 +164,8 @@ class RawFMU3:
         required = (ctypes.c_uint * max(1, n_required))()
         self.c = self.f["fmi3InstantiateCoSimulation"](
             name.encode() if name is not None else None, (token or self.md.guid).encode(),
-            None, False, False, event_mode, False, required, n_required, None, self._logger,
+            self.resources.encode(), False, False, event_mode, False, required, n_required, None,
+            self._logger,
             self.f["fmi3InstantiateCoSimulation"].argtypes[-1]())  # no intermediate update
         return self.c
 
