@@ -138,6 +138,9 @@ LOG_OPTIONS = {"identifier": ("--identifier", "lsm"), "param": ("--param", []),
 
 
 def cmd_identify(args) -> int:
+    if args.urdf_tolerance is not None and not args.robot:
+        raise InputError("harness identify: --urdf-tolerance is the URDF's prior: it needs "
+                         "--robot")
     if args.model:  # a model file: harness.model.commands
         given = [option for dest, (option, default) in LOG_OPTIONS.items()
                  if getattr(args, dest) != default]
