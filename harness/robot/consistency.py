@@ -18,12 +18,16 @@ The fit minimizes D + w P:
   mass and size, or what the data make of the parameter, never an absolute floor);
 - w = 1 (the prior at the stated tolerance) unless that takes beta(pi) out of the
   estimate's 95 % confidence region (D > chi2_r(0.95), widened by the distance of the
-  nearest consistent point when even that lies outside): then the largest w < 1 that
-  keeps it inside.  The prior decides what the data leave open and never outweighs
-  what they determine.
+  nearest consistent point when even that lies outside) or makes the training-log
+  prediction more than PREDICTION_MARGIN worse than the estimate's (when the pipeline
+  passes its score: the sandwich covariance of a log whose residual is mostly model
+  error, not noise, is wide): then the largest w < 1 (bisection in log w) that keeps
+  it inside.  The prior decides what the data leave open and never outweighs what they
+  determine.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -42,6 +46,7 @@ DEFAULT_URDF_TOLERANCE = 0.3
 CONFIDENCE = 0.95        # of the region the consistent parameters stay in
 MIN_PRIOR_WEIGHT = 1e-8  # the weakest prior tried (it still picks the unidentified values)
 WEIGHT_HALVINGS = 10     # bisection steps (in log w) when w = 1 leaves the region
+PREDICTION_MARGIN = 0.02  # relative: the training-log error allowed above the estimate's
 
 
 @dataclass
@@ -54,6 +59,8 @@ class Projection:
     bound: float            # D allowed: chi2_r(CONFIDENCE) (+ nearest, if computed)
     prior_weight: float     # w: 1 = the URDF at the stated tolerance
     tolerance: float        # the stated relative tolerance of the URDF's values
+    error: float            # score(beta(pi)) (0 without a score)
+    error_bound: float      # the score allowed
 
 
 def pseudo_inertia(link: np.ndarray) -> np.ndarray:
@@ -139,13 +146,17 @@ def _link_jacobian(theta: np.ndarray) -> np.ndarray:
 
 def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
                           covariance: np.ndarray, data_scale: np.ndarray | None = None,
-                          tolerance: float = DEFAULT_URDF_TOLERANCE) -> Projection:
+                          tolerance: float = DEFAULT_URDF_TOLERANCE,
+                          score: Callable[[np.ndarray], float] | None = None) -> Projection:
     """Standard parameters pi (12 n) that are physically consistent, keep beta(pi) in
     the estimate's confidence region (covariance (r, r) of beta) and are as close to
     the URDF's values as `tolerance` (relative, > 0) says where the data allow (see the
     module's description).  data_scale (12 n): see prior_scales (None: the URDF's
-    values and link sizes alone).  Only the links and friction among the identified
-    (base and dependent) columns move."""
+    values and link sizes alone).  score(beta), if given, is the training-log prediction
+    error of base parameters beta: the prior is weakened also where it would make it more
+    than PREDICTION_MARGIN (relative) larger than the estimate's (or the nearest
+    consistent point's, if that is larger).  Only the links and friction among the
+    identified (base and dependent) columns move."""
     if not (np.isfinite(tolerance) and tolerance > 0):
         raise ValueError(f"the URDF tolerance must be a finite number > 0, not {tolerance!r}")
     n = robot.n
@@ -156,13 +167,14 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
     whiten = _whitening(beta, covariance)
     if data_scale is None:
         data_scale = np.full(12 * n, np.nan)
-    prior = 1.0 / (tolerance * prior_scales(nominal, n, data_scale)[free])
+    scales = prior_scales(nominal, n, data_scale)
+    prior = 1.0 / (tolerance * scales[free])
 
     def unpack(x: np.ndarray) -> np.ndarray:
         pi = nominal.copy()
         for j, i in enumerate(links):
             pi[10 * i:10 * i + 10] = _link(x[10 * j:10 * j + 10])
-        pi[friction] = x[10 * len(links):]
+        pi[friction] = x[10 * len(links):] ** 2  # >= 0
         return pi
 
     def derivative(x: np.ndarray) -> np.ndarray:
@@ -170,7 +182,7 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
         D = np.zeros((12 * n, len(x)))
         for j, i in enumerate(links):
             D[10 * i:10 * i + 10, 10 * j:10 * j + 10] = _link_jacobian(x[10 * j:10 * j + 10])
-        D[friction, 10 * len(links) + np.arange(len(friction))] = 1.0
+        D[friction, 10 * len(links) + np.arange(len(friction))] = 2 * x[10 * len(links):]
         return D
 
     projector = whiten @ base.project(np.eye(12 * n)).T  # W P: whitened beta of pi
@@ -192,37 +204,51 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
             D = derivative(x)
             return np.vstack([projector @ D, (root * prior)[:, None] * D[free]])
 
-        x = scipy.optimize.least_squares(residual, start, jac=jacobian,
-                                         bounds=(lower, np.inf), x_scale="jac", method="dogbox",
-                                         max_nfev=2000).x
+        x = scipy.optimize.least_squares(residual, start, jac=jacobian, method="lm",
+                                         x_scale="jac", max_nfev=4000).x
         return x, float(np.sum(data_residual(x) ** 2))
 
-    start = np.concatenate([*(_log_cholesky(nominal[10 * i:10 * i + 10]) for i in links),
-                            np.maximum(nominal[friction], 0.0)])
-    lower = np.concatenate([np.full(10 * len(links), -np.inf), np.zeros(len(friction))])
-    # friction from the base estimate directly: its columns are always base columns
+    # friction from the base estimate directly (its columns are always base columns),
+    # as the square root of a value > 0: a zero would have no gradient
+    value = np.maximum(nominal[friction], 0.0)
     for k, column in enumerate(friction):
         if column in base.base:
-            start[10 * len(links) + k] = max(beta[list(base.base).index(column)], 0.0)
+            value[k] = max(beta[list(base.base).index(column)], 0.0)
+    value = np.maximum(value, 1e-6 * scales[friction])
+    start = np.concatenate([*(_log_cholesky(nominal[10 * i:10 * i + 10]) for i in links),
+                            np.sqrt(value)])
     region = float(scipy.stats.chi2.ppf(CONFIDENCE, len(beta)))
+    error = score or (lambda _: 0.0)
+    estimate_error = error(beta)
+
+    def inside(x: np.ndarray, distance: float, bound: float, error_bound: float) -> bool:
+        return distance <= bound and error(base.project(unpack(x))) <= error_bound
+
+    def done(x: np.ndarray, distance: float, nearest: float, bound: float,
+             weight: float) -> Projection:
+        return Projection(unpack(x), distance, nearest, bound, weight, tolerance,
+                          error(base.project(unpack(x))), error_bound)
+
+    error_bound = (1 + PREDICTION_MARGIN) * estimate_error
     x, distance = solve(1.0, start)
-    if distance <= region:
-        return Projection(unpack(x), distance, float("nan"), region, 1.0, tolerance)
+    if inside(x, distance, region, error_bound):
+        return done(x, distance, float("nan"), region, 1.0)
     # the prior at the stated tolerance leaves the region: how far is the nearest
     # consistent point, and how much prior keeps within the region around it
     best, nearest = solve(MIN_PRIOR_WEIGHT, x)
     bound = nearest + region
-    if distance <= bound:
-        return Projection(unpack(x), distance, nearest, bound, 1.0, tolerance)
+    error_bound = (1 + PREDICTION_MARGIN) * max(estimate_error, error(base.project(unpack(best))))
+    if inside(x, distance, bound, error_bound):
+        return done(x, distance, nearest, bound, 1.0)
     low, high, best_distance = np.log10(MIN_PRIOR_WEIGHT), 0.0, nearest
     for _ in range(WEIGHT_HALVINGS):
         middle = 0.5 * (low + high)
         trial, trial_distance = solve(10.0 ** middle, best)
-        if trial_distance <= bound:
+        if inside(trial, trial_distance, bound, error_bound):
             low, best, best_distance = middle, trial, trial_distance
         else:
             high = middle
-    return Projection(unpack(best), best_distance, nearest, bound, 10.0 ** low, tolerance)
+    return done(best, best_distance, nearest, bound, 10.0 ** low)
 
 
 def _whitening(beta: np.ndarray, covariance: np.ndarray) -> np.ndarray:

@@ -213,10 +213,16 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     with np.errstate(divide="ignore"):
         data_scale = (np.linalg.norm(torque * mask) /
                       np.linalg.norm(Y * mask[:, :, None], axis=(0, 1)))
-    projection = consistent_parameters(robot, base, fit.beta, fit.covariance, data_scale,
-                                       urdf_tolerance)
     names = robot.joint_names
     known_torque = Y[:, :, known] @ nominal[known]
+    Yb, measured = base.regressor(Y) * mask[:, :, None], torque * mask
+    left, total = measured - known_torque * mask, float(np.linalg.norm(measured))
+
+    def score(beta: np.ndarray) -> float:
+        """The pooled training-log error of base parameters beta (prediction_error)."""
+        return float(np.linalg.norm(left - Yb @ beta)) / total if total > 0 else 0.0
+    projection = consistent_parameters(robot, base, fit.beta, fit.covariance, data_scale,
+                                       urdf_tolerance, score)
     predictions = {
         "urdf": prediction_error(Y @ nominal, torque, mask, names),
         "estimate": prediction_error(known_torque + base.regressor(Y) @ fit.beta, torque,
@@ -312,7 +318,8 @@ def _assessment_json(result: Identification) -> dict:
             "urdf_tolerance": p.tolerance, "mahalanobis_distance2": p.distance,
             "confidence_bound": p.bound,
             "nearest_consistent_distance2": None if np.isnan(p.nearest) else p.nearest,
-            "prior_weight": p.prior_weight}
+            "prior_weight": p.prior_weight, "training_error": p.error,
+            "training_error_bound": p.error_bound}
     return out
 
 
