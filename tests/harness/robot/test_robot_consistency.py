@@ -14,8 +14,6 @@ from scipy.integrate import solve_ivp
 
 from harness.cli import main
 from harness.robot import pipeline
-from harness.robot.assessment import CONSISTENT_MARGIN, Prediction, choose_model
-from harness.robot.consistency import prior_scales
 from harness.robot.examples import example_urdf
 from harness.robot.urdf import read_urdf
 
@@ -68,6 +66,7 @@ def test_the_consistent_model_predicts_the_training_log_as_well_as_the_estimate(
     data = write_log(tmp_path / "ur5.csv", t, quantized(q, 2 * np.pi / 2 ** 17),
                      truth.inverse_dynamics(q, qd, qdd))
     summary = identify(data, path, tmp_path / "out", locked=locked)
+    from harness.robot.assessment import CONSISTENT_MARGIN
     scores = summary["training_prediction"]
     estimate, consistent = scores["estimate"]["pooled"], scores["consistent"]["pooled"]
     warned = any("worse than the base-parameter estimate" in w for w in summary["warnings"])
@@ -180,11 +179,13 @@ def test_an_identified_model_worse_than_the_urdf_keeps_the_urdf(tmp_path, monkey
     assert np.array_equal(identified.arrays()["friction"], robot.arrays()["friction"])
 
 
-def _prediction(pooled: float) -> Prediction:
+def _prediction(pooled: float):
+    from harness.robot.assessment import Prediction
     return Prediction(pooled, {"j": pooled})
 
 
 def test_the_choice_between_the_consistent_model_the_estimate_and_the_urdf():
+    from harness.robot.assessment import choose_model
     consistent, nominal = np.ones(3), np.zeros(3)
     close = choose_model({"urdf": _prediction(0.3), "estimate": _prediction(0.10),
                           "consistent": _prediction(0.104)}, consistent, nominal)
@@ -201,6 +202,7 @@ def test_the_choice_between_the_consistent_model_the_estimate_and_the_urdf():
 def test_the_prior_scales_have_no_absolute_floor():
     """Friction the URDF leaves at 0 takes the data's scale, a zero first moment the
     link's mass times its size, a massless link the data's scale."""
+    from harness.robot.consistency import prior_scales
     n = 2
     nominal = np.zeros(12 * n)
     moment = 0.04 / 3  # size sqrt(tr I / 2 m) = 0.1 m
