@@ -7,7 +7,7 @@ by construction (log-Cholesky): per link, the pseudo-inertia
     J = [[Sigma, h], [h^T, m]] = L L^T,  Sigma = tr(I_o)/2 * 1 - I_o,
 with L lower triangular with positive (exponential) diagonal, is positive definite:
 m > 0 and an inertia about the centre of mass that is positive definite and satisfies
-the triangle inequalities.  Friction is kept >= 0.
+the triangle inequalities.  Friction is the square of its coordinate: >= 0.
 
 The fit minimizes D + w P:
 - D = (beta(pi) - beta_hat)^T C^-1 (beta(pi) - beta_hat), the estimate's Mahalanobis
@@ -59,8 +59,8 @@ class Projection:
     bound: float            # D allowed: chi2_r(CONFIDENCE) (+ nearest, if computed)
     prior_weight: float     # w: 1 = the URDF at the stated tolerance
     tolerance: float        # the stated relative tolerance of the URDF's values
-    error: float            # score(beta(pi)) (0 without a score)
-    error_bound: float      # the score allowed
+    error: float            # score(beta(pi)): the training-log error (0 without a score)
+    error_bound: float      # the training-log error allowed
 
 
 def pseudo_inertia(link: np.ndarray) -> np.ndarray:
@@ -219,36 +219,36 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
                             np.sqrt(value)])
     region = float(scipy.stats.chi2.ppf(CONFIDENCE, len(beta)))
     error = score or (lambda _: 0.0)
-    estimate_error = error(beta)
 
-    def inside(x: np.ndarray, distance: float, bound: float, error_bound: float) -> bool:
-        return distance <= bound and error(base.project(unpack(x))) <= error_bound
+    def model_error(x: np.ndarray) -> float:
+        return error(base.project(unpack(x)))
 
-    def done(x: np.ndarray, distance: float, nearest: float, bound: float,
-             weight: float) -> Projection:
-        return Projection(unpack(x), distance, nearest, bound, weight, tolerance,
-                          error(base.project(unpack(x))), error_bound)
-
-    error_bound = (1 + PREDICTION_MARGIN) * estimate_error
+    # w = 1: the prior at the stated tolerance
     x, distance = solve(1.0, start)
-    if inside(x, distance, region, error_bound):
-        return done(x, distance, float("nan"), region, 1.0)
-    # the prior at the stated tolerance leaves the region: how far is the nearest
-    # consistent point, and how much prior keeps within the region around it
+    error_bound = (1 + PREDICTION_MARGIN) * error(beta)
+    if distance <= region and model_error(x) <= error_bound:
+        return Projection(unpack(x), distance, float("nan"), region, 1.0, tolerance,
+                          model_error(x), error_bound)
+    # it leaves the region: how far is the nearest consistent point (w -> 0), and how much
+    # prior keeps the model within the region around it
     best, nearest = solve(MIN_PRIOR_WEIGHT, x)
     bound = nearest + region
-    error_bound = (1 + PREDICTION_MARGIN) * max(estimate_error, error(base.project(unpack(best))))
-    if inside(x, distance, bound, error_bound):
-        return done(x, distance, nearest, bound, 1.0)
-    low, high, best_distance = np.log10(MIN_PRIOR_WEIGHT), 0.0, nearest
-    for _ in range(WEIGHT_HALVINGS):
-        middle = 0.5 * (low + high)
-        trial, trial_distance = solve(10.0 ** middle, best)
-        if inside(trial, trial_distance, bound, error_bound):
-            low, best, best_distance = middle, trial, trial_distance
-        else:
-            high = middle
-    return done(best, best_distance, nearest, bound, 10.0 ** low)
+    error_bound = max(error_bound, (1 + PREDICTION_MARGIN) * model_error(best))
+    weight, best_distance = MIN_PRIOR_WEIGHT, nearest
+    if distance <= bound and model_error(x) <= error_bound:
+        weight, best, best_distance = 1.0, x, distance
+    else:
+        low, high = np.log10(MIN_PRIOR_WEIGHT), 0.0
+        for _ in range(WEIGHT_HALVINGS):
+            middle = 0.5 * (low + high)
+            trial, trial_distance = solve(10.0 ** middle, best)
+            if trial_distance <= bound and model_error(trial) <= error_bound:
+                low, best, best_distance = middle, trial, trial_distance
+            else:
+                high = middle
+        weight = 10.0 ** low
+    return Projection(unpack(best), best_distance, nearest, bound, weight, tolerance,
+                      model_error(best), error_bound)
 
 
 def _whitening(beta: np.ndarray, covariance: np.ndarray) -> np.ndarray:

@@ -210,12 +210,14 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     check_friction_rows(mask, qd[used], robot.joint_names, min_speed)
     fit = torque_least_squares(base.regressor(Y), z, batch=correlation, mask=mask)
     # each parameter's value that alone would explain the torques (prior_scales)
+    measured = torque * mask
     with np.errstate(divide="ignore"):
-        data_scale = (np.linalg.norm(torque * mask) /
-                      np.linalg.norm(Y * mask[:, :, None], axis=(0, 1)))
+        data_scale = (np.linalg.norm(measured) /
+                      np.sqrt(np.einsum("kij,kij,ki->j", Y, Y, mask.astype(float))))
     names = robot.joint_names
     known_torque = Y[:, :, known] @ nominal[known]
-    Yb, measured = base.regressor(Y) * mask[:, :, None], torque * mask
+    Yb = base.regressor(Y)  # a copy (fancy indexing): masked in place
+    Yb *= mask[:, :, None]
     left, total = measured - known_torque * mask, float(np.linalg.norm(measured))
 
     def score(beta: np.ndarray) -> float:

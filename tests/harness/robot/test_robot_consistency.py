@@ -218,7 +218,7 @@ def test_the_prior_scales_have_no_absolute_floor():
 
 def test_the_tolerance_is_refused_unless_positive(tmp_path, capsys):
     path, _ = example_urdf("double_pendulum")
-    for value in ("0", "-1", "nan"):
+    for value in ("0", "-1", "nan", "inf"):
         with pytest.raises(SystemExit) as stop:
             main(["identify", "log.csv", "--robot", str(path), "--urdf-tolerance", value,
                   "--out", str(tmp_path / "o")])
