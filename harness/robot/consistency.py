@@ -45,7 +45,7 @@ from .urdf import Robot, body_inertial, check_inertia, inertia_matrix, parse_urd
 DEFAULT_URDF_TOLERANCE = 0.3
 CONFIDENCE = 0.95        # of the region the consistent parameters stay in
 MIN_PRIOR_WEIGHT = 1e-8  # the weakest prior tried (it still picks the unidentified values)
-WEIGHT_HALVINGS = 10     # bisection steps (in log w) when w = 1 leaves the region
+WEIGHT_HALVINGS = 6      # bisection steps in log w (to 1/8 of a decade) when w = 1 leaves
 PREDICTION_MARGIN = 0.02  # relative: the training-log error allowed above the estimate's
 
 
