@@ -46,6 +46,10 @@ DEFAULT_URDF_TOLERANCE = 0.3
 CONFIDENCE = 0.95        # of the region the consistent parameters stay in
 MIN_PRIOR_WEIGHT = 1e-8  # the weakest prior tried (it still picks the unidentified values)
 WEIGHT_HALVINGS = 6      # bisection steps in log w (to 1/8 of a decade) when w = 1 leaves
+# relative standard deviation added to each base parameter's: no estimate is taken as
+# more precise than this (a noise-free log's would make the fit needlessly stiff; the
+# training-log bound PREDICTION_MARGIN still holds the result to the estimate's fit)
+COVARIANCE_FLOOR = 1e-4
 PREDICTION_MARGIN = 0.02  # relative: the training-log error allowed above the estimate's
 
 
@@ -253,10 +257,11 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
 
 def _whitening(beta: np.ndarray, covariance: np.ndarray) -> np.ndarray:
     """W = L^-1 with L L^T the covariance, regularized so that exact (noise-free)
-    estimates keep a finite weight: 1e-6 of each |beta_k| (of 1e-6 of the largest for
-    beta_k = 0) added in quadrature."""
+    estimates keep a finite weight: COVARIANCE_FLOOR of each |beta_k| (of that of 1e-6 of
+    the largest for beta_k = 0) added in quadrature."""
     magnitude = np.abs(beta)
-    floor = 1e-6 * np.maximum(magnitude, 1e-6 * max(float(magnitude.max(initial=0.0)), 1e-300))
+    floor = COVARIANCE_FLOOR * np.maximum(
+        magnitude, 1e-6 * max(float(magnitude.max(initial=0.0)), 1e-300))
     C = np.asarray(covariance, float) + np.diag(floor ** 2)
     try:
         L = np.linalg.cholesky(0.5 * (C + C.T))
