@@ -160,6 +160,9 @@ def _refuse(given: list[str], path: str, why: str) -> None:
 
 
 def cmd_identify(args) -> int:
+    if args.urdf_tolerance is not None and not args.robot:
+        raise InputError("harness identify: --urdf-tolerance is the URDF's prior: it needs "
+                         "--robot")
     if args.model:  # a model file: harness.model.commands
         given = _given(args, LOG_OPTIONS) + _given(args, ROBOT_OPTIONS)
         given += ["--robot"] if args.robot else []

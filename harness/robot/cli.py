@@ -31,6 +31,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--min-speed", type=_non_negative, default=None, metavar="V",
                        help="leave out joint equations at |q'| < V [rad/s or m/s], where "
                             "Coulomb friction is not f_c sign(q') (default 0.05)")
+    group.add_argument("--urdf-tolerance", type=_positive("--urdf-tolerance"), default=None,
+                       metavar="FRACTION",
+                       help="how far the URDF's masses, inertias and friction are trusted, "
+                            "relative (0.3: within +-30 %%, the default): the prior that "
+                            "picks the physically consistent parameters the data leave open; "
+                            "it never moves them out of the estimate's confidence region")
     add_unit_arguments(group, time=False)  # identify's --time-unit serves every log
 
 
@@ -116,6 +122,8 @@ def identify_command(args) -> int:
             robot = read_urdf(args.robot, locked=tuple(args.lock))
             log = read_log(args.data, robot.n, mapping, units=units_of(args, robot))
             speed = {} if args.min_speed is None else {"min_speed": args.min_speed}
+            if args.urdf_tolerance is not None:
+                speed["urdf_tolerance"] = args.urdf_tolerance
             result = identify_robot(robot, log, unknown=args.unknown, method=args.velocity,
                                     window=args.window, **speed)
             written = write_results(outputs.staging, robot, log, result, Path(args.data).name)
@@ -127,7 +135,22 @@ def identify_command(args) -> int:
     for i, joint in enumerate(robot.joints):
         print(f"  {joint.name}: mass {result.pi[10 * i]:.6g} kg, viscous "
               f"{result.pi[10 * n + 2 * i]:.6g}, Coulomb {result.pi[10 * n + 2 * i + 1]:.6g}")
+    _print_assessment(result)
     return 0
+
+
+def _print_assessment(result) -> None:
+    """The training-log prediction errors, the passive joints and the warnings."""
+    if result.choice is not None:
+        scores = ", ".join(f"{name} {100 * p.pooled:.3f} %"
+                           for name, p in result.choice.predictions.items())
+        print(f"  training-log torque prediction error (pooled): {scores}; identified.urdf "
+              f"holds the {result.choice.written} model")
+    for name in result.passive:
+        print(f"  {name}: torque 0 throughout, taken as a passive joint (its equation, "
+              f"torque = 0, constrains the parameters)")
+    for message in result.warnings:
+        print(f"harness identify: warning: {message}", file=sys.stderr)
 
 
 def register_fmu_parameters(sub, parents) -> None:

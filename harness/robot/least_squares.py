@@ -12,6 +12,7 @@ class Fit:
     std_error: np.ndarray      # (r,) sandwich standard errors
     residual_rms: np.ndarray   # (n,) per joint
     condition: float           # of the weighted regression matrix
+    covariance: np.ndarray     # (r, r) sandwich covariance of beta
 
     def relative_errors(self, truth: np.ndarray) -> np.ndarray:
         return np.abs(self.beta - truth) / np.maximum(np.abs(truth), 1e-12)
@@ -49,5 +50,7 @@ def torque_least_squares(Yb: np.ndarray, z: np.ndarray, batch: int = 1,
     batch_scores = scores[:usable].reshape(-1, batch, r).sum(axis=1)
     S = batch_scores.T @ batch_scores * (N / max(usable, 1))
     gamma = np.linalg.inv(information)
-    std = np.sqrt(np.maximum(np.einsum("ab,bc,ca->a", gamma, S, gamma), 0.0))
-    return Fit(beta, std, rms, float(np.linalg.cond(A.reshape(-1, r))))
+    covariance = gamma @ S @ gamma
+    covariance = 0.5 * (covariance + covariance.T)
+    std = np.sqrt(np.maximum(np.diag(covariance), 0.0))
+    return Fit(beta, std, rms, float(np.linalg.cond(A.reshape(-1, r))), covariance)

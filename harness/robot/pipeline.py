@@ -23,7 +23,7 @@ from __future__ import annotations
 import csv
 import json
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -37,8 +37,14 @@ from ..log_columns import (
     read_header,
     uneven_step,
 )
+from .assessment import Choice, choose_model, prediction_error
 from .base_parameters import BaseParameters, base_parameters
-from .consistency import consistent_parameters, write_identified_urdf
+from .consistency import (
+    DEFAULT_URDF_TOLERANCE,
+    Projection,
+    consistent_parameters,
+    write_identified_urdf,
+)
 from .filtered_regression import filtered_regression, low_pass
 from .least_squares import Fit, torque_least_squares
 from .log_units import LogUnits
@@ -178,11 +184,19 @@ class Identification:
     velocity: np.ndarray          # (N, n)
     used: np.ndarray              # indices of the samples used in the regression
     velocity_window: np.ndarray | None = None  # per joint [s] ("sg": the velocity's window)
+    projection: Projection | None = None  # the consistent parameters and their distance
+    choice: Choice | None = None          # the training-log scores, what is written, warnings
+    passive: list[str] = field(default_factory=list)  # joints whose torque is 0 throughout
+
+    @property
+    def warnings(self) -> list[str]:
+        return [] if self.choice is None else self.choice.warnings
 
 
 def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: str = "sg",
                    window: float = 0.05, tau: float = 0.02, max_samples: int = 20000,
-                   skip: float = 0.5, min_speed: float | None = None) -> Identification:
+                   skip: float = 0.5, min_speed: float | None = None,
+                   urdf_tolerance: float = DEFAULT_URDF_TOLERANCE) -> Identification:
     """Identify the unknown parameters ("all" or "payload") from the log.
 
     The first `skip` seconds (observer convergence, filter edges) and the last window
@@ -190,7 +204,11 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     Joint i's equation is left out near its velocity reversals and where
     |q_i'| < min_speed (rad/s or m/s, None: the core's default; see friction_rows).
     method "observer": tau is the time constant of the regression's causal filter (two
-    first-order stages)."""
+    first-order stages).  urdf_tolerance: how far (relative) the URDF's values are
+    trusted where the data leave the consistent parameters open (consistency.py); the
+    URDF's values are kept if the identified model predicts the training log worse
+    (assessment.py).  A joint whose torque is 0 throughout is passive: its equation
+    (torque = 0) constrains the parameters like any other."""
     if log.q.shape[1] != robot.n:
         raise LogError(f"the log has {log.q.shape[1]} joints, the robot {robot.n}")
     if method not in ("sg", "observer"):
@@ -239,8 +257,31 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
         speed[:, i] = x[used]
     check_friction_rows(mask, speed, robot.joint_names, min_speed)
     fit = torque_least_squares(base.regressor(Y), z, batch=correlation, mask=mask)
-    pi = consistent_parameters(robot, base, fit.beta, fit.std_error)
-    return Identification(base, fit, pi, velocity, used, velocity_window)
+    # each parameter's value that alone would explain the torques (prior_scales)
+    measured = torque * mask
+    with np.errstate(divide="ignore"):
+        data_scale = (np.linalg.norm(measured) /
+                      np.sqrt(np.einsum("kij,kij,ki->j", Y, Y, mask.astype(float))))
+    names = robot.joint_names
+    known_torque = Y[:, :, known] @ nominal[known]
+    Yb = base.regressor(Y)  # a copy (fancy indexing): masked in place
+    Yb *= mask[:, :, None]
+    left, total = measured - known_torque * mask, float(np.linalg.norm(measured))
+
+    def score(beta: np.ndarray) -> float:
+        """The pooled training-log error of base parameters beta (prediction_error)."""
+        return float(np.linalg.norm(left - Yb @ beta)) / total if total > 0 else 0.0
+    projection = consistent_parameters(robot, base, fit.beta, fit.covariance, data_scale,
+                                       urdf_tolerance, score)
+    predictions = {
+        "urdf": prediction_error(Y @ nominal, torque, mask, names),
+        "estimate": prediction_error(known_torque + base.regressor(Y) @ fit.beta, torque,
+                                     mask, names),
+        "consistent": prediction_error(Y @ projection.pi, torque, mask, names)}
+    choice = choose_model(predictions, projection.pi, nominal)
+    passive = [name for i, name in enumerate(names) if not np.any(log.u[:, i])]
+    return Identification(base, fit, choice.pi, velocity, used, velocity_window, projection,
+                          choice, passive)
 
 
 def friction_rows(velocity: np.ndarray, h: float, margin: float,
@@ -317,6 +358,29 @@ def _near(events: np.ndarray, at: np.ndarray, h: float, margin: float) -> np.nda
             > np.searchsorted(events, at - half, side="left"))
 
 
+def _assessment_json(result: Identification) -> dict:
+    """summary.json's record of the training-log predictions, the consistent projection,
+    what identified.urdf holds and the warnings."""
+    out: dict = {"passive_joints": result.passive, "warnings": result.warnings}
+    if result.choice is not None:
+        out["training_prediction"] = {
+            **{name: p.as_json() for name, p in result.choice.predictions.items()},
+            "definition": "RMS of (predicted - measured torque) over RMS of the measured "
+                          "torque over the joint equations the regression used, per joint "
+                          "and pooled; urdf: the input URDF, estimate: the base-parameter "
+                          "least squares, consistent: the physically consistent parameters"}
+        out["identified_urdf_holds"] = result.choice.written
+    if result.projection is not None:
+        p = result.projection
+        out["consistency"] = {
+            "urdf_tolerance": p.tolerance, "mahalanobis_distance2": p.distance,
+            "confidence_bound": p.bound,
+            "nearest_consistent_distance2": None if np.isnan(p.nearest) else p.nearest,
+            "prior_weight": p.prior_weight, "training_error": p.error,
+            "training_error_bound": p.error_bound}
+    return out
+
+
 def write_results(out: Path, robot: Robot, log: JointLog, result: Identification,
                   data_name: str) -> list[Path]:
     """velocities.csv, parameters.csv, identified.urdf, summary.json and a plot."""
@@ -331,7 +395,8 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
                        delimiter=",", header=header if start == 0 else "", comments="")
     parameters = out / "parameters.csv"
     nominal_beta = result.base.project(robot.parameters())
-    consistent_beta = result.base.project(result.pi)
+    consistent_beta = result.base.project(result.pi if result.projection is None
+                                          else result.projection.pi)
     with parameters.open("w", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(["parameter", "urdf", "estimate", "std_error", "consistent", "definition"])
@@ -340,7 +405,11 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
                              f"{result.fit.beta[k]:.10g}", f"{result.fit.std_error[k]:.3g}",
                              f"{consistent_beta[k]:.10g}", result.base.description(k)])
     urdf = out / "identified.urdf"
+    kept = result.choice is not None and result.choice.written == "urdf"
     write_identified_urdf(robot, result.pi, urdf,
+                          f"the input URDF's inertials and joint dynamics, kept: the model "
+                          f"identified from {data_name} predicts it worse (summary.json)"
+                          if kept else
                           f"inertials and joint dynamics identified from {data_name} by "
                           f"python -m harness identify")
     summary = out / "summary.json"
@@ -354,6 +423,7 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
         "condition_number": result.fit.condition,
         "base_parameters": result.base.count,
         "samples_used": int(len(result.used)),
+        **_assessment_json(result),
         **({} if result.velocity_window is None else
            {"velocity_window_s": dict(zip(names, result.velocity_window.tolist()))}),
     }, indent=2) + "\n")

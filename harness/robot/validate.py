@@ -5,7 +5,9 @@ The positions pass the same zero-phase Savitzky-Golay filter as the identificati
 (`savitzky_golay`: q, q', q'' and the measured torques alike), the URDF's inverse
 dynamics with its friction predicts the torques, and the score is the field's: the
 RMS of the prediction error over the RMS of the measured torque, per joint and pooled
-over the joints, the filter's edges left out."""
+over the joints, the filter's edges left out.  A joint whose measured torque is 0
+throughout (a passive joint) has no relative error of its own (null in validation.json);
+its predicted torque still counts in the pooled error."""
 from __future__ import annotations
 
 import json
@@ -20,9 +22,9 @@ OUTPUT_NAMES = ("validation.json", "validation.png")
 
 
 def torque_errors(robot: Robot, log: JointLog, window: float
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, float], float]:
-    """(t, measured, predicted torques, relative error per joint, pooled) on the samples
-    a window away from the log's ends."""
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, float | None], float]:
+    """(t, measured, predicted torques, relative error per joint (None: a joint whose
+    torque is 0, passive), pooled) on the samples a window away from the log's ends."""
     q, qd, qdd, u = savitzky_golay(log, window)
     edge = int(np.ceil(window / log.step - 1e-9))  # not one more for a step's rounding
     inside = slice(edge, len(log.t) - edge)
@@ -32,17 +34,18 @@ def torque_errors(robot: Robot, log: JointLog, window: float
     predicted = robot.rigid_body().inverse_dynamics(q[inside], qd[inside], qdd[inside])
     measured = u[inside]
     error = predicted - measured
-    per_joint = {}
+    per_joint: dict[str, float | None] = {}
     for i, name in enumerate(robot.joint_names):
         scale = float(np.sqrt(np.mean(measured[:, i] ** 2)))
         per_joint[name] = (float(np.sqrt(np.mean(error[:, i] ** 2))) / scale if scale > 0
-                           else float("nan"))
+                           else None)
     pooled = float(np.linalg.norm(error) / np.linalg.norm(measured))
     return log.t[inside], measured, predicted, per_joint, pooled
 
 
 def write_validation(out: Path, urdf: str, data: str, window: float, t: np.ndarray,
-                     measured: np.ndarray, predicted: np.ndarray, per_joint: dict[str, float],
+                     measured: np.ndarray, predicted: np.ndarray,
+                     per_joint: dict[str, float | None],
                      pooled: float) -> None:
     """validation.json and validation.png (measured and predicted torques per joint)."""
     (out / "validation.json").write_text(json.dumps({
@@ -62,12 +65,17 @@ def write_validation(out: Path, urdf: str, data: str, window: float, t: np.ndarr
     for i, (ax, name) in enumerate(zip(axes, per_joint)):
         ax.plot(t, measured[:, i], lw=0.8, color="k", label="measured")
         ax.plot(t, predicted[:, i], lw=0.8, color="C1", label="predicted")
-        ax.set_ylabel(f"{name}\n{100 * per_joint[name]:.1f} %", fontsize=8)
+        ax.set_ylabel(f"{name}\n{_percent(per_joint[name], 1)}", fontsize=8)
     axes[0].legend(loc="upper right", fontsize=8)
     axes[-1].set_xlabel("t [s]")
     fig.suptitle(f"{Path(urdf).name} on {Path(data).name}: pooled {100 * pooled:.2f} %",
                  fontsize=10)
     fig.savefig(out / "validation.png", dpi=100)
+
+
+def _percent(relative: float | None, digits: int) -> str:
+    """A relative error in %, or what None means (a joint whose torque is 0)."""
+    return "n/a (torque 0: passive)" if relative is None else f"{100 * relative:.{digits}f} %"
 
 
 def validate_command(args) -> int:
@@ -96,6 +104,6 @@ def validate_command(args) -> int:
         return 2
     print(f"wrote {', '.join(str(p) for p in outputs.written)}")
     for name, relative in per_joint.items():
-        print(f"  {name}: relative torque error {100 * relative:.3f} %")
+        print(f"  {name}: relative torque error {_percent(relative, 3)}")
     print(f"  pooled: {100 * pooled:.3f} %")
     return 0

@@ -1,0 +1,282 @@
+"""`identify --robot`: the physically consistent model written to identified.urdf stays
+with the data (the estimate's confidence region, its training-log prediction), uses the
+URDF only as far as --urdf-tolerance says, falls back to the URDF when it predicts worse,
+and handles a passive joint.  Simulated robots, analytic trajectories (no integration
+error) unless a passive joint needs the closed loop."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from robot_helpers import payload_link
+from scipy.integrate import solve_ivp
+
+from harness.cli import main
+from harness.robot import pipeline
+from harness.robot.examples import example_urdf
+from harness.robot.urdf import read_urdf
+
+
+def multisine(n: int, seconds: float, h: float, amplitude: float, seed: int = 0):
+    """(t, q, qd, qdd) of n joints along analytic multi-sines."""
+    t = np.arange(0.0, seconds, h)
+    f = np.array([0.2, 0.45, 0.8, 1.3])
+    rng = np.random.default_rng(seed)
+    phase = rng.uniform(0, 2 * np.pi, (n, len(f)))
+    scale = amplitude * rng.uniform(0.6, 1.0, (n, 1)) / np.sqrt(f)
+    angle = 2 * np.pi * f[None, None, :] * t[:, None, None] + phase[None]
+    w = 2 * np.pi * f
+    return (t, (scale * np.sin(angle)).sum(-1) / 2, (scale * w * np.cos(angle)).sum(-1) / 2,
+            -(scale * w ** 2 * np.sin(angle)).sum(-1) / 2)
+
+
+def write_log(path, t, q, tau):
+    n = q.shape[1]
+    header = ",".join(["t", *(f"q{i + 1}" for i in range(n)), *(f"u{i + 1}" for i in range(n))])
+    np.savetxt(path, np.column_stack([t, q, tau]), delimiter=",", header=header, comments="",
+               fmt="%.12g")
+    return path
+
+
+def identify(data, urdf, out, *options, locked=()) -> dict:
+    arguments = ["identify", str(data), "--robot", str(urdf), "--out", str(out), *options]
+    for joint in locked:
+        arguments += ["--lock", joint]
+    assert main(arguments) == 0
+    return json.loads((out / "summary.json").read_text())
+
+
+def quantized(q, resolution):
+    return np.round(q / resolution) * resolution
+
+
+def test_the_consistent_model_predicts_the_training_log_as_well_as_the_estimate(tmp_path):
+    """The UR5 with every base parameter unknown (truth: links scaled 0.8..1.2, friction
+    added), 17-bit encoders: the written model within 5 % of the estimate's training-log
+    error, or the warning; its masses stay plausible (within the URDF's +-30 %, where the
+    data do not determine them)."""
+    path, locked = example_urdf("ur5")
+    robot = read_urdf(path, locked=locked)
+    rng = np.random.default_rng(1)
+    link = robot.arrays()["link"] * rng.uniform(0.8, 1.2, (robot.n, 1))
+    friction = np.column_stack([rng.uniform(0.2, 1.0, robot.n), rng.uniform(0.5, 2.0, robot.n)])
+    truth = robot.rigid_body(link=link, friction=friction, coulomb_velocity=0.02)
+    t, q, qd, qdd = multisine(robot.n, 6.0, 1e-3, amplitude=0.6)
+    data = write_log(tmp_path / "ur5.csv", t, quantized(q, 2 * np.pi / 2 ** 17),
+                     truth.inverse_dynamics(q, qd, qdd))
+    summary = identify(data, path, tmp_path / "out", locked=locked)
+    from harness.robot.assessment import CONSISTENT_MARGIN
+    scores = summary["training_prediction"]
+    estimate, consistent = scores["estimate"]["pooled"], scores["consistent"]["pooled"]
+    warned = any("worse than the base-parameter estimate" in w for w in summary["warnings"])
+    assert consistent <= (1 + CONSISTENT_MARGIN) * estimate or warned, (consistent, estimate)
+    assert consistent < 0.01 and scores["urdf"]["pooled"] > 0.05, scores  # 0.49 %, 8.5 %
+    consistency = summary["consistency"]
+    assert consistency["mahalanobis_distance2"] <= consistency["confidence_bound"]
+    identified = read_urdf(tmp_path / "out" / "identified.urdf", locked=locked)
+    ratio = identified.arrays()["link"][:, 0] / robot.arrays()["link"][:, 0]
+    assert np.all((ratio > 0.6) & (ratio < 1.4)), ratio
+    assert np.all(np.abs(identified.arrays()["friction"] - friction) / friction < 0.02)
+
+
+SLIDE = """<robot name="slide"><link name="base"/>
+<link name="carriage"><inertial><origin xyz="0 0 0" rpy="0 0 0"/><mass value="5"/>
+<inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<joint name="slide" type="prismatic"><parent link="base"/><child link="carriage"/>
+<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1000" velocity="1"/></joint></robot>"""
+
+
+def test_a_prismatic_drive_gets_its_friction_from_the_data_not_the_urdf_zero(tmp_path):
+    """A vertical 5 kg slide with viscous 200 N s/m and Coulomb 20 N, a URDF without
+    friction, forces with 10 N of noise: the friction within 10 % of the truth (the
+    earlier prior, floored at 1e-3, wrote viscous 36: 82 % off)."""
+    urdf = tmp_path / "slide.urdf"
+    urdf.write_text(SLIDE)
+    robot = read_urdf(urdf)
+    truth = robot.rigid_body(friction=np.array([[200.0, 20.0]]))
+    t, q, qd, qdd = multisine(1, 6.0, 1e-3, amplitude=0.05)
+    force = truth.inverse_dynamics(q, qd, qdd) + 10.0 * np.random.default_rng(2).normal(
+        size=q.shape)
+    data = write_log(tmp_path / "slide.csv", t, quantized(q, 1e-6), force)
+    summary = identify(data, urdf, tmp_path / "out")
+    assert abs(summary["viscous"]["slide"] - 200.0) / 200.0 < 0.1, summary["viscous"]
+    assert abs(summary["coulomb"]["slide"] - 20.0) / 20.0 < 0.1, summary["coulomb"]
+    assert summary["identified_urdf_holds"] == "consistent"
+
+
+def _scaled_urdf(path, factor: float, links: list[str], out):
+    """The URDF with the named links' mass and inertia times factor (still consistent)."""
+    from lxml import etree
+    tree = etree.parse(str(path))
+    for link in tree.getroot().findall("link"):
+        if link.get("name") not in links:
+            continue
+        for inertial in link.findall("inertial"):
+            mass = inertial.find("mass")
+            mass.set("value", repr(factor * float(mass.get("value"))))
+            inertia = inertial.find("inertia")
+            for key, value in inertia.attrib.items():
+                inertia.set(key, repr(factor * float(value)))
+    tree.write(str(out))
+    return out
+
+
+@pytest.mark.parametrize("tolerance", ["1", "0.3", "0.001"])
+def test_a_wrong_urdf_does_not_drag_the_masses_the_data_determine(tmp_path, tolerance):
+    """The two-link arm with a 0.3 kg tip payload, link 2 and the friction unknown
+    (--unknown payload); the prior is the URDF with link 2's mass and inertia doubled
+    (0.66 kg against the true 0.63 kg with the payload: 5 % off, and its inertia 2x).
+    Link 2's mass stays within 0.5 % of the truth at low trust (+-100 %), at the default
+    and even at +-0.1 %: the prior never takes the model out of the estimate's confidence
+    region (its weight drops below 1 instead)."""
+    path, _ = example_urdf("double_pendulum")
+    robot = read_urdf(path)
+    friction = np.array([[0.05, 0.2], [0.04, 0.1]])
+    link = payload_link(robot.arrays()["link"])
+    truth = robot.rigid_body(link=link, friction=friction)
+    t, q, qd, qdd = multisine(2, 8.0, 1e-3, amplitude=0.5)
+    data = write_log(tmp_path / "arm.csv", t, quantized(q, 2 * np.pi / 2 ** 17),
+                     truth.inverse_dynamics(q, qd, qdd))
+    wrong = _scaled_urdf(path, 2.0, [robot.joints[1].child_link], tmp_path / "wrong.urdf")
+    summary = identify(data, wrong, tmp_path / "out", "--unknown", "payload",
+                       "--urdf-tolerance", tolerance)
+    assert summary["consistency"]["urdf_tolerance"] == float(tolerance)
+    mass = summary["masses"][robot.joints[1].child_link]
+    assert abs(mass - link[1, 0]) / link[1, 0] < 0.005, (mass, link[1, 0])
+    assert np.allclose([summary["viscous"]["joint1"], summary["viscous"]["joint2"]],
+                       friction[:, 0], rtol=0.03)
+    consistency = summary["consistency"]
+    assert consistency["mahalanobis_distance2"] <= consistency["confidence_bound"]
+    if tolerance == "0.001":
+        assert consistency["prior_weight"] < 1.0
+
+
+def test_an_identified_model_worse_than_the_urdf_keeps_the_urdf(tmp_path, monkeypatch, capsys):
+    """A consistent projection gone wrong (link 2's mass tripled, as a projection far from
+    the estimate would give): the warning, and identified.urdf with the URDF's values."""
+    path, _ = example_urdf("double_pendulum")
+    robot = read_urdf(path)
+    truth = robot.rigid_body(friction=np.array([[0.05, 0.2], [0.04, 0.1]]))
+    t, q, qd, qdd = multisine(2, 4.0, 1e-3, amplitude=0.5)
+    data = write_log(tmp_path / "arm.csv", t, q, truth.inverse_dynamics(q, qd, qdd))
+    right = pipeline.consistent_parameters
+
+    def wrong(*args, **kwargs):
+        projection = right(*args, **kwargs)
+        projection.pi[10:20] *= 3.0
+        return projection
+    monkeypatch.setattr(pipeline, "consistent_parameters", wrong)
+    summary = identify(data, path, tmp_path / "out")
+    err = capsys.readouterr().err
+    assert "warning: the identified model predicts the training log worse than the URDF" in err
+    assert summary["identified_urdf_holds"] == "urdf"
+    assert any("worse than the URDF" in w for w in summary["warnings"])
+    scores = summary["training_prediction"]
+    assert scores["consistent"]["pooled"] > scores["urdf"]["pooled"]
+    identified = read_urdf(tmp_path / "out" / "identified.urdf")
+    assert np.array_equal(identified.arrays()["link"], robot.arrays()["link"])
+    assert np.array_equal(identified.arrays()["friction"], robot.arrays()["friction"])
+
+
+def _prediction(pooled: float):
+    from harness.robot.assessment import Prediction
+    return Prediction(pooled, {"j": pooled})
+
+
+def test_the_choice_between_the_consistent_model_the_estimate_and_the_urdf():
+    from harness.robot.assessment import choose_model
+    consistent, nominal = np.ones(3), np.zeros(3)
+    close = choose_model({"urdf": _prediction(0.3), "estimate": _prediction(0.10),
+                          "consistent": _prediction(0.104)}, consistent, nominal)
+    assert close.written == "consistent" and close.warnings == []
+    far = choose_model({"urdf": _prediction(0.3), "estimate": _prediction(0.10),
+                        "consistent": _prediction(0.106)}, consistent, nominal)
+    assert far.written == "consistent" and np.array_equal(far.pi, consistent)
+    assert len(far.warnings) == 1 and "6 % worse than the base-parameter estimate" in far.warnings[0]
+    worse = choose_model({"urdf": _prediction(0.3), "estimate": _prediction(0.10),
+                          "consistent": _prediction(0.31)}, consistent, nominal)
+    assert worse.written == "urdf" and np.array_equal(worse.pi, nominal)
+
+
+def test_the_prior_scales_have_no_absolute_floor():
+    """Friction the URDF leaves at 0 takes the data's scale, a zero first moment the
+    link's mass times its size, a massless link the data's scale."""
+    from harness.robot.consistency import prior_scales
+    n = 2
+    nominal = np.zeros(12 * n)
+    moment = 0.04 / 3  # size sqrt(tr I / 2 m) = 0.1 m
+    nominal[:10] = [2.0, 0.0, 0.0, 0.0, moment, 0.0, moment, 0.0, 0.0, moment]
+    data = np.full(12 * n, 7.0)
+    data[20] = 300.0  # joint 1's viscous friction
+    scale = prior_scales(nominal, n, data)
+    assert scale[0] == 2.0 and np.isclose(scale[1], 0.2) and np.isclose(scale[5], 0.02)
+    assert np.isclose(scale[4], 0.02) and 0.02 > moment  # m l^2, the larger
+    assert scale[20] == 300.0 and np.all(scale[10:20] == 7.0)
+    assert prior_scales(nominal, n, np.full(12 * n, np.inf))[21] == 1.0
+
+
+def test_the_tolerance_is_refused_unless_positive(tmp_path, capsys):
+    path, _ = example_urdf("double_pendulum")
+    for value in ("0", "-1", "nan", "inf"):
+        with pytest.raises(SystemExit) as stop:
+            main(["identify", "log.csv", "--robot", str(path), "--urdf-tolerance", value,
+                  "--out", str(tmp_path / "o")])
+        assert stop.value.code == 2
+        assert "--urdf-tolerance" in capsys.readouterr().err
+    assert main(["identify", "log.csv", "--urdf-tolerance", "0.2",
+                 "--out", str(tmp_path / "o")]) == 2
+    assert "--urdf-tolerance" in capsys.readouterr().err
+
+
+def _underactuated_log(robot, friction, seconds: float, seed: int, h: float = 1e-3):
+    """The two-link arm with joint 2 passive (torque 0), joint 1 under PD control along a
+    multi-sine: closed loop, integrated."""
+    truth = robot.rigid_body(friction=friction, coulomb_velocity=0.05)
+    rng = np.random.default_rng(seed)
+    f = np.array([0.3, 0.7, 1.1, 1.9])
+    phase, amplitude = rng.uniform(0, 2 * np.pi, 4), 0.3 / np.sqrt(f)
+
+    def torque(t: float, x: np.ndarray) -> np.ndarray:
+        angle = 2 * np.pi * f * t + phase
+        reference = (amplitude * np.sin(angle)).sum()
+        rate = (amplitude * 2 * np.pi * f * np.cos(angle)).sum()
+        return np.array([30.0 * (reference - x[0]) + 3.0 * (rate - x[2]), 0.0])
+
+    def rhs(t: float, x: np.ndarray) -> np.ndarray:
+        return np.concatenate([x[2:], truth.forward_dynamics(x[:2], x[2:], torque(t, x))[0]])
+    t = np.arange(0.0, seconds, h)
+    start = [(amplitude * np.sin(phase)).sum(), 0.0, 0.0, 0.0]
+    solution = solve_ivp(rhs, (0.0, t[-1]), start, t_eval=t, rtol=1e-9, atol=1e-11)
+    tau = np.array([torque(tk, x) for tk, x in zip(t, solution.y.T)])
+    return t, solution.y[:2].T, tau
+
+
+def test_a_passive_joint_constrains_the_parameters(tmp_path, capsys):
+    """Joint 2 passive (its torque column all 0): its equation, torque = 0, is kept, so
+    that its own friction (in no other equation) is identified; validate reports it as
+    n/a in strict JSON."""
+    path, _ = example_urdf("double_pendulum")
+    robot = read_urdf(path)
+    friction = np.array([[0.05, 0.1], [0.01, 0.005]])
+    t, q, tau = _underactuated_log(robot, friction, 8.0, seed=0)
+    assert not np.any(tau[:, 1])
+    data = write_log(tmp_path / "passive.csv", t, quantized(q, 2 * np.pi / 2 ** 17), tau)
+    summary = identify(data, path, tmp_path / "out")
+    assert summary["passive_joints"] == ["joint2"]
+    assert "joint2: torque 0 throughout, taken as a passive joint" in capsys.readouterr().out
+    assert abs(summary["viscous"]["joint2"] - 0.01) / 0.01 < 0.05, summary["viscous"]
+    scores = summary["training_prediction"]
+    assert scores["consistent"]["per_joint"]["joint2"] is None
+    assert scores["consistent"]["per_joint"]["joint1"] < 0.02, scores
+    assert main(["validate", str(data), "--robot", str(tmp_path / "out" / "identified.urdf"),
+                 "--out", str(tmp_path / "v")]) == 0
+    assert "n/a (torque 0: passive)" in capsys.readouterr().out
+
+    def strict(constant):
+        raise ValueError(f"not strict JSON: {constant}")
+    report = json.loads((tmp_path / "v" / "validation.json").read_text(),
+                        parse_constant=strict)
+    assert report["relative_error"]["per_joint"]["joint2"] is None
+    assert report["relative_error"]["per_joint"]["joint1"] < 0.1
+
