@@ -77,9 +77,13 @@ def pseudo_inertia(link: np.ndarray) -> np.ndarray:
 
 
 def link_of_pseudo_inertia(J: np.ndarray) -> np.ndarray:
-    S, h, m = J[:3, :3], J[:3, 3], J[3, 3]
-    I = np.trace(S) * np.eye(3) - S
-    return np.array([m, *h, I[0, 0], I[0, 1], I[1, 1], I[0, 2], I[1, 2], I[2, 2]])
+    """The 10 link parameters of a pseudo-inertia J (4 x 4), or of a stack of them
+    (..., 4, 4) -> (..., 10)."""
+    S, h, m = J[..., :3, :3], J[..., :3, 3], J[..., 3, 3]
+    trace = S[..., 0, 0] + S[..., 1, 1] + S[..., 2, 2]
+    return np.stack([m, h[..., 0], h[..., 1], h[..., 2], trace - S[..., 0, 0], -S[..., 0, 1],
+                     trace - S[..., 1, 1], -S[..., 0, 2], -S[..., 1, 2], trace - S[..., 2, 2]],
+                    axis=-1)
 
 
 _LOWER = np.tril_indices(4)
@@ -135,17 +139,26 @@ def prior_scales(nominal: np.ndarray, n: int, data_scale: np.ndarray) -> np.ndar
 
 def _link_jacobian(theta: np.ndarray) -> np.ndarray:
     """d _link(theta) / d theta (10 x 10): J = L L^T, dJ = E L^T + L E^T with E the
-    derivative of L along one coordinate, and the link parameters linear in J."""
+    derivative of L along one coordinate, and the link parameters linear in J (all ten
+    coordinates at once)."""
     L = np.zeros((4, 4))
     values = theta.copy()
     values[_DIAGONAL] = np.exp(np.clip(values[_DIAGONAL], -50.0, 50.0))
     L[_LOWER] = values
-    out = np.empty((10, 10))
-    for k, (r, c) in enumerate(zip(*_LOWER)):
-        E = np.zeros((4, 4))
-        E[r, c] = values[k] if r == c else 1.0
-        out[:, k] = link_of_pseudo_inertia(E @ L.T + L @ E.T)
-    return out
+    E = np.zeros((10, 4, 4))
+    E[_COORDINATES, _LOWER[0], _LOWER[1]] = _coordinate_steps(values)
+    dJ = E @ L.T
+    return link_of_pseudo_inertia(dJ + dJ.transpose(0, 2, 1)).T
+
+
+_COORDINATES = np.arange(10)
+
+
+def _coordinate_steps(values: np.ndarray) -> np.ndarray:
+    """dL_rc / d theta_k: the value itself on the diagonal (log coordinates), else 1."""
+    step = np.ones(10)
+    step[_DIAGONAL] = values[_DIAGONAL]
+    return step
 
 
 def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
