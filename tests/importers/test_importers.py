@@ -29,12 +29,25 @@ def test_importers_are_installed():
         pytest.fail("importers missing:\n  " + "\n  ".join(problems) + f"\n{INSTALL}")
 
 
+def model_file_fmu(tmp_path: Path) -> Path:
+    """A model file's FMU as `sto-harness fmu --model` writes it (the EMPS drive), with
+    its default experiment as its reference: each importer must hand it its resources."""
+    from harness.cli import main
+
+    assert main(["fmu", "--model", str(REPO / "examples" / "emps" / "emps.toml"),
+                 "--out", str(tmp_path)]) == 0
+    mr.main([str(tmp_path / "emps.fmu")])
+    return tmp_path / "emps.fmu"
+
+
 def test_every_fmu_agrees_with_its_reference_in_every_importer(observer_fmu, pendulum_fmu,
-                                                                 controller_fmu, robot_fmu):
+                                                                 controller_fmu, robot_fmu,
+                                                                 tmp_path):
     problems = check.check_tools()
     if problems:
         pytest.fail("importers missing:\n  " + "\n  ".join(problems) + f"\n{INSTALL}")
-    fmus = [observer_fmu, pendulum_fmu, controller_fmu, robot_fmu]
+    fmus = [observer_fmu, pendulum_fmu, controller_fmu, robot_fmu,
+            observer_fmu.with_name("ModelObserver.fmu"), model_file_fmu(tmp_path)]
     run = subprocess.run([sys.executable, "-m", "tools.importers.check", *map(str, fmus)],
                          capture_output=True, text=True, cwd=REPO, timeout=1800)
     print(run.stdout)
