@@ -65,6 +65,11 @@ for target in "${TARGETS[@]}"; do
         rm -rf "$corpus" && mkdir -p "$corpus"
         seeds=tools/abuse/corpus/$target
         [ -d "$seeds/$id" ] && seeds=$seeds/$id
+        if [ "$target" = fuzz_deserialize ] && [ ! -d "tools/abuse/corpus/$target/$id" ]; then
+            # large states are not committed: seeds from this build
+            "$PY" -m tools.abuse.make_corpus --into "$OUT/seeds" "$id" >/dev/null
+            seeds=$OUT/seeds/$target/$id
+        fi
         [ -d "$seeds" ] || die "no seed corpus $seeds (commit one: a few inputs as files)"
         log "$target on $id for $SECONDS_EACH s (seeds: $(find "$seeds" -maxdepth 1 -type f | wc -l))"
         status=0

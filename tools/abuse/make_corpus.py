@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
+import sys
 from pathlib import Path
 
 from tools.abuse.abuse_fmi import MODELS, OK, Raw
@@ -30,7 +31,8 @@ def states(model: str) -> list[bytes]:
     parameters = {"SuperTwistingObserver": {"identifier": 1, "identifier_start": 0},
                   "Pendulum": {"damping": 1, "disturbance": 1},
                   "TwistingController": {},
-                  "RobotObserver": {"f_plus[1]": 1000.0, "f_plus[2]": 1000.0}}[model]
+                  "RobotObserver": {"f_plus[1]": 1000.0, "f_plus[2]": 1000.0},
+                  "ModelObserver": {"t_id": 0.0}}[model]
     f = Raw(model, "seed")
     assert f.initialize(parameters) == OK, f.messages()
     out = []
@@ -72,9 +74,12 @@ CALLS = [
 ]
 
 
-def main() -> None:
-    for model in MODELS:
-        folder = CORPUS / "fuzz_deserialize" / model
+def main(argv: list[str]) -> None:
+    into = CORPUS
+    if argv[:1] == ["--into"]:
+        into, argv = Path(argv[1]), argv[2:]
+    for model in argv or MODELS:
+        folder = into / "fuzz_deserialize" / model
         for state in states(model):
             write(folder, bytes([0]) + state)
             write(folder, bytes([3]) + state)
@@ -86,9 +91,9 @@ def main() -> None:
             write(folder, bytes([4, 0, 0, field, 0, 200 + field % 28]))
         write(folder, bytes([4, 0, 0, 2, 0, 255, 0, 0, 3, 0, 70, 2, 0, 1, 0, 0]))
     for sequence in CALLS:
-        write(CORPUS / "fuzz_calls", bytes(sequence))
-    print(f"seeds in {CORPUS}: {sum(1 for p in CORPUS.rglob('*') if p.is_file())}")
+        write(into / "fuzz_calls", bytes(sequence))
+    print(f"seeds in {into}: {sum(1 for p in into.rglob('*') if p.is_file())}")
 
 
 if __name__ == "__main__":
-    main()
+    main(sys.argv[1:])
