@@ -8,7 +8,8 @@ loaded on first use, so ``import harness`` stays cheap:
   ``default_fmu_dir()`` (the FMUs installed with the package, or a checkout's build);
 - recorded logs through the observer FMU: ``identify_file(path, fmu, parameters)``;
 - sweeps: ``load_spec(path)``, ``run_sweep(spec, out)``;
-- model files: ``read_model(path)`` (``ModelFileError`` for a bad file);
+- model files: ``read_model(path)`` (``ModelFileError`` for a bad file),
+  ``build_fmu(model, path)`` (its observer/identifier FMU);
 - serial robots: ``read_urdf(path)``, ``read_log(path, n)``, ``identify_robot(robot, log)``,
   ``fmu_parameters(robot)`` (the RobotObserver FMU's parameters).
 
@@ -33,13 +34,14 @@ _EXPORTS = {
     "run_sweep": "harness.sweep",
     "read_model": "harness.model",
     "ModelFileError": "harness.model",
+    "build_fmu": "harness.model.fmu_export",
     "read_urdf": "harness.robot.urdf",
     "read_log": "harness.robot.pipeline",
     "identify_robot": "harness.robot.pipeline",
     "fmu_parameters": "harness.robot.fmu",
 }
 __all__ = [
-    "SCENARIOS", "ModelFileError", "default_fmu_dir", "fmu_parameters", "identify_file",
+    "SCENARIOS", "ModelFileError", "build_fmu", "default_fmu_dir", "fmu_parameters", "identify_file",
     "identify_robot", "load_spec", "read_log", "read_model", "read_urdf", "run_scenario",
     "run_sweep", "score",
 ]
@@ -48,6 +50,7 @@ if TYPE_CHECKING:
     from harness.identify import identify_file
     from harness.metrics import score
     from harness.model import ModelFileError, read_model
+    from harness.model.fmu_export import build_fmu
     from harness.paths import default_fmu_dir
     from harness.robot.fmu import fmu_parameters
     from harness.robot.pipeline import identify_robot, read_log

@@ -291,7 +291,7 @@ def global_options() -> argparse.ArgumentParser:
     subcommands leave them alone when not given, argparse.SUPPRESS)."""
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--fmu-dir", default=argparse.SUPPRESS, metavar="DIR",
-                        help="folder with the three FMUs (default: $STO_FMU_DIR, else build/fmus "
+                        help="folder of the FMUs (default: $STO_FMU_DIR, else build/fmus "
                              "of a source checkout, else the FMUs installed with the package)")
     common.add_argument("--quiet", "-q", action="store_true", default=argparse.SUPPRESS,
                         help="no progress bars and no warnings on stderr, only errors (the "

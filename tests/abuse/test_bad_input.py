@@ -1,4 +1,4 @@
-"""Bad input of every kind, over the three FMUs, through the raw fmi2 functions.
+"""Bad input of every kind, over every FMU, through the raw fmi2 functions.
 
 Each case runs in a forked child (abuse_fmi.isolated): a crash fails that case
 only.  A case prepares an instance (freshly instantiated, in initialization

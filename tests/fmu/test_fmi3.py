@@ -1,4 +1,4 @@
-"""FMI 3.0 variants of the three FMUs (build/fmi3/), through fmpy.
+"""FMI 3.0 variants of the FMUs (build/fmi3/), through fmpy.
 
 Same model files as the FMI 2.0 FMUs, so the same numbers: the FMI 3 runs are compared
 with the FMI 2 runs element by element.  Then FMI 3's own state machine, fmi3DoStep's
