@@ -41,9 +41,9 @@ _EXPORTS = {
     "fmu_parameters": "harness.robot.fmu",
 }
 __all__ = [
-    "SCENARIOS", "ModelFileError", "build_fmu", "default_fmu_dir", "fmu_parameters", "identify_file",
-    "identify_robot", "load_spec", "read_log", "read_model", "read_urdf", "run_scenario",
-    "run_sweep", "score",
+    "SCENARIOS", "ModelFileError", "build_fmu", "default_fmu_dir", "fmu_parameters",
+    "identify_file", "identify_robot", "load_spec", "read_log", "read_model", "read_urdf",
+    "run_scenario", "run_sweep", "score",
 ]
 
 if TYPE_CHECKING:

@@ -32,7 +32,7 @@ from lxml import etree
 from ..paths import default_fmu_dir
 from .model import Model
 from .program import ProgramError, compile_program
-from .units import quantity
+from .units import quantity, si_factor
 
 TEMPLATE = "ModelObserver"
 #: The base units FMI's <BaseUnit> takes, by pint's dimension name.
@@ -178,6 +178,11 @@ def model_description(model: Model, template: bytes, fmi_version: int,
             units.add(typed.get("unit"))
         if generic == "identifier" and identifier is not None:
             typed.set("start", str(identifier))
+        found = _element_index(generic)
+        if found and found[0] == "f_plus_" and model.units:
+            # the binary sets the bound from SI for the coordinate's unit (its resource)
+            scale = si_factor(model.units[model.coordinates[found[1]]])
+            typed.set("start", repr(float(typed.get("start")) / scale))
     clash = sorted({n for n in kept.values() if list(kept.values()).count(n) > 1})
     if clash:
         raise ExportError(f"the FMU's variables would share the names {', '.join(clash)}: "

@@ -121,7 +121,10 @@ def compile_program(model: Model) -> str:
     header = ["sto-term-program 1", f"# {Path(model.source).name}", f"sizes {n} {m} {p}",
               f"constants {len(compiler.constants)} {pool}".rstrip(),
               "nominal " + " ".join(repr(float(q.nominal)) for q in model.parameters),
-              "scale " + " ".join(repr(float(f)) for f in si)]
+              "scale " + " ".join(repr(float(f)) for f in si),
+              "coordinate_scale " + " ".join(
+                  repr(si_factor(model.units[c]) if model.units else 1.0)
+                  for c in model.coordinates)]
     return "\n".join(header + lines) + "\n"
 
 

@@ -207,7 +207,11 @@ void mp_run(ModelPipeline *p, const TermProgram *program, const double y[], cons
         }
         if (!p->identifier) continue;
         const double t = start_time + (double)k * p->h;
-        if (!p->identifying && t >= p->t_id && sto_converged(&p->obs)) {
+        /* the observer slides, or the bank's members have settled (they track where the
+         * super-twisting observer's gains are too small to slide) */
+        const int ready = sto_converged(&p->obs) ||
+                          (p->scheme == STO_SCHEME_ADAPTIVE && adaptive_settled(&p->bank, n));
+        if (!p->identifying && t >= p->t_id && ready) {
             p->identifying = 1;
             p->started = p->warm_samples = 0;
         }

@@ -171,7 +171,17 @@ int tp_parse(TermProgram *p, const char *text, size_t length, char *error, size_
                                               k, p->scale[k]);
     }
     p->identifier = 1;
+    for (int i = 0; i < p->n; ++i) p->coordinate_scale[i] = 1.0;
     if (next_word(&c)) return -1;
+    if (strcmp(c.token, "coordinate_scale") == 0) {
+        for (int i = 0; i < p->n; ++i) {
+            if (read_double(&c, "coordinate_scale", &p->coordinate_scale[i])) return -1;
+            if (!(p->coordinate_scale[i] > 0.0))
+                return fail(&c, "coordinate_scale of coordinate %d = %g is not positive", i,
+                            p->coordinate_scale[i]);
+        }
+        if (next_word(&c)) return -1;
+    }
     if (strcmp(c.token, "identifier") == 0) {
         if (read_int(&c, "identifier", 0, 2, &p->identifier) || next_word(&c)) return -1;
     }

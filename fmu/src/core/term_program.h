@@ -16,6 +16,7 @@
  *     constants C  c_1 .. c_C
  *     nominal v_1 .. v_P    the parameters' nominal values (the file's units)
  *     scale s_1 .. s_P      each parameter's unit in SI (theta_SI = s theta)
+ *     coordinate_scale c_1 .. c_N   optional: each coordinate's unit in SI (default 1)
  *     identifier K          optional: the identifier the model asks for (1 LSM, the
  *                           default; 2 MFF for time-varying parameters; 0 none)
  *     entry I K L  op arg .. op arg     L (op, arg) pairs; K = P: r_I
@@ -52,6 +53,7 @@ typedef struct {
     int n_constants, n_tokens;
     double constant[TP_MAX_CONSTANTS];
     double nominal[TP_MAX_PARAMETERS], scale[TP_MAX_PARAMETERS];
+    double coordinate_scale[TP_MAX_COORDINATES];
     int identifier;
     int op[TP_MAX_TOKENS], arg[TP_MAX_TOKENS];
     /* entry (i, k), k <= p (k = p: r_i): tokens start[i][k] .. start[i][k] + length[i][k] - 1 */

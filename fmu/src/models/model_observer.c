@@ -20,6 +20,7 @@
 #define MAX_U TP_MAX_INPUTS
 #define MAX_P TP_MAX_PARAMETERS
 #define GAINS_P 0.5 /* p of condition (6) for the gains of Theorem 3.1 */
+#define F_PLUS_SI 10.0 /* default bound of the acceleration error [SI units per s^2] */
 
 typedef struct {
     TermProgram program; /* the resource region: the model file, as read at instantiation */
@@ -62,10 +63,11 @@ typedef struct {
     E(__VA_ARGS__, 29), E(__VA_ARGS__, 30), E(__VA_ARGS__, 31), E(__VA_ARGS__, 32)
 #define F_PLUS(i)                                                                                \
     {.name = "f_plus_" #i, .vr = 17 + (i), .type = TYPE_REAL,                                     \
-     PARAM(.offset = OFF(f_plus) + ((i) - 1) * sizeof(double), .start = 10.0, .min = 0.0,         \
+     PARAM(.offset = OFF(f_plus) + ((i) - 1) * sizeof(double), .start = F_PLUS_SI, .min = 0.0,    \
            .max = NAN, .min_exclusive = true,                                                     \
            .description = "Bound of the nominal model's acceleration error of coordinate " #i    \
-                          " (its unit per s^2): the super-twisting gains by Theorem 3.1")}
+                          " (its unit per s^2; default 10 m/s^2 or rad/s^2 in that unit): the " \
+                          "super-twisting gains by Theorem 3.1")}
 #define INPUT_ELEMENT(i)                                                                         \
     {.name = "input_" #i, .vr = 209 + (i), .type = TYPE_REAL,                                     \
      INPUT(.offset = OFF(u) + ((i) - 1) * sizeof(double), .description = "Known input " #i)}
@@ -143,11 +145,14 @@ static ModelStatus parse_resource(void *region, const char *text, size_t length,
     return MODEL_ERROR;
 }
 
-/* The identifier the model file asks for (--identifier mff of `fmu --model`). */
+/* The identifier the model file asks for (--identifier mff of `fmu --model`), and each
+ * coordinate's gain bound in its own unit: F_PLUS_SI in SI (so that a file in mm
+ * observes as one in m). */
 static void resource_start_values(void *data)
 {
     ModelData *d = data;
     d->pipe.identifier = d->program.identifier;
+    for (int i = 0; i < d->program.n; ++i) d->f_plus[i] = F_PLUS_SI / d->program.coordinate_scale[i];
 }
 
 static void publish(ModelData *d)

@@ -18,6 +18,7 @@ static const char EMPS[] =
     "constants 2 0.001 1\n"
     "nominal 100 0 0 0\n"
     "scale 1 1 1 1\n"
+    "coordinate_scale 0.001\n"
     "entry 0 0 3  0 0  3 0  6 0\n"
     "entry 0 1 3  0 0  2 0  6 0\n"
     "entry 0 2 2  2 0  15 0\n"
@@ -38,6 +39,8 @@ static int evaluates_a_drive(void)
                     Y[0][3]);
     failed += check(r[0] == 42.5, "r = %g, expected 42.5", r[0]);
     failed += check(program.identifier == 1, "identifier %d: LSM by default", program.identifier);
+    failed += check(program.coordinate_scale[0] == 0.001, "coordinate scale %g (mm)",
+                    program.coordinate_scale[0]);
     return failed;
 }
 
@@ -112,6 +115,8 @@ static int refuses_bad_programs(void)
         {"sto-term-program 1 sizes 1 0 1 constants 0 entry", "expected 'nominal'"},
         {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 identifier 3",
          "identifier = 3"},
+        {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 coordinate_scale 0",
+         "coordinate_scale of coordinate 0 = 0 is not positive"},
         {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 identifier 2 x",
          "expected 'entry', found 'x'"},
         {"sto-term-program 1 sizes 1 0 1 constants 0 nominal 0 scale 1 entry 0 0 1 0 0", "argument 0 out of range"},

@@ -212,3 +212,24 @@ def test_what_the_fmu_cannot_be_built_for_is_refused(tmp_path, capsys, case, mes
     assert main(["fmu", "--model", str(model), "--out", str(out)]) == 2
     assert message in capsys.readouterr().err
     assert case == "out_is_a_file" or not (out / "m.fmu").exists()
+
+
+def test_the_fmus_physical_values_do_not_depend_on_the_files_units(tmp_path, emps_fmus):
+    """x in mm, Fv in kN.s/m, Fc and OF in kN: the same physical values as in SI (the
+    observer's gain bound follows the coordinate's unit; the identifier works in SI).
+    Measured: equal to 1e-15 relative."""
+    text = (EMPS / "emps.toml").read_text()
+    for old, new in (('x = "m"', 'x = "mm"'), ('unit = "N.s/m"', 'unit = "kN.s/m"'),
+                     ('Fc = { nominal = 0, unit = "N" }', 'Fc = { nominal = 0, unit = "kN" }'),
+                     ('OF = { nominal = 0, unit = "N" }', 'OF = { nominal = 0, unit = "kN" }')):
+        assert old in text
+        text = text.replace(old, new)
+    (tmp_path / "emps.toml").write_text(text)
+    scaled = export(tmp_path / "emps.toml", tmp_path / "out")
+    model = read_model(EMPS / "emps.toml")
+    log = read_log(EMPS / "data" / "DATA_EMPS.mat", model)
+    names = [p.name for p in model.parameters]
+    si = run_log(emps_fmus[2], log.t, {"x": log.q[:, 0]}, {"vir": log.inputs[:, 0]}, names)
+    other = run_log(scaled, log.t, {"x": 1000.0 * log.q[:, 0]}, {"vir": log.inputs[:, 0]}, names)
+    for name, factor in (("M", 1.0), ("Fv", 1e3), ("Fc", 1e3), ("OF", 1e3)):
+        assert abs(factor * other[name][-1] - si[name][-1]) <= 1e-3 * abs(si[name][-1]), name
