@@ -58,8 +58,27 @@ class Choice:
     warnings: list[str] = field(default_factory=list)
 
 
+#: A link mass this many times the URDF's (or a fraction of it) is named in a warning.
+MASS_RATIO = 10.0
+
+
+def implausible_masses(consistent: np.ndarray, nominal: np.ndarray,
+                       link_names: list[str]) -> list[str]:
+    """Warnings for the links whose identified mass is MASS_RATIO times the URDF's, or
+    less than its MASS_RATIO-th: the data leave it to directions they hardly see."""
+    out = []
+    for i, name in enumerate(link_names):
+        mass, urdf = consistent[10 * i], nominal[10 * i]
+        if urdf > 0 and not (urdf / MASS_RATIO <= mass <= MASS_RATIO * urdf):
+            out.append(f"{name}'s identified mass {mass:.4g} kg is {mass / urdf:.3g} times the "
+                       f"URDF's {urdf:.4g} kg: the log hardly determines it (a coarse encoder "
+                       f"or a short --window lets the derivatives' noise decide; try a longer "
+                       f"--window, or --unknown payload)")
+    return out
+
+
 def choose_model(predictions: dict[str, Prediction], consistent: np.ndarray,
-                 nominal: np.ndarray) -> Choice:
+                 nominal: np.ndarray, link_names: list[str] | None = None) -> Choice:
     """The consistent parameters, or the URDF's (nominal) if the consistent model
     predicts the training log worse than the URDF; warnings for both cases of the
     module's description.  predictions: "urdf", "estimate" and "consistent"."""
@@ -80,4 +99,6 @@ def choose_model(predictions: dict[str, Prediction], consistent: np.ndarray,
             f"URDF's kinematics fits the data as well (unmodelled effects, wrong kinematics "
             f"or units, a joint whose torque is not in the log); identified.urdf is "
             f"written all the same")
+    if link_names:
+        warnings += implausible_masses(consistent, nominal, link_names)
     return Choice(consistent, "consistent", predictions, warnings)

@@ -131,6 +131,8 @@ def identify_command(args) -> int:
         print(f"harness identify: {error}", file=sys.stderr)
         return 2
     print("wrote " + ", ".join(str(outputs.final(path)) for path in written))
+    if log.resampled:
+        print(f"  {args.data}: {log.resampled}")
     n = robot.n
     for i, joint in enumerate(robot.joints):
         print(f"  {joint.name}: mass {result.pi[10 * i]:.6g} kg, viscous "

@@ -71,6 +71,7 @@ class JointLog:
     t: np.ndarray   # (N,)
     q: np.ndarray   # (N, n)
     u: np.ndarray   # (N, n)
+    resampled: str | None = None  # what was done to a log whose clock jitters (None: nothing)
 
     @property
     def step(self) -> float:
@@ -130,13 +131,43 @@ def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
     if units is not None:  # to s, rad or m, N.m or N; a factor of 1 leaves the numbers
         data *= np.concatenate([[units.time], units.position, units.torque])
     t = data[:, 0]
-    uneven = uneven_step(t, relative_tolerance)
-    if uneven:
-        raise LogError(f"{path} {header.place(uneven[0])}: {uneven[1]}")
     if units is None or units.time_unit is None:
         note_slow_step(path, (t[-1] - t[0]) / (len(t) - 1),
                        "give --time-unit ms (--time-unit s confirms seconds)")
-    return JointLog(t, data[:, 1:1 + n], data[:, 1 + n:])
+    uneven = uneven_step(t, relative_tolerance)
+    if uneven is None:
+        return JointLog(t, data[:, 1:1 + n], data[:, 1 + n:])
+    steps = np.diff(t)
+    typical = float(np.median(steps))
+    gap = int(np.argmax(steps)) if steps.size else 0
+    if not np.all(steps > 0) or steps[gap] > GAP_STEPS * typical:
+        where = uneven[0] if not np.all(steps > 0) else gap + 1
+        why = uneven[1] if not np.all(steps > 0) else (
+            f"a gap of {steps[gap]:.6g} s where the steps are typically {typical:.6g} s: "
+            f"the log is not continuous there; cut it into continuous pieces")
+        raise LogError(f"{path} {header.place(where)}: {why}")
+    return _resampled(t, data[:, 1:1 + n], data[:, 1 + n:])
+
+
+#: A step this many times the median step is a gap (refused); shorter uneven steps are a
+#: jittering clock (the log is resampled).
+GAP_STEPS = 2.5
+
+
+def _resampled(t: np.ndarray, q: np.ndarray, u: np.ndarray) -> JointLog:
+    """A log whose clock jitters, on even steps of its mean step: the positions through
+    cubic splines (their derivatives stay smooth), the torques linearly (a torque held
+    between samples is not smoother than the samples)."""
+    from scipy.interpolate import make_interp_spline
+
+    even = np.linspace(t[0], t[-1], len(t))
+    positions = make_interp_spline(t, q, k=3, axis=0)(even)
+    torques = np.column_stack([np.interp(even, t, u[:, i]) for i in range(u.shape[1])])
+    steps = np.diff(t)
+    return JointLog(even, positions, torques,
+                    f"the clock jitters (steps from {steps.min():.6g} to {steps.max():.6g} s): "
+                    f"the log is resampled onto even steps of {even[1] - even[0]:.6g} s "
+                    f"(positions by cubic splines, torques linearly)")
 
 
 def _odd(count: int) -> int:
@@ -278,7 +309,8 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
         "estimate": prediction_error(known_torque + base.regressor(Y) @ fit.beta, torque,
                                      mask, names),
         "consistent": prediction_error(Y @ projection.pi, torque, mask, names)}
-    choice = choose_model(predictions, projection.pi, nominal)
+    choice = choose_model(predictions, projection.pi, nominal,
+                          [joint.child_link for joint in robot.joints])
     passive = [name for i, name in enumerate(names) if not np.any(log.u[:, i])]
     return Identification(base, fit, choice.pi, velocity, used, velocity_window, projection,
                           choice, passive)
@@ -423,6 +455,7 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
         "condition_number": result.fit.condition,
         "base_parameters": result.base.count,
         "samples_used": int(len(result.used)),
+        "resampled": log.resampled,
         **_assessment_json(result),
         **({} if result.velocity_window is None else
            {"velocity_window_s": dict(zip(names, result.velocity_window.tolist()))}),

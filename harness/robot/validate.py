@@ -103,6 +103,8 @@ def validate_command(args) -> int:
         print(f"harness validate: {error}", file=sys.stderr)
         return 2
     print(f"wrote {', '.join(str(p) for p in outputs.written)}")
+    if log.resampled:
+        print(f"  {args.data}: {log.resampled}")
     for name, relative in per_joint.items():
         print(f"  {name}: relative torque error {_percent(relative, 3)}")
     print(f"  pooled: {100 * pooled:.3f} %")

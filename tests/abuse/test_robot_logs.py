@@ -1,6 +1,7 @@
 """Robot logs as loggers write them: epoch time stamps (rounded by float64), a clock
-that jitters within 1 %, and what must still be refused (a gap, time running back, a
-word in a number column), each named by its line."""
+that jitters within 1 % (used as it is) or more (resampled, and said so), and what must
+still be refused (a gap, time running back, a word in a number column), each named by
+its line."""
 from __future__ import annotations
 
 import numpy as np
@@ -45,8 +46,25 @@ def test_a_clock_jittering_within_one_percent_is_used_as_it_is(tmp_path):
     assert log.step == pytest.approx(1e-3, rel=1e-5)
 
 
+def test_a_real_time_loggers_clock_is_resampled_and_said_so(tmp_path, arm, capsys):
+    """Steps of 8 to 13 ms (a real-time interface at about 94 Hz): the positions on even
+    steps of the mean step by cubic splines, the torques linearly."""
+    urdf, _ = arm
+    rng = np.random.default_rng(5)
+    t = np.concatenate([[0.0], np.cumsum(rng.uniform(0.008, 0.013, 1999))])
+    path = _log(tmp_path / "rt.csv", t)
+    log = read_log(path, 2)
+    assert log.resampled and "resampled onto even steps" in log.resampled
+    assert np.allclose(np.diff(log.t), log.step, rtol=1e-9)
+    truth = 0.8 * np.sin(1.3 * log.t)
+    assert np.max(np.abs(log.q[:, 0] - truth)) < 1e-7  # measured 2.7e-10
+    assert main(["identify", str(path), "--robot", str(urdf), "--unknown", "payload",
+                 "--out", str(tmp_path / "o")]) in (0, 1)
+    assert "the clock jitters (steps from 0.008" in capsys.readouterr().out
+
+
 @pytest.mark.parametrize("change, message", [
-    (lambda t: np.concatenate([t[:3000], t[3000:] + 0.05]), "line 3002: a step of 0.051 s"),
+    (lambda t: np.concatenate([t[:3000], t[3000:] + 0.05]), "line 3002: a gap of 0.051 s"),
     (lambda t: np.concatenate([t[:100], t[99:100], t[101:]]), "line 102: t does not increase"),
 ])
 def test_gaps_and_time_running_back_are_refused_with_their_line(tmp_path, change, message):

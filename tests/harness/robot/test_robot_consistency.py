@@ -280,3 +280,21 @@ def test_a_passive_joint_constrains_the_parameters(tmp_path, capsys):
     assert report["relative_error"]["per_joint"]["joint2"] is None
     assert report["relative_error"]["per_joint"]["joint1"] < 0.1
 
+
+
+def test_an_implausible_mass_is_named_in_a_warning():
+    """A link mass 10 times the URDF's, or a tenth of it, gets a warning naming the link."""
+    import numpy as np
+
+    from harness.robot.assessment import implausible_masses
+
+    nominal = np.zeros(24)
+    nominal[0], nominal[10] = 0.267, 0.33
+    consistent = nominal.copy()
+    assert implausible_masses(consistent, nominal, ["link1", "link2"]) == []
+    consistent[0] = 91.58
+    consistent[10] = 0.02
+    words = implausible_masses(consistent, nominal, ["link1", "link2"])
+    assert len(words) == 2
+    assert "link1's identified mass 91.58 kg is 343 times the URDF's 0.267 kg" in words[0]
+    assert "link2's identified mass 0.02 kg" in words[1]
