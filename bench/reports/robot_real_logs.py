@@ -110,12 +110,12 @@ def _truth(case: Case, robot: Robot, path: Path, locked: tuple[str, ...]):
     rng = np.random.default_rng(1)
     link, friction, _ = truth_of(case.robot, robot, rng)
     forward = pinocchio_truth(path, locked, link, friction)
-    extra = {}
+    extra: dict = {"true_masses": link[:, 0].tolist()}
     if case.outside_class:
         # Coulomb f_c + d for q' > 0, f_c - d for q' < 0, and a constant offset
         asymmetry = friction[:, 1] * rng.uniform(0.2, 0.4, robot.n) * rng.choice([-1, 1], robot.n)
         offset = friction[:, 1] * rng.uniform(0.3, 0.6, robot.n) * rng.choice([-1, 1], robot.n)
-        extra = {"coulomb_asymmetry": asymmetry.tolist(), "torque_offset": offset.tolist()}
+        extra.update(coulomb_asymmetry=asymmetry.tolist(), torque_offset=offset.tolist())
         symmetric = forward
 
         def forward(q, qd, tau):  # noqa: ANN001, ANN202
@@ -332,7 +332,9 @@ def run_case(case: Case, train_seconds: float, work: Path) -> dict:
         scores={k: {"per_joint": v[0], "pooled": v[1]} for k, v in scores.items()},
         warnings=summary.get("warnings", []), holds=summary.get("identified_urdf_holds"),
         passive=summary.get("passive_joints", []),
-        mass_ratio=(masses / masses_urdf).tolist(), ols_cutoff_hz=cutoff(1.0 / training.step))
+        mass_ratio=(masses / masses_urdf).tolist(),
+        true_mass_ratio=(np.asarray(extra["true_masses"]) / masses_urdf).tolist(),
+        ols_cutoff_hz=cutoff(1.0 / training.step))
     e = {k: v[1] for k, v in scores.items()}
     warned = bool(row["warnings"]) or bool(row["stderr"])
     row["targets"] = {
@@ -375,7 +377,7 @@ def document(run: dict) -> str:
         "filtfilt + central differences + np.linalg.lstsq on the same base regressor.",
         "",
         "| case | log | samples | identify exit, time | URDF | identified.urdf | estimate | "
-        "OLS (cut-off) | identified.urdf holds | masses / URDF | warnings (stderr) |",
+        "OLS (cut-off) | identified.urdf holds | masses / URDF (truth's) | warnings (stderr) |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in run["rows"]:
@@ -391,7 +393,8 @@ def document(run: dict) -> str:
             f"{r['identify_s']:.1f} s | {_pct(s['urdf']['pooled'])} | "
             f"{_pct(s['identified']['pooled'])} | {_pct(s['estimate']['pooled'])} | "
             f"{_pct(s['ols']['pooled'])} ({r['ols_cutoff_hz']:.3g} Hz) | {r['holds']} | "
-            f"{min(ratio):.2f}..{max(ratio):.2f} | {stderr} |")
+            f"{min(ratio):.2f}..{max(ratio):.2f} ({min(r['true_mass_ratio']):.2f}.."
+            f"{max(r['true_mass_ratio']):.2f}) | {stderr} |")
     lines += ["", "The same models on the validation run's true states and torques (no encoder, "
               "no filter, no clock jitter): the models' own error, apart from the scorer's "
               "derivative noise.", "",
@@ -414,13 +417,13 @@ def document(run: dict) -> str:
         if r.get("failed"):
             continue
         lines += [f"Case {r['case']} ({r['describe']}):", "",
-                  "| joint | URDF | identified.urdf | estimate | OLS | mass / URDF's |",
+                  "| joint | URDF | identified.urdf | estimate | OLS | mass / URDF's (truth's) |",
                   "|---|---|---|---|---|---|"]
         s = r["scores"]
         for i, joint in enumerate(r["joints"]):
             lines.append(f"| {joint} | " + " | ".join(_pct(s[k]['per_joint'][i]) for k in
                                                       ("urdf", "identified", "estimate", "ols"))
-                         + f" | {r['mass_ratio'][i]:.3f} |")
+                         + f" | {r['mass_ratio'][i]:.3f} ({r['true_mass_ratio'][i]:.3f}) |")
         lines.append("")
     lines += ["## Jittered logs given as they are", ""]
     for r in run["rows"]:
@@ -428,7 +431,7 @@ def document(run: dict) -> str:
             lines.append(f"- case {r['case']}: exit {r['raw_log']['rc']}: "
                          f"`{r['raw_log']['stderr'][:400]}`; the bench then resampled the log "
                          f"onto its mean step ({r['mean_step_ms']:.3f} ms)")
-    extra = [r for r in run["rows"] if r["truth_extra"]]
+    extra = [r for r in run["rows"] if "torque_offset" in r["truth_extra"]]
     for r in extra:
         lines.append(f"- case {r['case']}, outside the model class: Coulomb asymmetry (N.m) "
                      + ", ".join(f"{x:+.3f}" for x in r["truth_extra"]["coulomb_asymmetry"])
