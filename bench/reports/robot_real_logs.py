@@ -374,7 +374,8 @@ def document(run: dict) -> str:
         "the error over RMS of the measured torque, pooled over the joints; Savitzky-Golay "
         f"window {WINDOW:g} s, validate's default, unless the row says otherwise). URDF: the unidentified URDF; identified: identify's identified.urdf; "
         "estimate: identify's base-parameter least squares (parameters.csv); OLS: Butterworth "
-        "filtfilt + central differences + np.linalg.lstsq on the same base regressor.",
+        "filtfilt + central differences + np.linalg.lstsq on the same base regressor and the "
+        "same (resampled) training log.",
         "",
         "| case | log | samples | identify exit, time | URDF | identified.urdf | estimate | "
         "OLS (cut-off) | identified.urdf holds | masses / URDF (truth's) | warnings (stderr) |",
