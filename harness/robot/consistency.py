@@ -221,8 +221,11 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
             D = derivative(x)
             return np.vstack([projector @ D, (root * prior)[:, None] * D[free]])
 
-        x = scipy.optimize.least_squares(residual, start, jac=jacobian, method="lm",
-                                         x_scale="jac", max_nfev=4000).x
+        # the search may try steps far out (a square of a large friction coordinate
+        # overflows there): such a step is rejected by its residual, not worth a warning
+        with np.errstate(over="ignore", invalid="ignore"):
+            x = scipy.optimize.least_squares(residual, start, jac=jacobian, method="lm",
+                                             x_scale="jac", max_nfev=4000).x
         return x, float(np.sum(data_residual(x) ** 2))
 
     # friction from the base estimate directly (its columns are always base columns),
