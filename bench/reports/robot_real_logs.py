@@ -52,7 +52,7 @@ import numpy as np
 from scipy.interpolate import CubicHermiteSpline, CubicSpline
 from scipy.signal import butter, filtfilt
 
-from bench.reports import REPORTS
+from bench.reports import REPORTS, commit
 from bench.reports.robot_trajectories import multisine, quantize, simulate
 from bench.reports.robots import COULOMB_VELOCITY, pinocchio_truth, truth_of
 from harness.robot.base_parameters import base_parameters
@@ -450,14 +450,6 @@ def document(run: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _commit() -> str:
-    try:
-        return subprocess.run(["git", "describe", "--always", "--dirty", "--abbrev=10"],
-                              cwd=REPO, capture_output=True, text=True, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true",
@@ -479,7 +471,7 @@ def main(argv: list[str] | None = None) -> int:
     run: dict = {"command": shlex.join(["python", "-m", "bench.reports.robot_real_logs",
                                         *(sys.argv[1:] if argv is None else argv)]),
                  "date": datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M"),
-                 "commit": _commit(), "seconds": seconds, "load_start": os.getloadavg()[0],
+                 "commit": commit(), "seconds": seconds, "load_start": os.getloadavg()[0],
                  "rows": []}
     started = time.perf_counter()
     with tempfile.TemporaryDirectory() as temporary:

@@ -36,7 +36,6 @@ import json
 import os
 import shlex
 import shutil
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -44,7 +43,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from bench.reports import REPORTS, robot_report
+from bench.reports import REPORTS, commit, robot_report
 from bench.reports.realdata.baselines import kalman, tune_log10
 from bench.reports.robot_observer_methods import MODEL_METHODS, model_observer
 from bench.reports.robot_trajectories import quantize, simulate
@@ -211,14 +210,6 @@ def _json_safe(x):  # noqa: ANN001, ANN202 -- NaN (no payload) as null: strict J
     return x
 
 
-def _commit() -> str:
-    try:
-        return subprocess.run(["git", "describe", "--always", "--dirty", "--abbrev=10"],
-                              cwd=REPO, capture_output=True, text=True, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--rates", default="1000", help="comma-separated sampling rates [Hz]")
@@ -259,7 +250,7 @@ def main(argv: list[str] | None = None) -> int:
     run = {
         "command": shlex.join([".venv/bin/python", "-m", "bench.reports.robots",
                                *(sys.argv[1:] if argv is None else argv)]),
-        "commit": _commit(), "seconds": args.seconds, "seed": 1,
+        "commit": commit(), "seconds": args.seconds, "seed": 1,
         "robots": args.robots.split(","), "rates": [float(r) for r in args.rates.split(",")],
         "methods": list(methods), "model_left_out": left_out,
         "fmu_sha256": hashlib.sha256(fmu.read_bytes()).hexdigest() if "FMU" in methods else None,
