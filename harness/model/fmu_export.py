@@ -27,6 +27,7 @@ import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
+import sympy
 from lxml import etree
 
 from ..paths import default_fmu_dir
@@ -225,6 +226,11 @@ def _model_structure(root: etree._Element, fmi_version: int, old_index: dict[int
 def build_fmu(model: Model, destination: Path, fmi_version: int = 2,
               identifier: int | None = None, template: Path | None = None) -> None:
     """Writes the model's FMU to ``destination`` (a file name; written in one go)."""
+    if all(sympy.sympify(eq.known) == 0 for eq in model.equations):
+        raise ExportError("no equation has a known side (an input or a known term): the "
+                          "equations are homogeneous in the unknowns, which a log then fixes "
+                          "only up to a common scale; give one unknown as a constant "
+                          "([constants]) or add the input that drives the system")
     try:
         program = compile_program(model)
     except ProgramError as error:

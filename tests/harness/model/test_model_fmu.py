@@ -196,6 +196,7 @@ def write_model(path: Path, coordinates: int, extra_parameter: str = "") -> Path
     ("five_coordinates", "the model has 5 coordinates: the FMU takes at most 4"),
     ("name_clash", "would share the names m1_std"),
     ("out_is_a_file", "is not a folder"),
+    ("homogeneous", "only up to a common scale"),
 ])
 def test_what_the_fmu_cannot_be_built_for_is_refused(tmp_path, capsys, case, message):
     out = tmp_path / "out"
@@ -206,6 +207,12 @@ def test_what_the_fmu_cannot_be_built_for_is_refused(tmp_path, capsys, case, mes
         model.write_text('[model]\ncoordinates = ["q"]\ninputs = ["u"]\n'
                          'equations = ["m1*der(q,2) + m1_std*der(q) = u"]\n'
                          '[parameters]\nm1 = { nominal = 1 }\nm1_std = { nominal = 0 }\n')
+    elif case == "homogeneous":  # no input: the unknowns only up to a scale
+        model = tmp_path / "m.toml"
+        model.write_text('[model]\ncoordinates = ["q"]\n'
+                         'equations = ["J*der(q,2) + c*der(q) + k*q = 0"]\n'
+                         '[parameters]\nJ = { nominal = 1 }\nc = { nominal = 0.1 }\n'
+                         'k = { nominal = 10 }\n')
     else:
         model = write_model(tmp_path / "m.toml", 1)
         out.write_text("a file")
