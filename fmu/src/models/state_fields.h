@@ -46,7 +46,7 @@
     DERIVED_FIELD(T, id.runs), DERIVED_FIELD(T, id.run_start), DERIVED_FIELD(T, id.run_end),     \
     DERIVED_FIELD(T, id.weight), DERIVED_FIELD(T, id.h), DERIVED_FIELD(T, id.rho),               \
     DERIVED_FIELD(T, id.lambda), DERIVED_FIELD(T, id.one_minus_lambda_rho),                      \
-    STATE_FIELD(T, id.anchor_age, FIELD_INT, 0, 2147483647),                                     \
+    STATE_FIELD(T, id.anchor_age, FIELD_INT, 0, RRI_ANCHOR_INTERVAL),                            \
     STATE_FIELD(T, id.anchor_unit, FIELD_INT, 0, RRI_MAX_PARAMETERS + 2),                        \
     STATE_FIELD(T, id.anchor_failed, FIELD_INT, 0, 1), DERIVED_FIELD(T, id.batch_samples),       \
     STATE_FIELD(T, id.batch_age, FIELD_INT, 0, RRI_MAX_BATCH_SAMPLES),                           \
