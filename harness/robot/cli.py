@@ -108,19 +108,27 @@ def column_mapping(text: str, command: str) -> dict[str, str] | None:
     return mapping
 
 
+def robot_and_log(args, mapping: dict[str, str]):
+    """The robot of --robot (with --lock) and its log in SI units (--columns mapped, the
+    unit options applied): what identify and validate --robot both read first."""
+    from .pipeline import read_log
+    from .urdf import read_urdf
+    robot = read_urdf(args.robot, locked=tuple(args.lock))
+    return robot, read_log(args.data, robot.n, mapping, units=units_of(args, robot))
+
+
 def identify_command(args) -> int:
     from ..outputs import Outputs
     from .log_units import UnitError
-    from .pipeline import OUTPUT_NAMES, LogError, identify_robot, read_log, write_results
-    from .urdf import UrdfError, read_urdf
+    from .pipeline import OUTPUT_NAMES, LogError, identify_robot, write_results
+    from .urdf import UrdfError
     mapping = column_mapping(args.columns, "identify")
     if mapping is None:
         return 2
     try:
         with Outputs(args.out, "identify", inputs=[args.data, args.robot],
                      names=OUTPUT_NAMES) as outputs:
-            robot = read_urdf(args.robot, locked=tuple(args.lock))
-            log = read_log(args.data, robot.n, mapping, units=units_of(args, robot))
+            robot, log = robot_and_log(args, mapping)
             speed = {} if args.min_speed is None else {"min_speed": args.min_speed}
             if args.urdf_tolerance is not None:
                 speed["urdf_tolerance"] = args.urdf_tolerance

@@ -83,10 +83,9 @@ def validate_command(args) -> int:
     import sys
 
     from ..outputs import Outputs
-    from .cli import column_mapping, units_of
+    from .cli import column_mapping, robot_and_log
     from .log_units import UnitError
-    from .pipeline import read_log
-    from .urdf import UrdfError, read_urdf
+    from .urdf import UrdfError
 
     mapping = column_mapping(args.columns, "validate")
     if mapping is None:
@@ -94,8 +93,7 @@ def validate_command(args) -> int:
     try:
         with Outputs(args.out, "validate", inputs=[args.data, args.robot],
                      names=OUTPUT_NAMES) as outputs:
-            robot = read_urdf(args.robot, locked=tuple(args.lock))
-            log = read_log(args.data, robot.n, mapping, units=units_of(args, robot))
+            robot, log = robot_and_log(args, mapping)
             t, measured, predicted, per_joint, pooled = torque_errors(robot, log, args.window)
             write_validation(outputs.staging, args.robot, args.data, args.window, t,
                              measured, predicted, per_joint, pooled)

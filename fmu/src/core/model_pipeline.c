@@ -188,12 +188,16 @@ void mp_run(ModelPipeline *p, const TermProgram *program, const double y[], cons
     memcpy(s.u, u, (size_t)program->m * sizeof s.u[0]);
     AffineEntries e;
     StoTrace trace;
+    int current = 0; /* e holds the entries at (y, p->velocity, u): the regression's of the
+                      * last step, which the next step's nominal model takes again */
     for (; k < k_end; ++k) {
         StoAcceleration a[MAX_N];
         memset(a, 0, sizeof a);
         if (p->nominal_model) { /* the interval that starts here, at the last velocities */
-            memcpy(s.qd, p->velocity, (size_t)n * sizeof s.qd[0]);
-            affine_entries(program, &s, &e);
+            if (!current) {
+                memcpy(s.qd, p->velocity, (size_t)n * sizeof s.qd[0]);
+                affine_entries(program, &s, &e);
+            }
             if (nominal_acceleration(program, &e, p->nominal_acceleration))
                 p->singular_steps += 1.0;
             for (int i = 0; i < n; ++i) a[i].held = p->nominal_acceleration[i];
@@ -205,6 +209,7 @@ void mp_run(ModelPipeline *p, const TermProgram *program, const double y[], cons
             sto_run(&p->obs, y, a, 1, &trace);
             for (int i = 0; i < n; ++i) p->velocity[i] = trace.velocity[i][0];
         }
+        current = 0;
         if (!p->identifier) continue;
         const double t = start_time + (double)k * p->h;
         /* the observer slides, or the bank's members have settled (they track where the
@@ -218,6 +223,7 @@ void mp_run(ModelPipeline *p, const TermProgram *program, const double y[], cons
         if (!p->identifying) continue;
         memcpy(s.qd, p->velocity, (size_t)n * sizeof s.qd[0]);
         affine_entries(program, &s, &e);
+        current = 1;
         regression_step(p, program, &e);
     }
 }
