@@ -141,7 +141,7 @@ LOG_OPTIONS = {"identifier": ("--identifier", "lsm"), "param": ("--param", []),
                "csv_decimation": ("--csv-decimation", 1), "format": ("--format", "csv")}
 # the options of the robot path (harness.robot.cli), refused without --robot
 ROBOT_OPTIONS = {"lock": ("--lock", []), "unknown": ("--unknown", "all"),
-                 "velocity": ("--velocity", "sg"), "window": ("--window", 0.05),
+                 "velocity": ("--velocity", "sg"), "window": ("--window", None),
                  "min_speed": ("--min-speed", None), "angle_unit": ("--angle-unit", None),
                  "length_unit": ("--length-unit", None),
                  "torque_gains": ("--torque-gains", None)}

@@ -34,8 +34,10 @@ def register_validate(sub, parents) -> None:
                        help="log column of each role t, q1..qn, u1..un")
     robot.add_argument("--lock", action="append", default=[], metavar="JOINT",
                        help="a URDF joint held at 0 (e.g. gripper fingers); repeatable")
-    robot.add_argument("--window", type=_positive_window, default=0.05,
-                       help="Savitzky-Golay window of the derivatives [s] (default 0.05)")
+    robot.add_argument("--window", type=_positive_window, default=None,
+                       help="Savitzky-Golay window of the derivatives [s] (default: as "
+                            "identify chooses it, from the log's joint velocity windows, "
+                            "at least 0.05)")
     from .robot.cli import add_unit_arguments
     add_unit_arguments(robot, time=True)
     p.set_defaults(func=_validate)
@@ -57,7 +59,7 @@ def _validate(args: argparse.Namespace) -> int:
         return validate_robot(args)
     given = [option for option, value, default in (
         ("--columns", args.columns, ""), ("--lock", args.lock, []),
-        ("--window", args.window, 0.05), ("--time-unit", args.time_unit, None),
+        ("--window", args.window, None), ("--time-unit", args.time_unit, None),
         ("--angle-unit", args.angle_unit, None), ("--length-unit", args.length_unit, None),
         ("--torque-gains", args.torque_gains, None)) if value != default]
     if given:

@@ -1,7 +1,7 @@
 """`identify --robot` on logs with the properties of real robot logs, against the URDF and
 the practitioner's least squares, in one run.
 
-    /tmp/wtvenv/bin/python -m bench.reports.robot_real_logs [--quick] [--out FILE.md]
+    .venv/bin/python -m bench.reports.robot_real_logs [--quick] [--out FILE.md]
 
 --out (default build/reports/robot_real_logs.md) receives the generated document: the
 command, date, commit and load average, one row per case, the per-joint errors and the
@@ -14,8 +14,8 @@ Cases (the robots of bench/reports/robots.py, their truth from `truth_of`: links
      (per-joint drive gains, identified with --torque-gains), 17-bit encoders;
   b  the two-link arm at 200 Hz, joint 2 passive (torque 0, moved by joint 1), encoder
      steps of 0.01 rad, clock jitter +-10 %;
-  b2 case b's logs with identify --window 0.2 and validate --window 0.2 (the default
-     0.05 s window differentiates the 0.01 rad steps into noise);
+  b2 case b's logs with identify --window 0.05 and validate --window 0.05 (the fixed
+     window of earlier versions, which differentiates the 0.01 rad steps into noise);
   c  the UR5 at 1 kHz, 17 bit, with asymmetric Coulomb friction and a constant torque
      offset per joint in the truth (outside the identified model's class);
   d  the UR5 at 1 kHz, 17 bit: the clean reference.
@@ -59,10 +59,9 @@ from harness.robot.base_parameters import base_parameters
 from harness.robot.examples import example_urdf
 from harness.robot.pipeline import JointLog, savitzky_golay
 from harness.robot.urdf import Robot, read_urdf
-from harness.robot.validate import torque_errors
+from harness.robot.validate import scoring_window, torque_errors
 
 REPO = Path(__file__).resolve().parents[2]
-WINDOW = 0.05          # validate's default Savitzky-Golay window [s]
 FINE_STEP = 1e-3       # the simulation's step before sampling a jittered clock [s]
 UR5_GAINS = (13.2, 13.2, 13.2, 9.8, 9.8, 9.8)  # drive gains [N.m/A] of case a
 TARGET_RELATIVE = 0.05  # identified.urdf within 5 % (relative) of the estimate's error
@@ -82,7 +81,7 @@ class Case:
     passive: tuple[int, ...] = ()     # joints with torque 0
     outside_class: bool = False       # asymmetric Coulomb friction and a torque offset
     pd: tuple[float, float] = (400.0, 40.0)
-    window: float = WINDOW            # identify's and validate's --window [s]
+    window: float | None = None       # identify's and validate's --window [s] (None: theirs)
     results: dict = field(default_factory=dict)
 
 
@@ -94,9 +93,9 @@ CASES = (
          jitter=(0.9 / 200, 1.1 / 200), bits=None, resolution=0.01, passive=(1,),
          pd=(50.0, 5.0)),
     Case("b2", "double_pendulum", 200.0,
-         "case b's logs, identify and validate with --window 0.2",
+         "case b's logs, identify and validate with --window 0.05",
          jitter=(0.9 / 200, 1.1 / 200), bits=None, resolution=0.01, passive=(1,),
-         pd=(50.0, 5.0), window=0.2),
+         pd=(50.0, 5.0), window=0.05),
     Case("c", "ur5", 1000.0, "UR5, 1 kHz, 17 bit, asymmetric Coulomb + torque offset",
          outside_class=True),
     Case("d", "ur5", 1000.0, "UR5, 1 kHz, 17 bit (clean reference)"),
@@ -184,7 +183,7 @@ def resample(t: np.ndarray, q: np.ndarray, u: np.ndarray
 # --- identify, the scores ----------------------------------------------------------------
 
 def run_identify(data: Path, urdf: Path, out: Path, locked: tuple[str, ...],
-                 gains: tuple[float, ...] | None, window: float = WINDOW) -> dict:
+                 gains: tuple[float, ...] | None, window: float | None = None) -> dict:
     """The real CLI in a subprocess: exit status, wall time, stdout and stderr."""
     command = [sys.executable, "-m", "harness", "identify", str(data), "--robot", str(urdf),
                "--out", str(out)]
@@ -192,7 +191,7 @@ def run_identify(data: Path, urdf: Path, out: Path, locked: tuple[str, ...],
         command += ["--lock", joint]
     if gains:
         command += ["--torque-gains", ",".join(f"{g:g}" for g in gains)]
-    if window != WINDOW:
+    if window is not None:
         command += ["--window", f"{window:g}"]
     started = time.perf_counter()
     done = subprocess.run(command, cwd=REPO, capture_output=True, text=True)
@@ -313,17 +312,18 @@ def run_case(case: Case, train_seconds: float, work: Path) -> dict:
     body = robot.rigid_body()
     base = base_parameters(body, robot.arrays()["types"], robot.joint_names, "all")
     nominal_beta = base.project(robot.parameters())
-    urdf_joint, urdf_pooled = urdf_scores(robot, validation, case.window)
-    same = base_scores(robot, base, validation, nominal_beta, case.window)[1]
+    window = scoring_window(validation) if case.window is None else case.window
+    urdf_joint, urdf_pooled = urdf_scores(robot, validation, window)
+    same = base_scores(robot, base, validation, nominal_beta, window)[1]
     if abs(same - urdf_pooled) > 1e-6 * urdf_pooled:  # the two scorers agree on the URDF
         raise RuntimeError(f"base-parameter scorer {same} != validate's {urdf_pooled}")
     identified = read_urdf(out / "identified.urdf", locked=locked)
     estimate = read_estimate(out / "parameters.csv", base)
     ols = least_squares_baseline(robot, base, training)
     scores = {"urdf": (urdf_joint, urdf_pooled),
-              "identified": urdf_scores(identified, validation, case.window),
-              "estimate": base_scores(robot, base, validation, estimate, case.window),
-              "ols": base_scores(robot, base, validation, ols, case.window)}
+              "identified": urdf_scores(identified, validation, window),
+              "estimate": base_scores(robot, base, validation, estimate, window),
+              "ols": base_scores(robot, base, validation, ols, window)}
     row["true_states"] = {
         "urdf": true_state_error(robot, true_states),
         "identified": true_state_error(identified, true_states),
@@ -337,7 +337,8 @@ def run_case(case: Case, train_seconds: float, work: Path) -> dict:
         passive=summary.get("passive_joints", []),
         mass_ratio=(masses / masses_urdf).tolist(),
         true_mass_ratio=(np.asarray(extra["true_masses"]) / masses_urdf).tolist(),
-        ols_cutoff_hz=cutoff(1.0 / training.step))
+        ols_cutoff_hz=cutoff(1.0 / training.step), scoring_window_s=window,
+        regression_window_s=summary.get("regression_window_s"))
     e = {k: v[1] for k, v in scores.items()}
     warned = bool(row["warnings"]) or bool(row["stderr"])
     row["targets"] = {
@@ -375,26 +376,29 @@ def document(run: dict) -> str:
         "",
         "Torque prediction error on the validation log, `validate --robot`'s definition (RMS of "
         "the error over RMS of the measured torque, pooled over the joints; Savitzky-Golay "
-        f"window {WINDOW:g} s, validate's default, unless the row says otherwise). URDF: the unidentified URDF; identified: identify's identified.urdf; "
+        "window: validate's default for the validation log, unless the row says otherwise; the "
+        "window column gives it). URDF: the unidentified URDF; identified: identify's identified.urdf; "
         "estimate: identify's base-parameter least squares (parameters.csv); OLS: Butterworth "
         "filtfilt + central differences + np.linalg.lstsq on the same base regressor and the "
         "same (resampled) training log.",
         "",
-        "| case | log | samples | identify exit, time | URDF | identified.urdf | estimate | "
-        "OLS (cut-off) | identified.urdf holds | masses / URDF (truth's) | warnings (stderr) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "| case | log | samples | identify exit, time | windows: identify's, validate's | URDF | "
+        "identified.urdf | estimate | OLS (cut-off) | identified.urdf holds | masses / URDF "
+        "(truth's) | warnings (stderr) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in run["rows"]:
         if r.get("failed"):
             lines.append(f"| {r['case']} | {r['describe']} | {r['samples']} | exit "
-                         f"{r['identify_rc']} | failed: {r['stderr'][:200]} | | | | | | |")
+                         f"{r['identify_rc']} | failed: {r['stderr'][:200]} | | | | | | | |")
             continue
         s = r["scores"]
         ratio = r["mass_ratio"]
         stderr = r["stderr"].replace("\n", "<br>").replace("|", "\\|") or "none"
         lines.append(
             f"| {r['case']} | {r['describe']} | {r['samples']} | {r['identify_rc']}, "
-            f"{r['identify_s']:.1f} s | {_pct(s['urdf']['pooled'])} | "
+            f"{r['identify_s']:.1f} s | {r['regression_window_s']:.3g} s, "
+            f"{r['scoring_window_s']:.3g} s | {_pct(s['urdf']['pooled'])} | "
             f"{_pct(s['identified']['pooled'])} | {_pct(s['estimate']['pooled'])} | "
             f"{_pct(s['ols']['pooled'])} ({r['ols_cutoff_hz']:.3g} Hz) | {r['holds']} | "
             f"{min(ratio):.2f}..{max(ratio):.2f} ({min(r['true_mass_ratio']):.2f}.."

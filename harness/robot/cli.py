@@ -26,8 +26,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                             "observer per joint (the observer FMU's default estimator: "
                             "implicit super-twisting + noise-adaptive linear observers, C "
                             "core) and a momentum-form regression through a causal filter")
-    group.add_argument("--window", type=_positive("--window"), default=0.05,
-                       help="Savitzky-Golay window [s] (default 0.05, > 0)")
+    group.add_argument("--window", type=_positive("--window"), default=None,
+                       help="the regression's Savitzky-Golay window [s] (> 0; default: the "
+                            "longest of the joints' velocity windows, which follow the "
+                            "encoder's noise, at least 0.05)")
     group.add_argument("--min-speed", type=_non_negative, default=None, metavar="V",
                        help="leave out joint equations at |q'| < V [rad/s or m/s], where "
                             "Coulomb friction is not f_c sign(q') (default 0.05)")
@@ -141,6 +143,9 @@ def identify_command(args) -> int:
     print("wrote " + ", ".join(str(outputs.final(path)) for path in written))
     if log.resampled:
         print(f"  {args.data}: {log.resampled}")
+    if args.window is None:
+        print(f"  regression window {result.window:.3g} s (the joints' longest velocity "
+              f"window, at least 0.05 s; --window sets it)")
     n = robot.n
     for i, joint in enumerate(robot.joints):
         print(f"  {joint.name}: mass {result.pi[10 * i]:.6g} kg, viscous "

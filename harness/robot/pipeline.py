@@ -6,9 +6,9 @@ DATA.csv (or a Parquet file) has columns t, q1..qn (rad, or m for prismatic join
 u1..un (N.m or N); other names map with --columns q1=shoulder_pos etc., other units
 with --time-unit, --angle-unit, --length-unit and --torque-gains (currents times the
 drives' gains; harness.robot.log_units).  Steps:
-1. velocities: Savitzky-Golay (zero-phase, the default: the regression's signals over
-   a fixed window, accelerations and torques filtered alike; the velocities written over
-   a window each joint chooses, harness.robot.smoothing) or a causal, model-free
+1. velocities: Savitzky-Golay (zero-phase, the default: the velocities written over
+   a window each joint chooses, the regression's signals over the longest of them,
+   accelerations and torques filtered alike, harness.robot.smoothing) or a causal, model-free
    observer per joint, the observer FMU's default estimator through the C core
    (observer_velocities);
 2. the base regressor of the URDF's model (C core): at the smoothed signals (sg) or in
@@ -49,7 +49,7 @@ from .filtered_regression import filtered_regression, low_pass
 from .least_squares import Fit, torque_least_squares
 from .log_units import LogUnits
 from .native import core_defaults
-from .smoothing import adaptive_velocities
+from .smoothing import SHORTEST_REGRESSION_WINDOW, adaptive_velocities, regression_window
 from .urdf import Robot
 
 # a joint keeping fewer of its equations than this share is an error (its friction cannot
@@ -215,6 +215,7 @@ class Identification:
     velocity: np.ndarray          # (N, n)
     used: np.ndarray              # indices of the samples used in the regression
     velocity_window: np.ndarray | None = None  # per joint [s] ("sg": the velocity's window)
+    window: float = SHORTEST_REGRESSION_WINDOW  # the regression's Savitzky-Golay window [s]
     projection: Projection | None = None  # the consistent parameters and their distance
     choice: Choice | None = None          # the training-log scores, what is written, warnings
     passive: list[str] = field(default_factory=list)  # joints whose torque is 0 throughout
@@ -225,11 +226,13 @@ class Identification:
 
 
 def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: str = "sg",
-                   window: float = 0.05, tau: float = 0.02, max_samples: int = 20000,
+                   window: float | None = None, tau: float = 0.02, max_samples: int = 20000,
                    skip: float = 0.5, min_speed: float | None = None,
                    urdf_tolerance: float = DEFAULT_URDF_TOLERANCE) -> Identification:
     """Identify the unknown parameters ("all" or "payload") from the log.
 
+    window: the regression's Savitzky-Golay window [s] (None: "sg" takes the joints'
+    velocity windows' longest, smoothing.regression_window; "observer" 0.05 s).
     The first `skip` seconds (observer convergence, filter edges) and the last window
     are not used; at most max_samples evenly spaced samples enter the regression.
     Joint i's equation is left out near its velocity reversals and where
@@ -244,6 +247,13 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
         raise LogError(f"the log has {log.q.shape[1]} joints, the robot {robot.n}")
     if method not in ("sg", "observer"):
         raise ValueError(f"unknown method {method!r}: 'sg' or 'observer'")
+    velocity_window = None
+    if method == "sg":
+        velocity, velocity_window = adaptive_velocities(log.q, log.step)
+        if window is None:
+            window = regression_window(velocity_window)
+    elif window is None:
+        window = SHORTEST_REGRESSION_WINDOW
     # whole samples, rounded: a step of 1 ms read as 1.0000000000000002 ms (a log in ms)
     # must not move the first sample used
     first, last = round(skip / log.step), len(log.t) - round(window / log.step) - 1
@@ -262,14 +272,13 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
         q, qd, qdd, u = savitzky_golay(log, window, at=used)
         Y, torque = body.regressor(q, qd, qdd), u
         margin, slow_margin, memory = window, 0.0, window
-        velocity, velocity_window = adaptive_velocities(log.q, log.step)
 
         def joint_speed(i: int) -> np.ndarray:
             return _smooth(log, log.q[:, i], window, deriv=1)
     else:
         bound = 1.5 * np.array([np.abs(_smooth(log, log.q[:, i], max(window, 0.05), deriv=2)
                                        ).max() for i in range(robot.n)]) + 1e-3
-        velocity, velocity_window = observer_velocities(log, bound), None
+        velocity = observer_velocities(log, bound)
         Y, torque = filtered_regression(body, log.q, velocity, log.u, log.step, tau, used)
         margin = slow_margin = max(window, 4 * tau)
         memory = max(window, tau)
@@ -312,8 +321,8 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     choice = choose_model(predictions, projection.pi, nominal,
                           [joint.child_link for joint in robot.joints])
     passive = [name for i, name in enumerate(names) if not np.any(log.u[:, i])]
-    return Identification(base, fit, choice.pi, velocity, used, velocity_window, projection,
-                          choice, passive)
+    return Identification(base, fit, choice.pi, velocity, used, velocity_window, window,
+                          projection, choice, passive)
 
 
 def friction_rows(velocity: np.ndarray, h: float, margin: float,
@@ -455,6 +464,7 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
         "condition_number": result.fit.condition,
         "base_parameters": result.base.count,
         "samples_used": int(len(result.used)),
+        "regression_window_s": result.window,
         "resampled": log.resampled,
         **_assessment_json(result),
         **({} if result.velocity_window is None else

@@ -1,11 +1,10 @@
 """Zero-phase velocities for the offline pipeline: Savitzky-Golay derivatives whose
-window each joint chooses from its own data (Lepski's rule).
+window each joint chooses from its own data (Lepski's rule), and the regression's window
+that follows from them.
 
-The regression keeps its fixed window (pipeline.savitzky_golay, 0.05 s), which the
-parameters were validated with; the velocities the pipeline writes come from here.  A
-fixed 0.05 s window left exact samples 9-1200 times the oracle-tuned causal Kalman
-filter's velocity RMS (its polynomial cannot follow a multi-sine over 50 ms) and was
-too short for 17-bit encoders at 10 kHz; per joint, growing the window while the
+A fixed 0.05 s velocity window left exact samples 9-1200 times the oracle-tuned causal
+Kalman filter's velocity RMS (its polynomial cannot follow a multi-sine over 50 ms) and
+was too short for 17-bit encoders at 10 kHz; per joint, growing the window while the
 estimate stays within the noise of every shorter one gave 0.17-0.57 times the Kalman
 filter's on the robot bench's logs (docs/robots.md).
 """
@@ -21,6 +20,9 @@ KAPPA = 2.0    # a longer window is kept while it differs from each shorter one 
 #               than KAPPA times that one's noise (1 failed on 17-bit encoders at 10 kHz,
 #               whose rounding is not white over 7 samples; 4 chose windows too long)
 LONGEST = 0.3  # [s]
+# the regression's shortest window [s]: the fixed window the parameters were validated with,
+# which a fine encoder keeps (regression_window)
+SHORTEST_REGRESSION_WINDOW = 0.05
 CHUNK = 1 << 15  # samples compared at a time
 
 
@@ -96,3 +98,14 @@ def adaptive_velocities(q: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray
     for i in range(q.shape[1]):
         velocity[:, i], windows[i] = joint_velocity(q[:, i], h)
     return velocity, windows
+
+
+def regression_window(velocity_windows: np.ndarray) -> float:
+    """The regression's Savitzky-Golay window [s] when none is given: the longest of the
+    joints' velocity windows (adaptive_velocities), at least SHORTEST_REGRESSION_WINDOW.
+    One window serves every joint (the torques and every joint's accelerations must pass
+    the same filter), and an acceleration needs at least the window the noisiest joint's
+    velocity needs: a 0.01 rad encoder at 200 Hz gets about 0.3 s, where 0.05 s turned its
+    steps into accelerations of noise; a 17-bit encoder keeps 0.05-0.14 s."""
+    longest = float(np.max(velocity_windows)) if len(velocity_windows) else 0.0
+    return max(SHORTEST_REGRESSION_WINDOW, longest)

@@ -2,7 +2,8 @@
 maker's, or an identify run's identified.urdf) predicts the torques of a log.
 
 The positions pass the same zero-phase Savitzky-Golay filter as the identification
-(`savitzky_golay`: q, q', q'' and the measured torques alike), the URDF's inverse
+(`savitzky_golay`: q, q', q'' and the measured torques alike; by default over the window
+identify would choose for this log), the URDF's inverse
 dynamics with its friction predicts the torques, and the score is the field's: the
 RMS of the prediction error over the RMS of the measured torque, per joint and pooled
 over the joints, the filter's edges left out.  A joint whose measured torque is 0
@@ -16,9 +17,19 @@ from pathlib import Path
 import numpy as np
 
 from .pipeline import JointLog, LogError, savitzky_golay
+from .smoothing import adaptive_velocities, regression_window
 from .urdf import Robot
 
 OUTPUT_NAMES = ("validation.json", "validation.png")
+
+
+def scoring_window(log: JointLog) -> float:
+    """The window validate takes when none is given: identify's (regression_window) for
+    this log, so that a coarse encoder's steps are not scored as torque errors."""
+    try:
+        return regression_window(adaptive_velocities(log.q, log.step)[1])
+    except ValueError as error:  # too short a log
+        raise LogError(str(error)) from None
 
 
 def torque_errors(robot: Robot, log: JointLog, window: float
@@ -94,8 +105,9 @@ def validate_command(args) -> int:
         with Outputs(args.out, "validate", inputs=[args.data, args.robot],
                      names=OUTPUT_NAMES) as outputs:
             robot, log = robot_and_log(args, mapping)
-            t, measured, predicted, per_joint, pooled = torque_errors(robot, log, args.window)
-            write_validation(outputs.staging, args.robot, args.data, args.window, t,
+            window = scoring_window(log) if args.window is None else args.window
+            t, measured, predicted, per_joint, pooled = torque_errors(robot, log, window)
+            write_validation(outputs.staging, args.robot, args.data, window, t,
                              measured, predicted, per_joint, pooled)
     except (UrdfError, LogError, UnitError) as error:
         print(f"harness validate: {error}", file=sys.stderr)
@@ -105,5 +117,5 @@ def validate_command(args) -> int:
         print(f"  {args.data}: {log.resampled}")
     for name, relative in per_joint.items():
         print(f"  {name}: relative torque error {_percent(relative, 3)}")
-    print(f"  pooled: {100 * pooled:.3f} %")
+    print(f"  pooled: {100 * pooled:.3f} % (Savitzky-Golay window {window:.3g} s)")
     return 0
