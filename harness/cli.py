@@ -144,7 +144,9 @@ ROBOT_OPTIONS = {"lock": ("--lock", []), "unknown": ("--unknown", "all"),
                  "velocity": ("--velocity", "sg"), "window": ("--window", None),
                  "min_speed": ("--min-speed", None), "angle_unit": ("--angle-unit", None),
                  "length_unit": ("--length-unit", None),
-                 "torque_gains": ("--torque-gains", None)}
+                 "torque_gains": ("--torque-gains", None),
+                 "joint_terms": ("--joint-terms", None),
+                 "smooth_coulomb": ("--smooth-coulomb", None)}
 
 
 def _given(args, options: Mapping[str, tuple[str, object]]) -> list[str]:

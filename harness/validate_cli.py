@@ -38,6 +38,10 @@ def register_validate(sub, parents) -> None:
                        help="Savitzky-Golay window of the derivatives [s] (default: as "
                             "identify chooses it, from the log's joint velocity windows, "
                             "at least 0.05)")
+    robot.add_argument("--joint-terms-file", default=None, metavar="CSV",
+                       help="the joint terms (offsets, armature, asymmetric or smooth "
+                            "Coulomb) an identify run wrote, added to the URDF's prediction "
+                            "(default: joint_terms.csv next to the URDF, if there is one)")
     from .robot.cli import add_unit_arguments
     add_unit_arguments(robot, time=True)
     p.set_defaults(func=_validate)
@@ -61,7 +65,8 @@ def _validate(args: argparse.Namespace) -> int:
         ("--columns", args.columns, ""), ("--lock", args.lock, []),
         ("--window", args.window, None), ("--time-unit", args.time_unit, None),
         ("--angle-unit", args.angle_unit, None), ("--length-unit", args.length_unit, None),
-        ("--torque-gains", args.torque_gains, None)) if value != default]
+        ("--torque-gains", args.torque_gains, None),
+        ("--joint-terms-file", args.joint_terms_file, None)) if value != default]
     if given:
         print(f"harness validate: the option(s) {', '.join(given)} go with --robot; a model "
               "file maps its columns in [columns] and gives their units in [units] (t = \"ms\" "

@@ -14,6 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
+from .joint_terms import ARMATURE, COULOMB_NEGATIVE, COULOMB_POSITIVE, OFFSET, JointTerms
+
 LINK_NAMES = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
 FRICTION_NAMES = ("fv", "fc")
 
@@ -37,11 +39,11 @@ class BaseParameters:
         return len(self.base)
 
     def project(self, pi: np.ndarray) -> np.ndarray:
-        """beta of a standard parameter vector pi."""
+        """beta of a parameter vector pi (12 n standard, then the extra joint terms)."""
         return pi[..., self.base] + pi[..., self.dependent] @ self.K.T
 
     def regressor(self, Y: np.ndarray) -> np.ndarray:
-        """Y_b from full regressors (..., 12 n)."""
+        """Y_b from full regressors (..., 12 n + the extra joint terms')."""
         return Y[..., self.base]
 
     def description(self, index: int) -> str:
@@ -51,6 +53,32 @@ class BaseParameters:
             if abs(coefficient) > 1e-9:
                 terms.append(f"{coefficient:+.6g} {self.dependent_names[k]}")
         return " ".join(terms)
+
+
+#: the order in which the extra joint terms join the base (base_parameters)
+EXTRA_PREFERENCE = (COULOMB_POSITIVE, COULOMB_NEGATIVE, ARMATURE, OFFSET)
+
+
+def _independent_extras(Y: np.ndarray, chosen: np.ndarray, terms: JointTerms, n: int,
+                        tolerance: float) -> np.ndarray:
+    """The extra columns (0-based among the k n extras) that join the base: in the order
+    of EXTRA_PREFERENCE, each whose part outside the span of the columns chosen so far
+    (Y[:, chosen], then the extras taken) is more than sqrt(tolerance) of its norm."""
+    k = len(terms.kinds)
+    if k == 0:
+        return np.zeros(0, dtype=int)
+    Q = np.linalg.qr(Y[:, chosen])[0] if len(chosen) else np.zeros((len(Y), 0))
+    taken = []
+    rank = {kind: EXTRA_PREFERENCE.index(kind) for kind in terms.kinds}
+    for j in sorted(range(k * n), key=lambda j: (rank[terms.kinds[j % k]], j)):
+        column = Y[:, 12 * n + j]
+        size = float(np.linalg.norm(column))
+        for _ in range(2):  # projected twice: orthogonal to rounding
+            column = column - Q @ (Q.T @ column)
+        if size > 0 and np.linalg.norm(column) > np.sqrt(tolerance) * size:
+            Q = np.column_stack([Q, column / np.linalg.norm(column)])
+            taken.append(j)
+    return np.array(sorted(taken), dtype=int)
 
 
 def random_states(types: np.ndarray, count: int, rng: np.random.Generator):
@@ -72,24 +100,38 @@ def unknown_columns(n: int, unknown: str) -> np.ndarray:
 
 
 def base_parameters(body, types: np.ndarray, joint_names: list[str], unknown: str = "all",
-                    samples: int = 400, seed: int = 0,
-                    tolerance: float = 1e-9) -> BaseParameters:
+                    samples: int = 400, seed: int = 0, tolerance: float = 1e-9,
+                    terms: JointTerms | None = None) -> BaseParameters:
     """Numerical base parameters of the C model `body` (harness.robot.native.RigidBody)
-    among the `unknown` parameters (see unknown_columns); the others are not in K."""
+    among the `unknown` parameters (see unknown_columns); the others are not in K.
+
+    terms (harness.robot.joint_terms): the extra joint terms, columns 12 n onwards
+    (all unknown; a core column they replace is neither base nor dependent).  The core's
+    columns are chosen as without them; then each extra column joins the base unless the
+    columns chosen already span it, the Coulomb levels and the armature before the
+    offsets (EXTRA_PREFERENCE): an offset collinear with the asymmetric Coulomb levels
+    is folded into them."""
     rng = np.random.default_rng(seed)
-    columns = unknown_columns(len(types), unknown)
-    Y = body.regressor(*random_states(types, samples, rng)).reshape(-1, body.parameter_count)
-    Y = Y[:, columns]
-    _, R, order = scipy.linalg.qr(Y, mode="economic", pivoting=True)
+    n = len(types)
+    terms = terms or JointTerms()
+    columns = np.setdiff1d(unknown_columns(n, unknown), terms.replaced(n))
+    q, qd, qdd = random_states(types, samples, rng)
+    Y = terms.extend(body.regressor(q, qd, qdd), qd, qdd).reshape(-1, 12 * n + terms.count(n))
+    _, R, order = scipy.linalg.qr(Y[:, columns], mode="economic", pivoting=True)
     diagonal = np.abs(np.diag(R))
     rank = int(np.sum(diagonal > tolerance * diagonal[0]))
     base_local = np.sort(order[:rank])
+    extra = _independent_extras(Y, columns[base_local], terms, n, tolerance)
+    columns = np.concatenate([columns, 12 * n + np.arange(terms.count(n))])
+    base_local = np.sort(np.concatenate([base_local, len(columns) - terms.count(n) + extra]))
+    rank = len(base_local)
+    Y = Y[:, columns]
     dependent_local = np.setdiff1d(np.arange(len(columns)), base_local)
     base, dependent = columns[base_local], columns[dependent_local]
     Y = np.concatenate([Y[:, base_local], Y[:, dependent_local]], axis=1)
     # Y[:, dependent] = Y[:, base] K exactly (up to rounding): K by least squares
     K = np.linalg.lstsq(Y[:, :rank], Y[:, rank:], rcond=None)[0]
     K[np.abs(K) < 1e-10] = 0.0
-    names = parameter_names(joint_names)
+    names = parameter_names(joint_names) + terms.names(joint_names)
     return BaseParameters(base, dependent, K, [names[k] for k in base],
                           [names[k] for k in dependent])

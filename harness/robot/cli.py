@@ -39,6 +39,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                             "relative (0.3: within +-30 %%, the default): the prior that "
                             "picks the physically consistent parameters the data leave open; "
                             "it never moves them out of the estimate's confidence region")
+    group.add_argument("--joint-terms", default=None, metavar="TERM,...",
+                       help="extra terms of every joint, identified with the rest: offset "
+                            "(a constant torque), armature (reflected rotor inertia, x q''), "
+                            "asymmetric-coulomb (a Coulomb level per direction); written to "
+                            "DIR/joint_terms.csv, which validate --robot reads")
+    group.add_argument("--smooth-coulomb", type=_positive("--smooth-coulomb"), default=None,
+                       metavar="VS",
+                       help="Coulomb friction as fc tanh(q'/VS) instead of fc sign(q') "
+                            "[VS in rad/s or m/s, > 0]")
     add_unit_arguments(group, time=False)  # identify's --time-unit serves every log
 
 
@@ -121,11 +130,17 @@ def robot_and_log(args, mapping: dict[str, str]):
 
 def identify_command(args) -> int:
     from ..outputs import Outputs
+    from .joint_terms import JointTermsError, parse_terms
     from .log_units import UnitError
     from .pipeline import OUTPUT_NAMES, LogError, identify_robot, write_results
     from .urdf import UrdfError
     mapping = column_mapping(args.columns, "identify")
     if mapping is None:
+        return 2
+    try:
+        terms = parse_terms(args.joint_terms, args.smooth_coulomb)
+    except JointTermsError as error:
+        print(f"harness identify: {error}", file=sys.stderr)
         return 2
     try:
         with Outputs(args.out, "identify", inputs=[args.data, args.robot],
@@ -135,7 +150,7 @@ def identify_command(args) -> int:
             if args.urdf_tolerance is not None:
                 speed["urdf_tolerance"] = args.urdf_tolerance
             result = identify_robot(robot, log, unknown=args.unknown, method=args.velocity,
-                                    window=args.window, **speed)
+                                    window=args.window, terms=terms, **speed)
             written = write_results(outputs.staging, robot, log, result, Path(args.data).name)
     except (UrdfError, LogError, UnitError) as error:
         print(f"harness identify: {error}", file=sys.stderr)
@@ -147,9 +162,20 @@ def identify_command(args) -> int:
         print(f"  regression window {result.window:.3g} s (the joints' longest velocity "
               f"window, at least 0.05 s; --window sets it)")
     n = robot.n
+    standard = result.standard(n)
+    values = result.term_values(n)
     for i, joint in enumerate(robot.joints):
-        print(f"  {joint.name}: mass {result.pi[10 * i]:.6g} kg, viscous "
-              f"{result.pi[10 * n + 2 * i]:.6g}, Coulomb {result.pi[10 * n + 2 * i + 1]:.6g}")
+        coulomb = ("" if terms.asymmetric_coulomb else
+                   f", Coulomb {standard[10 * n + 2 * i + 1]:.6g}")
+        extras = "".join(f", {kind} {values[i, j]:.6g}" for j, kind in enumerate(terms.kinds))
+        print(f"  {joint.name}: mass {standard[10 * i]:.6g} kg, viscous "
+              f"{standard[10 * n + 2 * i]:.6g}{coulomb}{extras}")
+    if terms.any and result.urdf_kept:
+        print("  the joint terms are not written: identified.urdf keeps the URDF's values")
+    elif terms.any:
+        mean = (" (identified.urdf holds the mean of the two Coulomb levels)"
+                if terms.asymmetric_coulomb else "")
+        print(f"  the joint terms: {outputs.final(written[-1])}{mean}")
     _print_assessment(result)
     return 0
 

@@ -38,6 +38,7 @@ import scipy.stats
 from lxml import etree
 
 from .base_parameters import BaseParameters
+from .joint_terms import JointTerms
 from .urdf import Robot, body_inertial, check_inertia, inertia_matrix, parse_urdf
 
 # the default relative tolerance of the URDF's values (--urdf-tolerance):
@@ -57,7 +58,7 @@ PREDICTION_MARGIN = 0.02  # relative: the training-log error allowed above the e
 class Projection:
     """The consistent parameters and how close they stay to the estimate."""
 
-    pi: np.ndarray          # consistent standard parameters (12 n)
+    pi: np.ndarray          # consistent parameters (12 n standard, then the joint terms)
     distance: float         # D: Mahalanobis distance^2 of beta(pi) from the estimate
     nearest: float          # D of the nearest consistent point (NaN: not needed)
     bound: float            # D allowed: chi2_r(CONFIDENCE) (+ nearest, if computed)
@@ -111,7 +112,8 @@ def _link(theta: np.ndarray) -> np.ndarray:
 
 
 def prior_scales(nominal: np.ndarray, n: int, data_scale: np.ndarray) -> np.ndarray:
-    """The scale of each standard parameter (12 n) that the URDF tolerance multiplies.
+    """The scale of each standard parameter (12 n, then any extra joint terms': nominal
+    and data_scale as long) that the URDF tolerance multiplies.
 
     Link i (URDF mass m > 0, size l = sqrt(tr I_o / 2m) from its inertia about the joint
     frame): the larger of |the URDF's value| and m (mass), m l (first moments), m l^2
@@ -120,10 +122,11 @@ def prior_scales(nominal: np.ndarray, n: int, data_scale: np.ndarray) -> np.ndar
     and data_scale, what the data make of the parameter (the value that alone would
     explain the measured torques: |u| / |Y_k| over the regression's equations).  A
     parameter that neither the URDF nor the data give a scale to gets 1 (it moves no
-    joint and the URDF leaves it at 0)."""
+    joint and the URDF leaves it at 0).  The extra joint terms are scaled like the
+    friction."""
     nominal = np.asarray(nominal, float)
     data_scale = np.asarray(data_scale, float)
-    physical = np.full(12 * n, np.nan)
+    physical = np.full(len(nominal), np.nan)  # 12 n, and the extra joint terms
     for i in range(n):
         link = nominal[10 * i:10 * i + 10]
         mass = link[0]
@@ -164,7 +167,8 @@ def _coordinate_steps(values: np.ndarray) -> np.ndarray:
 def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
                           covariance: np.ndarray, data_scale: np.ndarray | None = None,
                           tolerance: float = DEFAULT_URDF_TOLERANCE,
-                          score: Callable[[np.ndarray], float] | None = None) -> Projection:
+                          score: Callable[[np.ndarray], float] | None = None,
+                          terms: JointTerms | None = None) -> Projection:
     """Standard parameters pi (12 n) that are physically consistent, keep beta(pi) in
     the estimate's confidence region (covariance (r, r) of beta) and are as close to
     the URDF's values as `tolerance` (relative, > 0) says where the data allow (see the
@@ -173,36 +177,50 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
     error of base parameters beta: the prior is weakened also where it would make it more
     than PREDICTION_MARGIN (relative) larger than the estimate's (or the nearest
     consistent point's, if that is larger).  Only the links and friction among the
-    identified (base and dependent) columns move."""
+    identified (base and dependent) columns move.
+
+    terms (harness.robot.joint_terms): the extra joint terms after the 12 n standard
+    parameters (pi then has 12 n + terms.count(n) entries): kept out of the links, the
+    offsets free, the armature and the Coulomb levels >= 0 (squared coordinates like the
+    friction), their prior 0 (the URDF has none) at the data's scale."""
     if not (np.isfinite(tolerance) and tolerance > 0):
         raise ValueError(f"the URDF tolerance must be a finite number > 0, not {tolerance!r}")
     n = robot.n
-    nominal = robot.parameters()
+    terms = terms or JointTerms()
+    extra = terms.count(n)
+    size = 12 * n + extra
+    nominal = np.concatenate([robot.parameters(), np.zeros(extra)])
     free = np.union1d(base.base, base.dependent)
     links = sorted({int(k) // 10 for k in free if k < 10 * n})
-    friction = np.array([k for k in free if k >= 10 * n], dtype=int)
+    signed = np.flatnonzero(~terms.nonnegative(n)) + 12 * n  # the offsets
+    friction = np.array([k for k in free if k >= 10 * n and k not in signed], dtype=int)
+    offsets = np.array([k for k in free if k in signed], dtype=int)
     whiten = _whitening(beta, covariance)
     if data_scale is None:
-        data_scale = np.full(12 * n, np.nan)
+        data_scale = np.full(size, np.nan)
     scales = prior_scales(nominal, n, data_scale)
     prior = 1.0 / (tolerance * scales[free])
+    squares = slice(10 * len(links), 10 * len(links) + len(friction))
+    linear = slice(squares.stop, None)
 
     def unpack(x: np.ndarray) -> np.ndarray:
         pi = nominal.copy()
         for j, i in enumerate(links):
             pi[10 * i:10 * i + 10] = _link(x[10 * j:10 * j + 10])
-        pi[friction] = x[10 * len(links):] ** 2  # >= 0
+        pi[friction] = x[squares] ** 2  # >= 0
+        pi[offsets] = x[linear]
         return pi
 
     def derivative(x: np.ndarray) -> np.ndarray:
-        """d pi / d x (12 n, len(x))."""
-        D = np.zeros((12 * n, len(x)))
+        """d pi / d x (size, len(x))."""
+        D = np.zeros((size, len(x)))
         for j, i in enumerate(links):
             D[10 * i:10 * i + 10, 10 * j:10 * j + 10] = _link_jacobian(x[10 * j:10 * j + 10])
-        D[friction, 10 * len(links) + np.arange(len(friction))] = 2 * x[10 * len(links):]
+        D[friction, 10 * len(links) + np.arange(len(friction))] = 2 * x[squares]
+        D[offsets, squares.stop + np.arange(len(offsets))] = 1.0
         return D
 
-    projector = whiten @ base.project(np.eye(12 * n)).T  # W P: whitened beta of pi
+    projector = whiten @ base.project(np.eye(size)).T  # W P: whitened beta of pi
 
     def data_residual(x: np.ndarray) -> np.ndarray:
         return projector @ unpack(x) - whitened_beta
@@ -235,8 +253,10 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
         if column in base.base:
             value[k] = max(beta[list(base.base).index(column)], 0.0)
     value = np.maximum(value, 1e-6 * scales[friction])
+    offset = np.array([beta[list(base.base).index(k)] if k in base.base else 0.0
+                       for k in offsets])
     start = np.concatenate([*(_log_cholesky(nominal[10 * i:10 * i + 10]) for i in links),
-                            np.sqrt(value)])
+                            np.sqrt(value), offset])
     region = float(scipy.stats.chi2.ppf(CONFIDENCE, len(beta)))
     error = score or (lambda _: 0.0)
 

@@ -46,6 +46,7 @@ from .consistency import (
     write_identified_urdf,
 )
 from .filtered_regression import filtered_regression, low_pass
+from .joint_terms import COULOMB_NEGATIVE, COULOMB_POSITIVE, SIDECAR_NAME, JointTerms, write_sidecar
 from .least_squares import Fit, torque_least_squares
 from .log_units import LogUnits
 from .native import core_defaults
@@ -59,7 +60,7 @@ TOO_FEW_ROWS, FEW_ROWS = 0.01, 0.1
 WRITE_ROWS = 1 << 16  # rows of velocities.csv formatted at a time
 PLOT_BINS = 4000      # stretches of a long log's velocity plot (plot_samples)
 OUTPUT_NAMES = ("velocities.csv", "parameters.csv", "identified.urdf", "summary.json",
-                "velocities.png")
+                "velocities.png", SIDECAR_NAME)
 
 
 class LogError(ValueError):
@@ -211,7 +212,7 @@ def observer_velocities(log: JointLog, acceleration_bound: np.ndarray) -> np.nda
 class Identification:
     base: BaseParameters
     fit: Fit
-    pi: np.ndarray                # consistent standard parameters (12 n)
+    pi: np.ndarray                # consistent parameters (12 n, then the joint terms')
     velocity: np.ndarray          # (N, n)
     used: np.ndarray              # indices of the samples used in the regression
     velocity_window: np.ndarray | None = None  # per joint [s] ("sg": the velocity's window)
@@ -219,16 +220,49 @@ class Identification:
     projection: Projection | None = None  # the consistent parameters and their distance
     choice: Choice | None = None          # the training-log scores, what is written, warnings
     passive: list[str] = field(default_factory=list)  # joints whose torque is 0 throughout
+    terms: JointTerms = field(default_factory=JointTerms)  # the extra joint terms
 
     @property
     def warnings(self) -> list[str]:
         return [] if self.choice is None else self.choice.warnings
 
+    @property
+    def urdf_kept(self) -> bool:
+        """True if identified.urdf keeps the input URDF's values (assessment.py)."""
+        return self.choice is not None and self.choice.written == "urdf"
+
+    def standard(self, n: int) -> np.ndarray:
+        """The 12 n parameters identified.urdf holds: with asymmetric Coulomb friction
+        (unless the URDF's values are kept), each joint's Coulomb friction is the mean
+        of its two levels."""
+        pi = self.pi[:12 * n].copy()
+        if self.terms.asymmetric_coulomb and not self.urdf_kept:
+            levels = self.term_values(n)
+            kinds = list(self.terms.kinds)
+            pi[10 * n + 1::2] = 0.5 * (levels[:, kinds.index(COULOMB_POSITIVE)] +
+                                       levels[:, kinds.index(COULOMB_NEGATIVE)])
+        return pi
+
+    def term_values(self, n: int) -> np.ndarray:
+        """(n, k): each joint's extra terms (terms.kinds' order)."""
+        return self.pi[12 * n:].reshape(n, len(self.terms.kinds))
+
+    def term_std_errors(self, n: int) -> np.ndarray:
+        """(k n,): each extra term's standard error where the term is a base parameter
+        by itself (no other parameter folded into it), NaN where it is not identified
+        alone."""
+        out = np.full(self.terms.count(n), np.nan)
+        for row, column in enumerate(self.base.base):
+            if column >= 12 * n and not np.any(np.abs(self.base.K[row]) > 1e-9):
+                out[column - 12 * n] = self.fit.std_error[row]
+        return out
+
 
 def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: str = "sg",
                    window: float | None = None, tau: float = 0.02, max_samples: int = 20000,
                    skip: float = 0.5, min_speed: float | None = None,
-                   urdf_tolerance: float = DEFAULT_URDF_TOLERANCE) -> Identification:
+                   urdf_tolerance: float = DEFAULT_URDF_TOLERANCE,
+                   terms: JointTerms | None = None) -> Identification:
     """Identify the unknown parameters ("all" or "payload") from the log.
 
     window: the regression's Savitzky-Golay window [s] (None: "sg" takes the joints'
@@ -242,7 +276,10 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     trusted where the data leave the consistent parameters open (consistency.py); the
     URDF's values are kept if the identified model predicts the training log worse
     (assessment.py).  A joint whose torque is 0 throughout is passive: its equation
-    (torque = 0) constrains the parameters like any other."""
+    (torque = 0) constrains the parameters like any other.  terms: the extra joint terms
+    (harness.robot.joint_terms; None: the core's model alone), identified with the rest;
+    the URDF's prediction is the core's model with the URDF's values."""
+    terms = terms or JointTerms()
     if log.q.shape[1] != robot.n:
         raise LogError(f"the log has {log.q.shape[1]} joints, the robot {robot.n}")
     if method not in ("sg", "observer"):
@@ -263,14 +300,15 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     used = np.arange(first, last, stride)
     body = robot.rigid_body()
     types = robot.arrays()["types"]
-    base = base_parameters(body, types, robot.joint_names, unknown)
+    base = base_parameters(body, types, robot.joint_names, unknown, terms=terms)
     if min_speed is None:
         min_speed = core_defaults().min_speed
     # each joint's velocity over the whole log is needed only for its friction rows
     # (friction_rows): one column at a time, the regression's signals at `used` only
     if method == "sg":
         q, qd, qdd, u = savitzky_golay(log, window, at=used)
-        Y, torque = body.regressor(q, qd, qdd), u
+        core = body.regressor(q, qd, qdd)
+        Y, torque = terms.extend(core, qd, qdd), u
         margin, slow_margin, memory = window, 0.0, window
 
         def joint_speed(i: int) -> np.ndarray:
@@ -279,7 +317,8 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
         bound = 1.5 * np.array([np.abs(_smooth(log, log.q[:, i], max(window, 0.05), deriv=2)
                                        ).max() for i in range(robot.n)]) + 1e-3
         velocity = observer_velocities(log, bound)
-        Y, torque = filtered_regression(body, log.q, velocity, log.u, log.step, tau, used)
+        core, torque = filtered_regression(body, log.q, velocity, log.u, log.step, tau, used)
+        Y = terms.extend_filtered(core, velocity, log.step, tau, used)
         margin = slow_margin = max(window, 4 * tau)
         memory = max(window, tau)
 
@@ -312,17 +351,18 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
         """The pooled training-log error of base parameters beta (prediction_error)."""
         return float(np.linalg.norm(left - Yb @ beta)) / total if total > 0 else 0.0
     projection = consistent_parameters(robot, base, fit.beta, fit.covariance, data_scale,
-                                       urdf_tolerance, score)
+                                       urdf_tolerance, score, terms)
     predictions = {
-        "urdf": prediction_error(Y @ nominal, torque, mask, names),
+        "urdf": prediction_error(core @ nominal, torque, mask, names),
         "estimate": prediction_error(known_torque + base.regressor(Y) @ fit.beta, torque,
                                      mask, names),
         "consistent": prediction_error(Y @ projection.pi, torque, mask, names)}
-    choice = choose_model(predictions, projection.pi, nominal,
+    choice = choose_model(predictions, projection.pi,
+                          np.concatenate([nominal, np.zeros(terms.count(robot.n))]),
                           [joint.child_link for joint in robot.joints])
     passive = [name for i, name in enumerate(names) if not np.any(log.u[:, i])]
     return Identification(base, fit, choice.pi, velocity, used, velocity_window, window,
-                          projection, choice, passive)
+                          projection, choice, passive, terms)
 
 
 def friction_rows(velocity: np.ndarray, h: float, margin: float,
@@ -422,9 +462,33 @@ def _assessment_json(result: Identification) -> dict:
     return out
 
 
+def _terms_json(result: Identification, names: list[str]) -> dict:
+    """summary.json's record of the extra joint terms (none: nothing)."""
+    terms = result.terms
+    if not terms.any:
+        return {}
+    n = len(names)
+    values, errors = result.term_values(n), result.term_std_errors(n).reshape(n, -1)
+    record: dict = {
+        "terms": list(terms.kinds), "smooth_coulomb_velocity": terms.smooth_coulomb,
+        "values": {name: dict(zip(terms.kinds, values[i].tolist()))
+                   for i, name in enumerate(names)},
+        "std_errors": {name: {kind: None if np.isnan(e) else float(e)
+                              for kind, e in zip(terms.kinds, errors[i])}
+                       for i, name in enumerate(names)},
+        "written_to": SIDECAR_NAME if not result.urdf_kept else
+        "nowhere: identified.urdf keeps the URDF's values"}
+    if terms.asymmetric_coulomb:
+        record["coulomb_in_urdf"] = "the mean of coulomb_positive and coulomb_negative"
+    return {"joint_terms": record}
+
+
 def write_results(out: Path, robot: Robot, log: JointLog, result: Identification,
                   data_name: str) -> list[Path]:
-    """velocities.csv, parameters.csv, identified.urdf, summary.json and a plot."""
+    """velocities.csv, parameters.csv, identified.urdf, summary.json, a plot and
+    joint_terms.csv (the extra joint terms; only its header without them or when
+    identified.urdf keeps the URDF's values, so that validate never reads an earlier
+    run's terms beside this run's URDF)."""
     out.mkdir(parents=True, exist_ok=True)
     names = robot.joint_names
     velocities = out / "velocities.csv"
@@ -435,7 +499,9 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
             np.savetxt(handle, np.column_stack([log.t[rows], result.velocity[rows]]),
                        delimiter=",", header=header if start == 0 else "", comments="")
     parameters = out / "parameters.csv"
-    nominal_beta = result.base.project(robot.parameters())
+    n = robot.n
+    extra = result.terms.count(n)
+    nominal_beta = result.base.project(np.concatenate([robot.parameters(), np.zeros(extra)]))
     consistent_beta = result.base.project(result.pi if result.projection is None
                                           else result.projection.pi)
     with parameters.open("w", newline="") as handle:
@@ -446,19 +512,23 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
                              f"{result.fit.beta[k]:.10g}", f"{result.fit.std_error[k]:.3g}",
                              f"{consistent_beta[k]:.10g}", result.base.description(k)])
     urdf = out / "identified.urdf"
-    kept = result.choice is not None and result.choice.written == "urdf"
-    write_identified_urdf(robot, result.pi, urdf,
+    kept = result.urdf_kept
+    standard = result.standard(n)
+    write_identified_urdf(robot, standard, urdf,
                           f"the input URDF's inertials and joint dynamics, kept: the model "
                           f"identified from {data_name} predicts it worse (summary.json)"
                           if kept else
                           f"inertials and joint dynamics identified from {data_name} by "
                           f"python -m harness identify")
+    sidecar = out / SIDECAR_NAME
+    write_sidecar(sidecar, result.terms, names, [joint.kind for joint in robot.joints],
+                  None if kept or not result.terms.any else result.pi[12 * n:],
+                  result.term_std_errors(n))
     summary = out / "summary.json"
-    n = robot.n
     summary.write_text(json.dumps({
         "joints": names,
-        "viscous": dict(zip(names, result.pi[10 * n::2].tolist())),
-        "coulomb": dict(zip(names, result.pi[10 * n + 1::2].tolist())),
+        "viscous": dict(zip(names, standard[10 * n::2].tolist())),
+        "coulomb": dict(zip(names, standard[10 * n + 1::2].tolist())),
         "masses": dict(zip([j.child_link for j in robot.joints], result.pi[:10 * n:10].tolist())),
         "residual_rms": dict(zip(names, result.fit.residual_rms.tolist())),
         "condition_number": result.fit.condition,
@@ -467,6 +537,7 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
         "regression_window_s": result.window,
         "resampled": log.resampled,
         **_assessment_json(result),
+        **_terms_json(result, names),
         **({} if result.velocity_window is None else
            {"velocity_window_s": dict(zip(names, result.velocity_window.tolist()))}),
     }, indent=2) + "\n")
@@ -483,7 +554,7 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
     figure.tight_layout()
     figure.savefig(plot, dpi=90)
     plt.close(figure)
-    return [velocities, parameters, urdf, summary, plot]
+    return [velocities, parameters, urdf, summary, plot, sidecar]
 
 
 def plot_samples(x: np.ndarray, bins: int = PLOT_BINS) -> np.ndarray | slice:

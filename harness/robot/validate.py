@@ -8,7 +8,12 @@ dynamics with its friction predicts the torques, and the score is the field's: t
 RMS of the prediction error over the RMS of the measured torque, per joint and pooled
 over the joints, the filter's edges left out.  A joint whose measured torque is 0
 throughout (a passive joint) has no relative error of its own (null in validation.json);
-its predicted torque still counts in the pooled error."""
+its predicted torque still counts in the pooled error.
+
+The joint terms an identify run wrote beside its identified.urdf (joint_terms.csv:
+offsets, armature, asymmetric or smooth Coulomb friction, harness.robot.joint_terms)
+join the prediction when that file sits next to the URDF or --joint-terms-file names
+it; without it, the URDF's model alone."""
 from __future__ import annotations
 
 import json
@@ -16,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .joint_terms import SIDECAR_NAME, JointTermsError, Sidecar, read_sidecar
 from .pipeline import JointLog, LogError, savitzky_golay
 from .smoothing import adaptive_velocities, regression_window
 from .urdf import Robot
@@ -32,10 +38,11 @@ def scoring_window(log: JointLog) -> float:
         raise LogError(str(error)) from None
 
 
-def torque_errors(robot: Robot, log: JointLog, window: float
+def torque_errors(robot: Robot, log: JointLog, window: float, sidecar: Sidecar | None = None
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, float | None], float]:
     """(t, measured, predicted torques, relative error per joint (None: a joint whose
-    torque is 0, passive), pooled) on the samples a window away from the log's ends."""
+    torque is 0, passive), pooled) on the samples a window away from the log's ends;
+    the sidecar's joint terms (read_sidecar) added to the URDF's prediction."""
     q, qd, qdd, u = savitzky_golay(log, window)
     edge = int(np.ceil(window / log.step - 1e-9))  # not one more for a step's rounding
     inside = slice(edge, len(log.t) - edge)
@@ -43,6 +50,9 @@ def torque_errors(robot: Robot, log: JointLog, window: float
         raise LogError(f"the log ({log.t[-1] - log.t[0]:g} s) is too short for a "
                        f"{window:g} s window")
     predicted = robot.rigid_body().inverse_dynamics(q[inside], qd[inside], qdd[inside])
+    if sidecar is not None:
+        predicted += sidecar.torque_change(qd[inside], qdd[inside],
+                                           robot.arrays()["friction"][:, 1])
     measured = u[inside]
     error = predicted - measured
     per_joint: dict[str, float | None] = {}
@@ -57,10 +67,11 @@ def torque_errors(robot: Robot, log: JointLog, window: float
 def write_validation(out: Path, urdf: str, data: str, window: float, t: np.ndarray,
                      measured: np.ndarray, predicted: np.ndarray,
                      per_joint: dict[str, float | None],
-                     pooled: float) -> None:
-    """validation.json and validation.png (measured and predicted torques per joint)."""
+                     pooled: float, joint_terms: str | None = None) -> None:
+    """validation.json and validation.png (measured and predicted torques per joint);
+    joint_terms: the joint_terms.csv whose terms the prediction includes (None: none)."""
     (out / "validation.json").write_text(json.dumps({
-        "urdf": urdf, "log": data,
+        "urdf": urdf, "joint_terms": joint_terms, "log": data,
         "relative_error": {"per_joint": per_joint, "pooled": pooled},
         "definition": "RMS of (predicted - measured torque) over RMS of the measured torque, "
                       "per joint and pooled over the joints; zero-phase Savitzky-Golay "
@@ -89,6 +100,15 @@ def _percent(relative: float | None, digits: int) -> str:
     return "n/a (torque 0: passive)" if relative is None else f"{100 * relative:.{digits}f} %"
 
 
+def sidecar_path(urdf: str, given: str | None) -> Path | None:
+    """The joint_terms.csv to read: the one given, else the one next to the URDF if
+    there is one, else None."""
+    if given is not None:
+        return Path(given)
+    beside = Path(urdf).parent / SIDECAR_NAME
+    return beside if beside.is_file() else None
+
+
 def validate_command(args) -> int:
     """`validate LOG --robot URDF --out DIR`: exit 0, or 2 for bad input."""
     import sys
@@ -101,18 +121,33 @@ def validate_command(args) -> int:
     mapping = column_mapping(args.columns, "validate")
     if mapping is None:
         return 2
+    terms_file = sidecar_path(args.robot, getattr(args, "joint_terms_file", None))
+    inputs = [args.data, args.robot] + ([terms_file] if terms_file is not None else [])
     try:
-        with Outputs(args.out, "validate", inputs=[args.data, args.robot],
-                     names=OUTPUT_NAMES) as outputs:
+        with Outputs(args.out, "validate", inputs=inputs, names=OUTPUT_NAMES) as outputs:
             robot, log = robot_and_log(args, mapping)
             window = scoring_window(log) if args.window is None else args.window
-            t, measured, predicted, per_joint, pooled = torque_errors(robot, log, window)
+            sidecar = (None if terms_file is None else
+                       read_sidecar(terms_file, robot.joint_names))
+            if sidecar is not None and not sidecar.terms.any:
+                sidecar = None  # only a header: the URDF's model alone
+            t, measured, predicted, per_joint, pooled = torque_errors(robot, log, window,
+                                                                      sidecar)
             write_validation(outputs.staging, args.robot, args.data, window, t,
-                             measured, predicted, per_joint, pooled)
-    except (UrdfError, LogError, UnitError) as error:
+                             measured, predicted, per_joint, pooled,
+                             None if sidecar is None else str(terms_file))
+    except (UrdfError, LogError, UnitError, JointTermsError) as error:
         print(f"harness validate: {error}", file=sys.stderr)
         return 2
     print(f"wrote {', '.join(str(p) for p in outputs.written)}")
+    if sidecar is not None:
+        settings = sidecar.terms
+        described = ", ".join(
+            [*settings.kinds] + ([f"smooth Coulomb (v_s {settings.smooth_coulomb:g})"]
+                                 if settings.smooth_coulomb is not None else []))
+        print(f"  the prediction includes the joint terms of {terms_file}: {described}")
+    elif terms_file is not None:
+        print(f"  {terms_file} holds no joint terms: the URDF's model alone")
     if log.resampled:
         print(f"  {args.data}: {log.resampled}")
     for name, relative in per_joint.items():
