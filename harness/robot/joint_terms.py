@@ -167,6 +167,27 @@ class JointTerms:
                 for kind in self.kinds]
 
 
+def check_directions(terms: JointTerms, speed: np.ndarray, mask: np.ndarray,
+                     names: list[str]) -> str | None:
+    """None, or why the terms cannot be identified from equations where each joint moves
+    one way only: speed (N, n) at the regression's samples, mask (N, n) the equations it
+    uses.  A joint that never moves backwards (or forwards) has no equation for one
+    Coulomb level, and its offset and Coulomb friction are then collinear."""
+    if not (terms.offset or terms.asymmetric_coulomb):
+        return None
+    problems = []
+    for i, name in enumerate(names):
+        used = speed[mask[:, i], i]
+        for word, moving in (("forwards (q' > 0)", used > 0), ("backwards (q' < 0)", used < 0)):
+            if not moving.any():
+                problems.append(f"joint {name!r} never moves {word} in the equations used")
+    if not problems:
+        return None
+    return ("; ".join(problems) + ": its offset and Coulomb friction (or its Coulomb "
+            "level that way) cannot be identified; leave out --joint-terms offset and "
+            "asymmetric-coulomb, or log a trajectory that moves each joint both ways")
+
+
 def _block_diagonal(signals: np.ndarray) -> np.ndarray:
     """(N, n, k) per-joint values as (N, n, k n) columns, joint i's in its own row."""
     N, n, k = signals.shape

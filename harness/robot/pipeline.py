@@ -17,6 +17,9 @@ drives' gains; harness.robot.log_units).  Steps:
    standard errors (harness.robot.least_squares);
 3. physically consistent link parameters near the URDF's (harness.robot.consistency),
    written as DIR/identified.urdf with the joints' viscous and Coulomb friction.
+Extra joint terms (--joint-terms, --smooth-coulomb: offsets, armature, asymmetric or
+smooth Coulomb friction, harness.robot.joint_terms) are extra regressor columns built
+here; what a URDF cannot hold goes to DIR/joint_terms.csv.
 """
 from __future__ import annotations
 
@@ -46,7 +49,14 @@ from .consistency import (
     write_identified_urdf,
 )
 from .filtered_regression import filtered_regression, low_pass
-from .joint_terms import COULOMB_NEGATIVE, COULOMB_POSITIVE, SIDECAR_NAME, JointTerms, write_sidecar
+from .joint_terms import (
+    COULOMB_NEGATIVE,
+    COULOMB_POSITIVE,
+    SIDECAR_NAME,
+    JointTerms,
+    check_directions,
+    write_sidecar,
+)
 from .least_squares import Fit, torque_least_squares
 from .log_units import LogUnits
 from .native import core_defaults
@@ -335,6 +345,9 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
         mask[:, i] = joint_friction_rows(x, log.step, margin, min_speed, slow_margin, used)
         speed[:, i] = x[used]
     check_friction_rows(mask, speed, robot.joint_names, min_speed)
+    one_way = check_directions(terms, speed, mask, robot.joint_names)
+    if one_way is not None:
+        raise LogError(one_way)
     fit = torque_least_squares(base.regressor(Y), z, batch=correlation, mask=mask)
     # each parameter's value that alone would explain the torques (prior_scales)
     measured = torque * mask

@@ -266,3 +266,36 @@ def test_terms_parse_and_refuse():
     assert JointTerms(asymmetric_coulomb=True).kinds == ("coulomb_positive", "coulomb_negative")
     with pytest.raises(JointTermsError, match="> 0"):
         JointTerms(smooth_coulomb=-1.0)
+
+
+def test_the_observer_method_takes_the_terms_in_momentum_form(tmp_path, arm):
+    """--velocity observer: the terms through the regression's causal filter, the
+    armature as the derivative of its momentum (30-bit encoders, as the observer test)."""
+    urdf, robot = arm
+    data = drive_log(tmp_path / "log.csv", robot, offset=False, seconds=6.0, bits=30)
+    summary = identify(tmp_path, urdf, data, "on", "--velocity", "observer",
+                       "--joint-terms", "armature,asymmetric-coulomb")
+    for i, joint in enumerate(robot.joint_names):
+        values = summary["joint_terms"]["values"][joint]
+        for kind, truth in (("armature", ARMATURE), ("coulomb_positive", POSITIVE),
+                            ("coulomb_negative", NEGATIVE)):
+            assert abs(values[kind] - truth[i]) < 0.03 * truth[i], (joint, kind, values)
+
+
+def test_a_joint_moving_one_way_only_is_named(tmp_path, arm, capsys):
+    urdf, robot = arm
+    truth = robot.rigid_body(link=payload_link(robot.arrays()["link"]), friction=FRICTION)
+    t, q, qd, qdd, _ = multisine_log(truth, 4.0, 1e-3)
+    q[:, 0] += 6.0 * t  # joint 1 turns forwards throughout
+    qd[:, 0] += 6.0
+    tau = truth.inverse_dynamics(q, qd, qdd)
+    data = tmp_path / "log.csv"
+    np.savetxt(data, np.column_stack([t, q, tau]), delimiter=",", header="t,q1,q2,u1,u2",
+               comments="", fmt="%.17g")
+    assert exit_code(["identify", str(data), "--robot", str(urdf), "--out",
+                      str(tmp_path / "out"), "--joint-terms", "offset"]) == 2
+    message = capsys.readouterr().err
+    assert "'joint1' never moves backwards" in message and "joint2" not in message
+    # without the offset, the symmetric model still identifies this log
+    assert exit_code(["identify", str(data), "--robot", str(urdf), "--unknown", "payload",
+                      "--out", str(tmp_path / "out"), "--joint-terms", "armature"]) == 0
