@@ -97,7 +97,7 @@ def test_armature_and_the_two_coulomb_levels_are_recovered(tmp_path, arm):
                                                  "coulomb_negative")} <= listed
     on = consistent_error(summary)
     off = consistent_error(identify(tmp_path, urdf, data, "off"))
-    assert on < 0.02 and off > 10 * on, (on, off)   # measured 0.0044 and 0.28
+    assert on < 0.005 and off > 0.2, (on, off)   # measured 0.00035 and 0.29
 
 
 def test_offsets_are_recovered_beside_the_symmetric_coulomb_friction(tmp_path, arm):
@@ -171,6 +171,7 @@ def test_validate_reads_the_terms_beside_the_urdf(tmp_path, arm, capsys):
     without = json.loads((tmp_path / "without" / "validation.json").read_text())
     assert without["joint_terms"] is None
     with_terms = report["relative_error"]["pooled"]
+    # measured 0.023 (the filter's smoothing of the Coulomb steps) and 0.36
     assert with_terms < 0.03 and without["relative_error"]["pooled"] > 5 * with_terms
     # named explicitly, the same prediction
     assert main(["validate", str(data), "--robot", str(alone / "arm.urdf"), "--joint-terms-file",
