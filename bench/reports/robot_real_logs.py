@@ -18,6 +18,8 @@ Cases (the robots of bench/reports/robots.py, their truth from `truth_of`: links
      window of earlier versions, which differentiates the 0.01 rad steps into noise);
   c  the UR5 at 1 kHz, 17 bit, with asymmetric Coulomb friction and a constant torque
      offset per joint in the truth (outside the identified model's class);
+  c2 case c's logs identified with --joint-terms offset,asymmetric-coulomb (the model
+     class then holds the truth; the least-squares baseline gets the same columns);
   d  the UR5 at 1 kHz, 17 bit: the clean reference.
 Training logs of 40 s (--quick: 8 s), validation logs half as long.
 A jittered log is given to identify as it is (identify resamples it itself); only if that
@@ -57,6 +59,7 @@ from bench.reports.robot_trajectories import multisine, quantize, simulate
 from bench.reports.robots import COULOMB_VELOCITY, pinocchio_truth, truth_of
 from harness.robot.base_parameters import base_parameters
 from harness.robot.examples import example_urdf
+from harness.robot.joint_terms import SIDECAR_NAME, JointTerms, Sidecar, parse_terms, read_sidecar
 from harness.robot.pipeline import JointLog, savitzky_golay
 from harness.robot.urdf import Robot, read_urdf
 from harness.robot.validate import scoring_window, torque_errors
@@ -82,6 +85,7 @@ class Case:
     outside_class: bool = False       # asymmetric Coulomb friction and a torque offset
     pd: tuple[float, float] = (400.0, 40.0)
     window: float | None = None       # identify's and validate's --window [s] (None: theirs)
+    joint_terms: str | None = None    # identify's --joint-terms (None: the core's model)
     results: dict = field(default_factory=dict)
 
 
@@ -98,6 +102,8 @@ CASES = (
          pd=(50.0, 5.0), window=0.05),
     Case("c", "ur5", 1000.0, "UR5, 1 kHz, 17 bit, asymmetric Coulomb + torque offset",
          outside_class=True),
+    Case("c2", "ur5", 1000.0, "case c's logs, identify --joint-terms offset,asymmetric-coulomb",
+         outside_class=True, joint_terms="offset,asymmetric-coulomb"),
     Case("d", "ur5", 1000.0, "UR5, 1 kHz, 17 bit (clean reference)"),
 )
 
@@ -183,7 +189,8 @@ def resample(t: np.ndarray, q: np.ndarray, u: np.ndarray
 # --- identify, the scores ----------------------------------------------------------------
 
 def run_identify(data: Path, urdf: Path, out: Path, locked: tuple[str, ...],
-                 gains: tuple[float, ...] | None, window: float | None = None) -> dict:
+                 gains: tuple[float, ...] | None, window: float | None = None,
+                 joint_terms: str | None = None) -> dict:
     """The real CLI in a subprocess: exit status, wall time, stdout and stderr."""
     command = [sys.executable, "-m", "harness", "identify", str(data), "--robot", str(urdf),
                "--out", str(out)]
@@ -193,6 +200,8 @@ def run_identify(data: Path, urdf: Path, out: Path, locked: tuple[str, ...],
         command += ["--torque-gains", ",".join(f"{g:g}" for g in gains)]
     if window is not None:
         command += ["--window", f"{window:g}"]
+    if joint_terms is not None:
+        command += ["--joint-terms", joint_terms]
     started = time.perf_counter()
     done = subprocess.run(command, cwd=REPO, capture_output=True, text=True)
     return {"rc": done.returncode, "seconds": time.perf_counter() - started,
@@ -200,20 +209,24 @@ def run_identify(data: Path, urdf: Path, out: Path, locked: tuple[str, ...],
             "command": shlex.join(["python", *command[1:]])}
 
 
-def _regressor(body, base, q, qd, qdd, chunk: int = 4000) -> np.ndarray:
-    """The base regressor (N, n, r), computed in chunks."""
-    return np.concatenate([base.regressor(body.regressor(q[k:k + chunk], qd[k:k + chunk],
-                                                         qdd[k:k + chunk]))
+def _regressor(body, base, q, qd, qdd, terms: JointTerms | None = None,
+               chunk: int = 4000) -> np.ndarray:
+    """The base regressor (N, n, r), with the joint terms' columns, computed in chunks."""
+    def full(part: slice) -> np.ndarray:
+        Y = body.regressor(q[part], qd[part], qdd[part])
+        return Y if terms is None else terms.extend(Y, qd[part], qdd[part])
+    return np.concatenate([base.regressor(full(slice(k, k + chunk)))
                            for k in range(0, len(q), chunk)])
 
 
-def base_scores(robot: Robot, base, log: JointLog, beta: np.ndarray, window: float
-                ) -> tuple[list[float | None], float]:
+def base_scores(robot: Robot, base, log: JointLog, beta: np.ndarray, window: float,
+                terms: JointTerms | None = None) -> tuple[list[float | None], float]:
     """validate's error definition (torque_errors) for a base-parameter vector."""
     q, qd, qdd, u = savitzky_golay(log, window)
     edge = int(np.ceil(window / log.step - 1e-9))
     inside = slice(edge, len(log.t) - edge)
-    predicted = _regressor(robot.rigid_body(), base, q[inside], qd[inside], qdd[inside]) @ beta
+    predicted = _regressor(robot.rigid_body(), base, q[inside], qd[inside], qdd[inside],
+                           terms) @ beta
     measured = u[inside]
     error = predicted - measured
     scale = np.sqrt(np.mean(measured ** 2, axis=0))
@@ -223,21 +236,25 @@ def base_scores(robot: Robot, base, log: JointLog, beta: np.ndarray, window: flo
 
 
 def true_state_error(robot: Robot, truth: tuple[np.ndarray, ...], beta: np.ndarray | None = None,
-                     base=None) -> float:
+                     base=None, terms: JointTerms | None = None,
+                     sidecar: Sidecar | None = None) -> float:
     """The pooled error on the true states and torques (no encoder, no filter): the model's
-    own error; `robot`'s inverse dynamics, or the base parameters `beta`."""
+    own error; `robot`'s inverse dynamics (with a sidecar's joint terms), or the base
+    parameters `beta` (with the joint terms' columns)."""
     q, qd, qdd, tau = truth
     if beta is None:
         predicted = robot.rigid_body().inverse_dynamics(q, qd, qdd)
+        if sidecar is not None:
+            predicted += sidecar.torque_change(qd, qdd, robot.arrays()["friction"][:, 1])
     else:
-        predicted = _regressor(robot.rigid_body(), base, q, qd, qdd) @ beta
+        predicted = _regressor(robot.rigid_body(), base, q, qd, qdd, terms) @ beta
     return float(np.linalg.norm(predicted - tau) / np.linalg.norm(tau))
 
 
-def urdf_scores(robot: Robot, log: JointLog, window: float
+def urdf_scores(robot: Robot, log: JointLog, window: float, sidecar: Sidecar | None = None
                 ) -> tuple[list[float | None], float]:
-    """validate --robot's errors (per joint, pooled) of a URDF's model."""
-    _, _, _, per_joint, pooled = torque_errors(robot, log, window)
+    """validate --robot's errors (per joint, pooled) of a URDF's model (and its sidecar)."""
+    _, _, _, per_joint, pooled = torque_errors(robot, log, window, sidecar)
     return list(per_joint.values()), pooled
 
 
@@ -247,7 +264,8 @@ def cutoff(rate: float) -> float:
     return min(10.0, rate / 10.0)
 
 
-def least_squares_baseline(robot: Robot, base, log: JointLog) -> np.ndarray:
+def least_squares_baseline(robot: Robot, base, log: JointLog,
+                           terms: JointTerms | None = None) -> np.ndarray:
     """beta of the practitioner's ordinary least squares: Butterworth filtfilt of q and u,
     central differences, the base regressor, np.linalg.lstsq; 0.5 s left out at each end."""
     rate = 1.0 / log.step
@@ -258,7 +276,7 @@ def least_squares_baseline(robot: Robot, base, log: JointLog) -> np.ndarray:
     qdd = np.gradient(qd, log.step, axis=0)
     edge = int(round(0.5 * rate))
     used = slice(edge, len(log.t) - edge)
-    Y = _regressor(robot.rigid_body(), base, q[used], qd[used], qdd[used])
+    Y = _regressor(robot.rigid_body(), base, q[used], qd[used], qdd[used], terms)
     beta, *_ = np.linalg.lstsq(Y.reshape(-1, Y.shape[-1]), u[used].reshape(-1), rcond=None)
     return beta
 
@@ -291,7 +309,7 @@ def run_case(case: Case, train_seconds: float, work: Path) -> dict:
     ran, out = None, folder / "out"
     if case.jitter is not None:
         raw = run_identify(write_csv(folder / "raw.csv", *train), path, folder / "raw_out",
-                           locked, case.gains, case.window)
+                           locked, case.gains, case.window, case.joint_terms)
         row["raw_log"] = {"rc": raw["rc"], "stderr": raw["stderr"]}
         train = resample(*train)  # the scorer's and the baseline's even logs
         check = resample(*check)
@@ -299,7 +317,7 @@ def run_case(case: Case, train_seconds: float, work: Path) -> dict:
             ran, out = raw, folder / "raw_out"
     if ran is None:
         data = write_csv(folder / "train.csv", *train)
-        ran = run_identify(data, path, out, locked, case.gains, case.window)
+        ran = run_identify(data, path, out, locked, case.gains, case.window, case.joint_terms)
     row.update(identify_rc=ran["rc"], identify_s=ran["seconds"], stderr=ran["stderr"],
                identify_command=ran["command"])
     if ran["rc"] not in (0, 1):
@@ -318,17 +336,25 @@ def run_case(case: Case, train_seconds: float, work: Path) -> dict:
     if abs(same - urdf_pooled) > 1e-6 * urdf_pooled:  # the two scorers agree on the URDF
         raise RuntimeError(f"base-parameter scorer {same} != validate's {urdf_pooled}")
     identified = read_urdf(out / "identified.urdf", locked=locked)
+    # the model class identify was given: the URDF's, or with the joint terms (then the
+    # identified model's terms come from its sidecar, as validate reads them)
+    terms = None if case.joint_terms is None else parse_terms(case.joint_terms, None)
+    sidecar = None
+    if terms is not None:
+        base = base_parameters(body, robot.arrays()["types"], robot.joint_names, "all",
+                               terms=terms)
+        sidecar = read_sidecar(out / SIDECAR_NAME, robot.joint_names)
     estimate = read_estimate(out / "parameters.csv", base)
-    ols = least_squares_baseline(robot, base, training)
+    ols = least_squares_baseline(robot, base, training, terms)
     scores = {"urdf": (urdf_joint, urdf_pooled),
-              "identified": urdf_scores(identified, validation, window),
-              "estimate": base_scores(robot, base, validation, estimate, window),
-              "ols": base_scores(robot, base, validation, ols, window)}
+              "identified": urdf_scores(identified, validation, window, sidecar),
+              "estimate": base_scores(robot, base, validation, estimate, window, terms),
+              "ols": base_scores(robot, base, validation, ols, window, terms)}
     row["true_states"] = {
         "urdf": true_state_error(robot, true_states),
-        "identified": true_state_error(identified, true_states),
-        "estimate": true_state_error(robot, true_states, estimate, base),
-        "ols": true_state_error(robot, true_states, ols, base)}
+        "identified": true_state_error(identified, true_states, sidecar=sidecar),
+        "estimate": true_state_error(robot, true_states, estimate, base, terms),
+        "ols": true_state_error(robot, true_states, ols, base, terms)}
     masses_urdf = robot.arrays()["link"][:, 0]
     masses = np.array(list(summary["masses"].values()))
     row.update(
