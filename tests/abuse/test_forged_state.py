@@ -85,8 +85,8 @@ CASES = [
     (MODEL, [("pipe.id.anchor_age", "i", INT_MAX)], "id.anchor_age"),
     (MODEL, [("pipe.warm_samples", "i", 100000)], "warm_samples"),
     (MODEL, [("pipe.statistics.stage", "i", 9)], "statistics.stage"),
-    (MODEL, [("pipe.bank.follow", "i", 15)], "an index of pipe.bank"),
-    (MODEL, [("pipe.obs.n", "i", 0)], "obs.n"),
+    (MODEL, [("pipe.bank[0].follow", "i", 15)], "an index of pipe.bank[0]"),
+    (MODEL, [("pipe.obs[0].n", "i", 0)], "obs[0].n"),
     (MODEL, [("pipe.identifying", "i", 2)], "identifying"),
     (MODEL, [("pipe.Y.row[0][0]", "d", math.nan)], "the model data (its byte"),
 ]

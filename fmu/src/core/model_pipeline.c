@@ -38,10 +38,15 @@ int mp_init(ModelPipeline *p, const TermProgram *program, const double alpha1[],
         return refuse(error, error_size, "tau_identifier = %g and statistics_interval = %g must "
                       "be finite and >= 0", p->tau_identifier, p->statistics_interval);
     const double zero[MAX_N] = {0};
-    sto_init(&p->obs, n, p->h, alpha1, alpha2, MP_INJECTION_TAU, y, zero);
-    sto_configure(&p->obs, (StoScheme)p->scheme, MP_CONVERGENCE_WINDOW);
-    memset(&p->bank, 0, sizeof p->bank);
-    if (p->scheme == STO_SCHEME_ADAPTIVE) adaptive_init(&p->bank, p->h);
+    memset(p->obs, 0, sizeof p->obs);
+    memset(p->bank, 0, sizeof p->bank);
+    for (int g = 0; g < mp_groups(n); ++g) {
+        const int first = g * MP_GROUP_SIZE;
+        sto_init(&p->obs[g], mp_group_size(n, g), p->h, alpha1 + first, alpha2 + first,
+                 MP_INJECTION_TAU, y + first, zero);
+        sto_configure(&p->obs[g], (StoScheme)p->scheme, MP_CONVERGENCE_WINDOW);
+        if (p->scheme == STO_SCHEME_ADAPTIVE) adaptive_init(&p->bank[g], p->h);
+    }
     p->gain = p->tau_identifier > 0.0 ? -expm1(-p->h / p->tau_identifier) : 1.0;
     p->warm_up = (int)fmin(ceil(MP_WARM_UP * p->tau_identifier / p->h), 1e9);
     p->warm_samples = 0;
@@ -178,6 +183,14 @@ static void regression_step(ModelPipeline *p, const TermProgram *program, const 
     sj_step(&p->statistics);
 }
 
+/* Every group's bank of linear observers has settled (noise_adaptive.h). */
+static int settled(const ModelPipeline *p, int n)
+{
+    for (int g = 0; g < mp_groups(n); ++g)
+        if (!adaptive_settled(&p->bank[g], mp_group_size(n, g))) return 0;
+    return 1;
+}
+
 void mp_run(ModelPipeline *p, const TermProgram *program, const double y[], const double u[],
             double start_time, unsigned long long k, unsigned long long k_end)
 {
@@ -202,20 +215,23 @@ void mp_run(ModelPipeline *p, const TermProgram *program, const double y[], cons
                 p->singular_steps += 1.0;
             for (int i = 0; i < n; ++i) a[i].held = p->nominal_acceleration[i];
         }
-        if (p->scheme == STO_SCHEME_ADAPTIVE) {
-            adaptive_run(&p->obs, &p->bank, y, a, 1, &trace);
-            memcpy(p->velocity, p->bank.velocity, (size_t)n * sizeof p->velocity[0]);
-        } else {
-            sto_run(&p->obs, y, a, 1, &trace);
-            for (int i = 0; i < n; ++i) p->velocity[i] = trace.velocity[i][0];
+        for (int g = 0; g < mp_groups(n); ++g) {
+            const int first = g * MP_GROUP_SIZE, size = mp_group_size(n, g);
+            if (p->scheme == STO_SCHEME_ADAPTIVE) {
+                adaptive_run(&p->obs[g], &p->bank[g], y + first, a + first, 1, &trace);
+                memcpy(p->velocity + first, p->bank[g].velocity,
+                       (size_t)size * sizeof p->velocity[0]);
+            } else {
+                sto_run(&p->obs[g], y + first, a + first, 1, &trace);
+                for (int i = 0; i < size; ++i) p->velocity[first + i] = trace.velocity[i][0];
+            }
         }
         current = 0;
         if (!p->identifier) continue;
         const double t = start_time + (double)k * p->h;
         /* the observer slides, or the bank's members have settled (they track where the
          * super-twisting observer's gains are too small to slide) */
-        const int ready = sto_converged(&p->obs) ||
-                          (p->scheme == STO_SCHEME_ADAPTIVE && adaptive_settled(&p->bank, n));
+        const int ready = mp_converged(p, n) || (p->scheme == STO_SCHEME_ADAPTIVE && settled(p, n));
         if (!p->identifying && t >= p->t_id && ready) {
             p->identifying = 1;
             p->started = p->warm_samples = 0;
@@ -230,9 +246,36 @@ void mp_run(ModelPipeline *p, const TermProgram *program, const double y[], cons
 
 void mp_communicate(ModelPipeline *p)
 {
-    if (p->scheme == STO_SCHEME_ADAPTIVE) adaptive_outputs(&p->obs, &p->bank);
-    else sto_update_outputs(&p->obs);
+    for (int g = 0; g < MP_GROUPS && p->obs[g].n > 0; ++g) {
+        if (p->scheme == STO_SCHEME_ADAPTIVE) adaptive_outputs(&p->obs[g], &p->bank[g]);
+        else sto_update_outputs(&p->obs[g]);
+    }
     if (p->identifying) sj_schedule(&p->statistics, &p->id);
+}
+
+int mp_groups(int n) { return (n + MP_GROUP_SIZE - 1) / MP_GROUP_SIZE; }
+
+int mp_group_size(int n, int g)
+{
+    const int rest = n - g * MP_GROUP_SIZE;
+    return rest < MP_GROUP_SIZE ? rest : MP_GROUP_SIZE;
+}
+
+double mp_position(const ModelPipeline *p, int i)
+{
+    return p->obs[i / MP_GROUP_SIZE].x1_hat[i % MP_GROUP_SIZE];
+}
+
+double mp_velocity(const ModelPipeline *p, int i)
+{
+    return p->obs[i / MP_GROUP_SIZE].x2_hat[i % MP_GROUP_SIZE];
+}
+
+int mp_converged(const ModelPipeline *p, int n)
+{
+    for (int g = 0; g < mp_groups(n); ++g)
+        if (!sto_converged(&p->obs[g])) return 0;
+    return 1;
 }
 
 void mp_estimates(const ModelPipeline *p, const TermProgram *program, double theta[],

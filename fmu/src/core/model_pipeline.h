@@ -32,7 +32,11 @@
 #include "super_twisting.h"
 #include "term_program.h"
 
-#define MP_MAX_COORDINATES STO_MAX_DOF
+#define MP_MAX_COORDINATES TP_MAX_COORDINATES
+/* The observer runs over groups of at most STO_MAX_DOF coordinates (each
+ * coordinate's observer is its own: a group only shares the loop) */
+#define MP_GROUP_SIZE STO_MAX_DOF
+#define MP_GROUPS ((MP_MAX_COORDINATES + MP_GROUP_SIZE - 1) / MP_GROUP_SIZE)
 
 typedef struct {
     /* configuration */
@@ -44,8 +48,8 @@ typedef struct {
     double gain;                /* 1 - exp(-h / tau_identifier) */
     int warm_up;                /* samples of the filters before the rows enter */
     /* state */
-    SuperTwistingObserver obs;
-    AdaptiveBank bank;
+    SuperTwistingObserver obs[MP_GROUPS]; /* coordinates g MP_GROUP_SIZE onwards */
+    AdaptiveBank bank[MP_GROUPS];
     double velocity[MP_MAX_COORDINATES];     /* the published velocity at the last sample */
     double nominal_acceleration[MP_MAX_COORDINATES]; /* F of the interval that starts there */
     double singular_steps;      /* samples at which the nominal inertia was singular */
@@ -81,5 +85,16 @@ void mp_estimates(const ModelPipeline *p, const TermProgram *program, double the
 
 /* Restarts identification from the nominal parameters. */
 void mp_restart_identifier(ModelPipeline *p);
+
+/* The observer groups an n-coordinate model uses, and group g's coordinates. */
+int mp_groups(int n);
+int mp_group_size(int n, int g);
+
+/* Coordinate i's position and velocity estimates (after mp_communicate). */
+double mp_position(const ModelPipeline *p, int i);
+double mp_velocity(const ModelPipeline *p, int i);
+
+/* Every group's super-twisting observer slides (the switching-rate test). */
+int mp_converged(const ModelPipeline *p, int n);
 
 #endif

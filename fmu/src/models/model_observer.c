@@ -46,9 +46,11 @@ typedef struct {
 #define ELEMENT(kind, base, vr0, field, unit_, text, i) \
     {.name = base "_" #i, .vr = (vr0) + (i) - 1, .type = TYPE_REAL,                              \
      kind(.offset = OFF(field) + ((i) - 1) * sizeof(double), .unit = unit_, .description = text)}
-#define FOUR(kind, base, vr0, field, unit, text)                                                 \
+#define SEVEN(kind, base, vr0, field, unit, text)                                                \
     ELEMENT(kind, base, vr0, field[0], unit, text, 1), ELEMENT(kind, base, vr0, field[0], unit, text, 2), \
-    ELEMENT(kind, base, vr0, field[0], unit, text, 3), ELEMENT(kind, base, vr0, field[0], unit, text, 4)
+    ELEMENT(kind, base, vr0, field[0], unit, text, 3), ELEMENT(kind, base, vr0, field[0], unit, text, 4), \
+    ELEMENT(kind, base, vr0, field[0], unit, text, 5), ELEMENT(kind, base, vr0, field[0], unit, text, 6), \
+    ELEMENT(kind, base, vr0, field[0], unit, text, 7)
 #define THIRTY_TWO(kind, base, vr0, field, text)                                                 \
     ELEMENTS_32(ELEMENT, kind, base, vr0, field[0], NULL, text)
 /* The 32 elements with literal indices (their names are made by stringizing). */
@@ -93,7 +95,7 @@ static const ModelVariable VARIABLES[] = {
      PARAM(.offset = OFF(pipe.statistics_interval), .start = 0.1, .min = 0.0, .max = NAN,
      .unit = "s", .description = "Time between the solves of the standard errors (their "
                                  "p^3 work spread over the internal steps after each)")},
-    F_PLUS(1), F_PLUS(2), F_PLUS(3), F_PLUS(4),
+    F_PLUS(1), F_PLUS(2), F_PLUS(3), F_PLUS(4), F_PLUS(5), F_PLUS(6), F_PLUS(7),
     {.name = "t_id", .vr = 80, .type = TYPE_REAL, PARAM(.offset = OFF(pipe.t_id), .start = 0.0,
      UNBOUNDED, .unit = "s",
      .description = "Earliest time at which identification starts (once the observer has "
@@ -112,15 +114,15 @@ static const ModelVariable VARIABLES[] = {
                     "identifier (0: none)")},
     MAX_INTERNAL_STEPS_VARIABLE(OFF(max_internal_steps)),
     WORK_VARIABLES(OFF(max_work), OFF(work_per_step)),
-    FOUR(INPUT, "position", 200, y, NULL, "Measured coordinate"),
+    SEVEN(INPUT, "position", 200, y, NULL, "Measured coordinate"),
     INPUT_ELEMENT(1), INPUT_ELEMENT(2), INPUT_ELEMENT(3), INPUT_ELEMENT(4), INPUT_ELEMENT(5),
     INPUT_ELEMENT(6), INPUT_ELEMENT(7),
     {.name = "identifier_reset", .vr = 220, .type = TYPE_BOOLEAN,
      .causality = CAUSALITY_INPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
      .offset = OFF(identifier_reset),
      .description = "A rising edge restarts identification from the nominal parameters"},
-    FOUR(OUTPUT, "position_estimate", 300, position, NULL, "Position estimate"),
-    FOUR(OUTPUT, "velocity", 310, velocity, NULL, "Velocity estimate"),
+    SEVEN(OUTPUT, "position_estimate", 300, position, NULL, "Position estimate"),
+    SEVEN(OUTPUT, "velocity", 310, velocity, NULL, "Velocity estimate"),
     THIRTY_TWO(OUTPUT, "theta", 400, theta, "Parameter estimate (the model file's unit)"),
     THIRTY_TWO(OUTPUT, "theta_std", 440, theta_std, "Standard error of the parameter estimate"),
     {.name = "identifier_active", .vr = 361, .type = TYPE_BOOLEAN,
@@ -160,12 +162,12 @@ static void publish(ModelData *d)
     const int n = d->program.n;
     mp_estimates(&d->pipe, &d->program, d->theta, d->theta_std);
     for (int i = 0; i < n; ++i) {
-        d->position[i] = d->pipe.obs.x1_hat[i];
-        d->velocity[i] = d->pipe.obs.x2_hat[i]; /* for the end of the step, as x1_hat */
+        d->position[i] = mp_position(&d->pipe, i);
+        d->velocity[i] = mp_velocity(&d->pipe, i); /* for the end of the step, as x1_hat */
     }
     d->excitation = d->pipe.identifying ? d->pipe.statistics.excitation : 0.0;
     d->identifier_active = d->pipe.identifying;
-    d->converged = sto_converged(&d->pipe.obs);
+    d->converged = mp_converged(&d->pipe, n);
 }
 
 /* Work units (about ns, model_interface.h) of one internal step: the observer
@@ -261,8 +263,9 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
 static const StateField STATE_FIELDS[] = {
     D(alpha1), D(alpha2), I(reset_seen, 0, 1), D(pipe.gain), D(pipe.warm_up),
     I(pipe.identifying, 0, 1), I(pipe.started, 0, 1), I(pipe.warm_samples, 0, 1000000000),
-    R(pipe.singular_steps, 0.0, NAN), STO_STATE_FIELDS(ModelData, pipe.obs),
-    BANK_STATE_FIELDS(ModelData, pipe.bank), RRI_STATE_FIELDS(ModelData, pipe.id),
+    R(pipe.singular_steps, 0.0, NAN), STO_STATE_FIELDS(ModelData, pipe.obs[0]),
+    STO_STATE_FIELDS(ModelData, pipe.obs[1]), BANK_STATE_FIELDS(ModelData, pipe.bank[0]),
+    BANK_STATE_FIELDS(ModelData, pipe.bank[1]), RRI_STATE_FIELDS(ModelData, pipe.id),
     SJ_STATE_FIELDS(ModelData, pipe.statistics),
     /* the doubles, named by their struct */
     REAL_FIELDS(ModelData, pipe.obs), REAL_FIELDS(ModelData, pipe.bank),
@@ -271,6 +274,7 @@ static const StateField STATE_FIELDS[] = {
 #undef D
 #undef I
 #undef R
+_Static_assert(MP_GROUPS == 2, "STATE_FIELDS lists each observer group");
 
 /* What the field table cannot state: indices below counts held in other fields. */
 static ModelStatus check_restored(const void *data, const void *initialized,
@@ -278,11 +282,14 @@ static ModelStatus check_restored(const void *data, const void *initialized,
 {
     const ModelData *d = data;
     (void)initialized;
-    if (d->pipe.scheme == STO_SCHEME_ADAPTIVE && !adaptive_valid(&d->pipe.bank, d->program.n)) {
-        log->log(log->context, MODEL_ERROR, "deserialized FMU state: an index of pipe.bank is "
-                 "not one of its %d members; state refused", d->pipe.bank.count);
-        return MODEL_ERROR;
-    }
+    for (int g = 0; g < mp_groups(d->program.n); ++g)
+        if (d->pipe.scheme == STO_SCHEME_ADAPTIVE &&
+            !adaptive_valid(&d->pipe.bank[g], mp_group_size(d->program.n, g))) {
+            log->log(log->context, MODEL_ERROR, "deserialized FMU state: an index of "
+                     "pipe.bank[%d] is not one of its %d members; state refused", g,
+                     d->pipe.bank[g].count);
+            return MODEL_ERROR;
+        }
     if (d->pipe.warm_samples > d->pipe.warm_up) {
         log->log(log->context, MODEL_ERROR, "deserialized FMU state: pipe.warm_samples = %d "
                  "exceeds pipe.warm_up = %d; state refused", d->pipe.warm_samples,
