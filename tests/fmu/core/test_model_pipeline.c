@@ -184,7 +184,7 @@ static int identifies_five_coordinates_in_two_groups(void)
     p->tau_identifier = MP_TAU_IDENTIFIER;
     p->rho = MP_RHO;
     p->statistics_interval = 0.1;
-    double alpha1[5], alpha2[5], y[5], u[5], v[5], a[5];
+    double alpha1[5] = {0}, alpha2[5] = {0}, y[5], u[5], v[5], a[5];
     for (int i = 0; i < 5; ++i) {
         gains_complete(10.0, 0.5, &alpha1[i], &alpha2[i]);
         five_trajectory(i, 0.0, &y[i], &v[i], &a[i]);
