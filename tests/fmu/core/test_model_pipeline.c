@@ -36,6 +36,20 @@ static void trajectory(double t, double *x, double *v, double *a)
     *a = -0.1 * w1 * w1 * sin(w1 * t) - 0.03 * w2 * w2 * sin(w2 * t);
 }
 
+/* A pipeline at 1 kHz with LSM and the defaults, the scheme given (to be freed). */
+static ModelPipeline *new_pipeline(int scheme)
+{
+    ModelPipeline *p = calloc(1, sizeof *p);
+    p->h = 1e-3;
+    p->scheme = scheme;
+    p->identifier = RRI_LSM;
+    p->nominal_model = 1;
+    p->tau_identifier = MP_TAU_IDENTIFIER;
+    p->rho = MP_RHO;
+    p->statistics_interval = 0.1;
+    return p;
+}
+
 /* Measured: exact positions 6.4e-4 worst (OF), 1 um encoder 1.0e-2 (Fc).
  * Runs the pipeline over `seconds` at 1 kHz with the positions rounded to
  * `resolution` (0: exact); returns the worst relative error of the four parameters
@@ -49,14 +63,7 @@ static double identify_drive(int scheme, double resolution, double seconds, doub
         printf("FAIL parse: %s\n", error);
         return INFINITY;
     }
-    ModelPipeline *p = calloc(1, sizeof *p);
-    p->h = 1e-3;
-    p->scheme = scheme;
-    p->identifier = RRI_LSM;
-    p->nominal_model = 1;
-    p->tau_identifier = MP_TAU_IDENTIFIER;
-    p->rho = MP_RHO;
-    p->statistics_interval = 0.1;
+    ModelPipeline *p = new_pipeline(scheme);
     double alpha1 = 0.0, alpha2 = 0.0;
     gains_complete(10.0, 0.5, &alpha1, &alpha2);
     double x, v, a;
@@ -176,14 +183,7 @@ static int identifies_five_coordinates_in_two_groups(void)
     char error[256];
     if (tp_parse(&program, FIVE_MASSES, strlen(FIVE_MASSES), error, sizeof error))
         return check(0, "parse: %s", error);
-    ModelPipeline *p = calloc(1, sizeof *p);
-    p->h = 1e-3;
-    p->scheme = STO_SCHEME_ADAPTIVE;
-    p->identifier = RRI_LSM;
-    p->nominal_model = 1;
-    p->tau_identifier = MP_TAU_IDENTIFIER;
-    p->rho = MP_RHO;
-    p->statistics_interval = 0.1;
+    ModelPipeline *p = new_pipeline(STO_SCHEME_ADAPTIVE);
     double alpha1[5] = {0}, alpha2[5] = {0}, y[5], u[5], v[5], a[5];
     for (int i = 0; i < 5; ++i) {
         gains_complete(10.0, 0.5, &alpha1[i], &alpha2[i]);
