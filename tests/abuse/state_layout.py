@@ -2,8 +2,10 @@
 
 The data block is a C struct private to the model file (fmu/src/models/), so its
 layout is asked of the compiler: a small program that includes the model file
-prints offsetof and sizeof of each field (e.g. "info.blocks.first[0]").  Same
-compiler and ABI as build.sh's FMUs; the result is cached per model and field set.
+prints offsetof and sizeof of each field (e.g. "info.blocks.first[0]").  The compiler
+is the one the CMake build of the FMUs configured (build/cmake/CMakeCache.txt; $CC or
+cc without that build), so the layout is the FMUs'; the result is cached per model and
+field set.
 """
 from __future__ import annotations
 
@@ -26,6 +28,16 @@ DATA_TYPES = {
 DATA_OFFSET = HEADER_SIZE + CLOCK_SIZE  # the model data follows the header and the clock
 
 
+def _compiler() -> str:
+    """The C compiler of the FMUs' CMake build (CMAKE_C_COMPILER), else $CC or cc."""
+    cache = REPO / "build" / "cmake" / "CMakeCache.txt"
+    if cache.is_file():
+        for line in cache.read_text(errors="replace").splitlines():
+            if line.startswith("CMAKE_C_COMPILER:"):
+                return line.partition("=")[2].strip()
+    return os.environ.get("CC", "cc")
+
+
 @functools.cache
 def _layout(model: str, fields: tuple[str, ...]) -> dict[str, tuple[int, int]]:
     source, data_type = DATA_TYPES[model]
@@ -39,7 +51,7 @@ def _layout(model: str, fields: tuple[str, ...]) -> dict[str, tuple[int, int]]:
     with tempfile.TemporaryDirectory() as tmp:
         program, binary = Path(tmp) / "layout.c", Path(tmp) / "layout"
         program.write_text("\n".join(lines) + "\n")
-        subprocess.run([os.environ.get("CC", "gcc"), "-std=c11", "-O0", "-w", "-o", str(binary),
+        subprocess.run([_compiler(), "-std=c11", "-O0", "-w", "-o", str(binary),
                         str(program), *cores, "-lm"], check=True, capture_output=True)
         out = subprocess.run([str(binary)], check=True, capture_output=True, text=True).stdout
     return {field: (DATA_OFFSET + int(a), int(b))
