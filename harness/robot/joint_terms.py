@@ -47,6 +47,7 @@ OPTION_ITEMS = {"offset": "offset", "armature": "armature",
                 "asymmetric-coulomb": "asymmetric_coulomb"}
 SIDECAR_NAME = "joint_terms.csv"
 SIDECAR_COLUMNS = ("joint", "term", "value", "std_error", "unit")
+SIDECAR_MAX_BYTES = 1 << 20  # a sidecar is read whole: larger files are refused
 
 
 class JointTermsError(ValueError):
@@ -280,11 +281,17 @@ def read_sidecar(path: Path, joint_names: list[str]) -> Sidecar:
     names a bad row (an unknown joint or term, a value that is not a number, a term
     given to some joints only)."""
     try:
-        with Path(path).open(newline="") as handle:
+        size = Path(path).stat().st_size
+        if size > SIDECAR_MAX_BYTES:
+            raise JointTermsError(f"{path}: {size} bytes; a {SIDECAR_NAME} is a few hundred "
+                                  f"(at most {SIDECAR_MAX_BYTES} are read)")
+        with Path(path).open(newline="", encoding="utf-8") as handle:
             rows = list(csv.DictReader(handle))
             header = rows[0].keys() if rows else None
     except OSError as error:
         raise JointTermsError(f"{path}: {error.strerror or error}") from None
+    except (UnicodeDecodeError, csv.Error) as error:
+        raise JointTermsError(f"{path}: not a CSV file in UTF-8 ({error})") from None
     if header is not None and not set(SIDECAR_COLUMNS) <= set(header):
         raise JointTermsError(f"{path}: the columns must be {', '.join(SIDECAR_COLUMNS)}")
     found: dict[tuple[str, str], float] = {}

@@ -229,12 +229,17 @@ def exit_code(arguments: list[str]) -> int:
     ("joint,term,value,std_error,unit\njoint1,stiction,1,,N.m\n", "term 'stiction'"),
     ("joint,term,value,std_error,unit\njoint1,offset,x,,N.m\n", "not a finite number"),
     ("joint,term,value,std_error,unit\njoint1,offset,1,,N.m\n", "joint 'joint2' has no offset"),
+    (b"joint,term,value,std_error,unit\njoint1,offset,\xff\n", "not a CSV file in UTF-8"),
+    (b"joint,term,value\n" + b"x" * (1 << 20), "bytes; a joint_terms.csv is a few hundred"),
 ])
 def test_bad_sidecars_exit_2_naming_the_row(tmp_path, arm, capsys, content, message):
     urdf, robot = arm
     data = drive_log(tmp_path / "log.csv", robot, seconds=2.0)
     terms = tmp_path / "terms.csv"
-    terms.write_text(content)
+    if isinstance(content, bytes):
+        terms.write_bytes(content)
+    else:
+        terms.write_text(content)
     assert main(["validate", str(data), "--robot", str(urdf), "--joint-terms-file", str(terms),
                  "--out", str(tmp_path / "out")]) == 2
     assert message in capsys.readouterr().err
