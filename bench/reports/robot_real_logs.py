@@ -62,7 +62,7 @@ from harness.robot.examples import example_urdf
 from harness.robot.joint_terms import SIDECAR_NAME, JointTerms, Sidecar, parse_terms, read_sidecar
 from harness.robot.pipeline import JointLog, savitzky_golay
 from harness.robot.urdf import Robot, read_urdf
-from harness.robot.validate import scoring_window, torque_errors
+from harness.robot.validate import filtered_friction_columns, scoring_window, torque_errors
 
 REPO = Path(__file__).resolve().parents[2]
 FINE_STEP = 1e-3       # the simulation's step before sampling a jittered clock [s]
@@ -210,23 +210,32 @@ def run_identify(data: Path, urdf: Path, out: Path, locked: tuple[str, ...],
 
 
 def _regressor(body, base, q, qd, qdd, terms: JointTerms | None = None,
+               steps: dict[int, tuple[int, np.ndarray]] | None = None,
                chunk: int = 4000) -> np.ndarray:
-    """The base regressor (N, n, r), with the joint terms' columns, computed in chunks."""
+    """The base regressor (N, n, r), with the joint terms' columns, computed in chunks;
+    `steps` (filtered_friction_columns at the same samples) in place of the Coulomb
+    columns."""
     def full(part: slice) -> np.ndarray:
         Y = body.regressor(q[part], qd[part], qdd[part])
-        return Y if terms is None else terms.extend(Y, qd[part], qdd[part])
+        Y = Y if terms is None else terms.extend(Y, qd[part], qdd[part])
+        for column, (joint, values) in (steps or {}).items():
+            Y[:, joint, column] = values[part]
+        return Y
     return np.concatenate([base.regressor(full(slice(k, k + chunk)))
                            for k in range(0, len(q), chunk)])
 
 
 def base_scores(robot: Robot, base, log: JointLog, beta: np.ndarray, window: float,
                 terms: JointTerms | None = None) -> tuple[list[float | None], float]:
-    """validate's error definition (torque_errors) for a base-parameter vector."""
+    """validate's error definition (torque_errors, the Coulomb columns filtered as the
+    measured torque) for a base-parameter vector."""
     q, qd, qdd, u = savitzky_golay(log, window)
     edge = int(np.ceil(window / log.step - 1e-9))
     inside = slice(edge, len(log.t) - edge)
+    steps = {column: (joint, values[inside]) for column, (joint, values)
+             in filtered_friction_columns(log, qd, window, terms).items()}
     predicted = _regressor(robot.rigid_body(), base, q[inside], qd[inside], qdd[inside],
-                           terms) @ beta
+                           terms, steps) @ beta
     measured = u[inside]
     error = predicted - measured
     scale = np.sqrt(np.mean(measured ** 2, axis=0))

@@ -250,6 +250,18 @@ class Sidecar:
         extra = np.einsum("kij,ij->ki", self.terms.signals(qd, qdd), self.values)
         return extra + (self.terms.coulomb(qd) - np.sign(qd)) * coulomb[None, :]
 
+    def coulomb_torque(self, qd: np.ndarray, coulomb: np.ndarray) -> np.ndarray:
+        """The Coulomb friction this model predicts at velocities (N, n): the symmetric
+        level (`coulomb` (n,), the URDF's) on terms.coulomb(q'), plus the levels per
+        direction."""
+        torque = self.terms.coulomb(qd) * coulomb[None, :]
+        levels = [j for j, kind in enumerate(self.terms.kinds)
+                  if kind in (COULOMB_POSITIVE, COULOMB_NEGATIVE)]
+        if levels:
+            signals = self.terms.signals(qd, np.zeros_like(qd))[:, :, levels]
+            torque = torque + np.einsum("kij,ij->ki", signals, self.values[:, levels])
+        return torque
+
 
 def write_sidecar(path: Path, terms: JointTerms, joint_names: list[str],
                   joint_kinds: list[str], values: np.ndarray | None,

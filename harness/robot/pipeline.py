@@ -195,12 +195,12 @@ def savitzky_golay(log: JointLog, window: float, order: int = 4,
     for x, deriv in ((log.q, 0), (log.q, 1), (log.q, 2), (log.u, 0)):
         smooth = np.empty((len(x) if at is None else len(at), x.shape[1]))
         for i in range(x.shape[1]):
-            smooth[:, i] = _smooth(log, x[:, i], window, order, deriv)[rows]
+            smooth[:, i] = smooth_column(log, x[:, i], window, order, deriv)[rows]
         out.append(smooth)
     return tuple(out)
 
 
-def _smooth(log: JointLog, x: np.ndarray, window: float, order: int = 4,
+def smooth_column(log: JointLog, x: np.ndarray, window: float, order: int = 4,
             deriv: int = 0) -> np.ndarray:
     """One column x (N,) of the log through the Savitzky-Golay filter of `window` s."""
     length = _odd(max(order + 2, round(window / log.step)))
@@ -322,9 +322,9 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
         margin, slow_margin, memory = window, 0.0, window
 
         def joint_speed(i: int) -> np.ndarray:
-            return _smooth(log, log.q[:, i], window, deriv=1)
+            return smooth_column(log, log.q[:, i], window, deriv=1)
     else:
-        bound = 1.5 * np.array([np.abs(_smooth(log, log.q[:, i], max(window, 0.05), deriv=2)
+        bound = 1.5 * np.array([np.abs(smooth_column(log, log.q[:, i], max(window, 0.05), deriv=2)
                                        ).max() for i in range(robot.n)]) + 1e-3
         velocity = observer_velocities(log, bound)
         core, torque = filtered_regression(body, log.q, velocity, log.u, log.step, tau, used)

@@ -3,7 +3,8 @@ maker's, or an identify run's identified.urdf) predicts the torques of a log.
 
 The positions pass the same zero-phase Savitzky-Golay filter as the identification
 (`savitzky_golay`: q, q', q'' and the measured torques alike; by default over the window
-identify would choose for this log), the URDF's inverse
+identify would choose for this log), the model's Coulomb friction (a step at every
+reversal, which the filtered measured torque has smoothed) passes it too, the URDF's inverse
 dynamics with its friction predicts the torques, and the score is the field's: the
 RMS of the prediction error over the RMS of the measured torque, per joint and pooled
 over the joints, the filter's edges left out.  A joint whose measured torque is 0
@@ -21,8 +22,16 @@ from pathlib import Path
 
 import numpy as np
 
-from .joint_terms import SIDECAR_NAME, JointTermsError, Sidecar, read_sidecar
-from .pipeline import JointLog, LogError, savitzky_golay
+from .joint_terms import (
+    COULOMB_NEGATIVE,
+    COULOMB_POSITIVE,
+    SIDECAR_NAME,
+    JointTerms,
+    JointTermsError,
+    Sidecar,
+    read_sidecar,
+)
+from .pipeline import JointLog, LogError, savitzky_golay, smooth_column
 from .smoothing import adaptive_velocities, regression_window
 from .urdf import Robot
 
@@ -36,6 +45,42 @@ def scoring_window(log: JointLog) -> float:
         return regression_window(adaptive_velocities(log.q, log.step)[1])
     except ValueError as error:  # too short a log
         raise LogError(str(error)) from None
+
+
+def coulomb_torque(robot: Robot, qd: np.ndarray, sidecar: Sidecar | None = None
+                   ) -> np.ndarray:
+    """The Coulomb friction (N, n) that a URDF's model (with a sidecar's terms) predicts at
+    the velocities qd: a step at every reversal."""
+    coulomb = robot.arrays()["friction"][:, 1]
+    return (coulomb[None, :] * np.sign(qd) if sidecar is None
+            else sidecar.coulomb_torque(qd, coulomb))
+
+
+def filtered_friction_columns(log: JointLog, qd: np.ndarray, window: float,
+                              terms: JointTerms | None = None) -> dict[int, tuple[int, np.ndarray]]:
+    """The regressor's Coulomb columns (the core's sign(q'), or the terms' tanh or levels
+    per direction) through the filter, over the whole log: {column: (joint, values (N,))}
+    for the column's entry in that joint's equation.  A regression-based score puts them in
+    place of the unfiltered steps, as torque_errors does for a URDF's model."""
+    n = qd.shape[1]
+    terms = terms or JointTerms()
+    out: dict[int, tuple[int, np.ndarray]] = {}
+    coulomb = filtered(log, terms.coulomb(qd), window)
+    for i in range(n):
+        out[10 * n + 2 * i + 1] = (i, coulomb[:, i])
+    k = len(terms.kinds)
+    signals = terms.signals(qd, np.zeros_like(qd))
+    for j, kind in enumerate(terms.kinds):
+        if kind in (COULOMB_POSITIVE, COULOMB_NEGATIVE):
+            level = filtered(log, signals[:, :, j], window)
+            for i in range(n):
+                out[12 * n + k * i + j] = (i, level[:, i])
+    return out
+
+
+def filtered(log: JointLog, x: np.ndarray, window: float) -> np.ndarray:
+    """Each column of x (N, n) through the Savitzky-Golay filter of `window` s."""
+    return np.column_stack([smooth_column(log, x[:, i], window) for i in range(x.shape[1])])
 
 
 def torque_errors(robot: Robot, log: JointLog, window: float, sidecar: Sidecar | None = None
@@ -53,6 +98,9 @@ def torque_errors(robot: Robot, log: JointLog, window: float, sidecar: Sidecar |
     if sidecar is not None:
         predicted += sidecar.torque_change(qd[inside], qdd[inside],
                                            robot.arrays()["friction"][:, 1])
+    # the model's Coulomb steps through the filter the measured torque passed
+    steps = coulomb_torque(robot, qd, sidecar)
+    predicted += (filtered(log, steps, window) - steps)[inside]
     measured = u[inside]
     error = predicted - measured
     per_joint: dict[str, float | None] = {}
@@ -75,8 +123,9 @@ def write_validation(out: Path, urdf: str, data: str, window: float, t: np.ndarr
         "relative_error": {"per_joint": per_joint, "pooled": pooled},
         "definition": "RMS of (predicted - measured torque) over RMS of the measured torque, "
                       "per joint and pooled over the joints; zero-phase Savitzky-Golay "
-                      "derivatives of q and the same filter on the measured torque (which "
-                      "smooths its Coulomb steps), the window's edges left out",
+                      "derivatives of q and the same filter on the measured torque and on "
+                      "the model's Coulomb friction (steps at the reversals), the window's "
+                      "edges left out",
         "window": window, "samples": int(len(t)),
     }, indent=2) + "\n", encoding="utf-8")
     from matplotlib.figure import Figure

@@ -171,8 +171,8 @@ def test_validate_reads_the_terms_beside_the_urdf(tmp_path, arm, capsys):
     without = json.loads((tmp_path / "without" / "validation.json").read_text())
     assert without["joint_terms"] is None
     with_terms = report["relative_error"]["pooled"]
-    # measured 0.023 (the filter's smoothing of the Coulomb steps) and 0.36
-    assert with_terms < 0.03 and without["relative_error"]["pooled"] > 5 * with_terms
+    # measured 0.00029 (the encoders' noise through the derivatives) and 0.35
+    assert with_terms < 0.002 and without["relative_error"]["pooled"] > 100 * with_terms
     # named explicitly, the same prediction
     assert main(["validate", str(data), "--robot", str(alone / "arm.urdf"), "--joint-terms-file",
                  str(tmp_path / "id" / "joint_terms.csv"), "--out", str(tmp_path / "named")]) == 0
