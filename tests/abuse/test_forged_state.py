@@ -161,6 +161,33 @@ def test_fmi2_forged_state_is_refused_naming_the_field(model, patches, named):
     isolated(run)
 
 
+@pytest.mark.parametrize("model, field", [(MODEL, "pipe.bank[0].member[0][0].z1"),
+                                          (OBS, "pipe.bank.member[0][0].z1")])
+def test_a_state_that_overflows_when_stepped_is_never_handed_out(model, field):
+    """A forged state of an extreme but finite value is accepted; the step after it
+    overflows a member's innovation statistics to inf.  Taking the state then either
+    fails, naming the overflow, or gives a state that deserializes again: the FMU never
+    hands out a state it would refuse (the fuzz run found ModelObserver doing so)."""
+    def run():
+        f, t = _fmi2_run(model, SETUP[model], STEPS)
+        good = f.serialize(f.get_state())
+        victim = Raw(model, "victim")
+        status, state = victim.deserialize(_patched(model, good, [(field, "d", 1e300)]))
+        assert status == OK, victim.messages()
+        assert victim.call("fmi2SetFMUstate", state) == OK, victim.messages()
+        _drive(_fmi2_inputs(victim, model), model, t)
+        victim.do_step(t, H)
+        again = ctypes.c_void_p()
+        if victim.call("fmi2GetFMUstate", ctypes.byref(again)) == OK:
+            status, _ = victim.deserialize(victim.serialize(again))
+            assert status == OK, victim.messages()
+        else:
+            assert "computation overflowed" in victim.errors(), victim.errors()
+        victim.assert_escaped()
+        assert_usable_after_reset(victim)
+    isolated(run)
+
+
 def test_fmi2_forged_state_before_initialization_is_refused():
     """Before initialization only the setters have written: an internal field
     that differs from the start state cannot come from this FMU."""

@@ -705,9 +705,16 @@ static Snapshot *new_snapshot(Instance *inst)
     return s;
 }
 
+static int data_finite(const Instance *inst, const char *function, const unsigned char *data);
+
 Status instance_get_state(Instance *inst, const char *function, void **state)
 {
     if (!state) return instance_fail(inst, "%s: FMUstate is NULL", function);
+    /* never hand out a state that deserialization would refuse: a computation that
+     * overflowed (from a restored state of extreme values) leaves no state to take */
+    if ((inst->clock.state & inst->api->stepping_states) && !data_finite(inst, function, inst->data))
+        return instance_fail(inst, "%s: the instance's computation overflowed; no state taken",
+                             function);
     Snapshot *s = *state;
     if (s && !owns_snapshot(inst, s))
         return instance_fail(inst, "%s: *FMUstate is neither NULL nor a state of this "
@@ -904,6 +911,61 @@ static int field_valid(const Instance *inst, const char *function, const StateFi
         }
     }
     return 1;
+}
+
+/* The finiteness part of stepping_data_valid, without the initialization it compares
+ * derived fields with: every Real variable finite, every FIELD_REAL element within its
+ * bounds, and every word that no other field covers a finite double.  Logs the first
+ * offender. */
+static int data_finite(const Instance *inst, const char *function, const unsigned char *data)
+{
+    unsigned char *covered = calloc(MD.data_size, 1);
+    if (!covered) {
+        instance_log(inst, STATUS_ERROR, "%s: out of memory", function);
+        return 0;
+    }
+    int ok = 1;
+    for (size_t v = 0; ok && v < MD.n_variables; ++v) {
+        const ModelVariable *var = &MD.variables[v];
+        const size_t count = model_variable_count(var);
+        mark(covered, var->offset, count * (var->type == TYPE_REAL ? sizeof(double) : sizeof(int)));
+        for (size_t e = 0; ok && var->type == TYPE_REAL && e < count; ++e) {
+            const double value = element_value(data, var, e);
+            if (!isfinite(value)) {
+                char name[64];
+                element_name(var, e, name, sizeof name);
+                instance_log(inst, STATUS_ERROR, "%s: %s = %g is not finite", function, name,
+                             value);
+                ok = 0;
+            }
+        }
+    }
+    if (inst->resource) mark(covered, MD.resource_offset, MD.resource_size);
+    for (size_t f = 0; ok && f < MD.n_state_fields; ++f) {
+        const StateField *field = &MD.state_fields[f];
+        if (field->check == FIELD_REALS) {
+            ok = reals_valid(inst, function, data, covered, field->name, field->offset,
+                             field->size);
+            continue;
+        }
+        /* a FIELD_REAL's own bounds (an infinite bound admits that infinity) */
+        const double lo = isnan(field->min) ? -DBL_MAX : field->min;
+        const double hi = isnan(field->max) ? DBL_MAX : field->max;
+        for (size_t e = 0; field->check == FIELD_REAL && e < field->size / sizeof(double); ++e) {
+            double value;
+            memcpy(&value, data + field->offset + e * sizeof(double), sizeof value);
+            if (!(value >= lo && value <= hi)) {
+                instance_log(inst, STATUS_ERROR, "%s: %s = %g is not finite or out of its "
+                             "range", function, field->name, value);
+                ok = 0;
+                break;
+            }
+        }
+        mark(covered, field->offset, field->size);
+    }
+    if (ok) ok = reals_valid(inst, function, data, covered, "the model data", 0, MD.data_size);
+    free(covered);
+    return ok;
 }
 
 /* A state that can step again: the variables of the table (calculated
