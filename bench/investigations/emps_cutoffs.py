@@ -13,33 +13,19 @@ import argparse
 from pathlib import Path
 
 import numpy as np
-import scipy.io
-import scipy.signal
 
+from bench.reports.emps import SKIP, benchmark_columns, benchmark_rows, decimated
 from bench.reports.emps_closed_loop import ClosedLoopLog, simulation_errors
 
 REPO = Path(__file__).resolve().parents[2]
-STEP, SKIP, FOLDS, MARGIN = 1e-3, 49, 5, 200
+FOLDS, MARGIN = 5, 200
 CUTOFFS = (10.0, 20.0, 30.0, 50.0, 100.0)
 
 
 def columns(path: Path, cutoff: float) -> tuple[np.ndarray, np.ndarray]:
-    """[q'', q', sign q', 1] and the force at every sample (the force filtered alike
-    below 100 Hz)."""
-    data = scipy.io.loadmat(path)
-    qm, force = data["qm"].ravel(), (data["gtau"] * data["vir"]).ravel()
-    b, a = scipy.signal.butter(4, cutoff / (0.5 / STEP))
-    q = scipy.signal.filtfilt(b, a, qm)
-    qd = np.gradient(q, STEP)
-    qdd = np.gradient(qd, STEP)
-    if cutoff < 100.0:
-        force = scipy.signal.filtfilt(b, a, force)
-    return np.column_stack([qdd, qd, np.sign(qd), np.ones_like(q)]), force
-
-
-def fit(X: np.ndarray, y: np.ndarray) -> np.ndarray:
-    return np.linalg.lstsq(scipy.signal.decimate(X, 10, axis=0, zero_phase=True),
-                           scipy.signal.decimate(y, 10, zero_phase=True), rcond=None)[0]
+    """The benchmark's columns and force at `cutoff`, the force filtered alike below the
+    benchmark's 100 Hz."""
+    return benchmark_columns(path, cutoff, filter_force=cutoff < 100.0)
 
 
 def cross_validation(path: Path, cutoff: float) -> float:
@@ -65,15 +51,12 @@ def main() -> None:
     parser.add_argument("--data", type=Path, default=REPO / "examples" / "emps" / "data")
     args = parser.parse_args()
     estimation, validation = args.data / "DATA_EMPS.mat", args.data / "DATA_EMPS_PULSES.mat"
-    Xv, yv = columns(validation, 100.0)
-    Xv, yv = (scipy.signal.decimate(Xv[SKIP:], 10, axis=0, zero_phase=True),
-              scipy.signal.decimate(yv[SKIP:], 10, zero_phase=True))
+    Xv, yv = benchmark_rows(validation)
     loop = ClosedLoopLog.read(validation)
     print("| cut-off | M | Fv | Fc | OF | cross-validation (estimation log) | cross-test | "
           "closed-loop force error |\n|---|---|---|---|---|---|---|---|")
     for cutoff in CUTOFFS:
-        X, y = columns(estimation, cutoff)
-        theta = fit(X[SKIP:], y[SKIP:])
+        theta = np.linalg.lstsq(*decimated(*columns(estimation, cutoff)), rcond=None)[0]
         cross = float(np.linalg.norm(yv - Xv @ theta) / np.linalg.norm(yv))
         print(f"| {cutoff:g} Hz | " + " | ".join(f"{v:.3f}" for v in theta) +
               f" | {100 * cross_validation(estimation, cutoff):.3f} % | {100 * cross:.3f} % | "

@@ -38,17 +38,34 @@ PUBLISHED_ERRORS = (0.0408, 0.0598, 0.089)
 STEP = 1e-3
 
 
-def benchmark_rows(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """The published IDIM-LS pipeline: decimated columns [q'', q', sign q', 1] and force."""
+SKIP = 49  # the first samples the published pipeline drops
+
+
+def benchmark_columns(path: Path, cutoff: float = 100.0, filter_force: bool = False
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """Columns [q'', q', sign q', 1] and the force at every sample: qm through a 4th-order
+    Butterworth of `cutoff` Hz forward and backward (and the force too if filter_force),
+    central differences."""
     data = scipy.io.loadmat(path)
     qm, force = data["qm"].ravel(), (data["gtau"] * data["vir"]).ravel()
-    b, a = scipy.signal.butter(4, 100.0 / (0.5 / STEP))
+    b, a = scipy.signal.butter(4, cutoff / (0.5 / STEP))
     q = scipy.signal.filtfilt(b, a, qm)
     qd = np.gradient(q, STEP)
     qdd = np.gradient(qd, STEP)
-    X = np.column_stack([qdd, qd, np.sign(qd), np.ones_like(q)])[49:]
-    return (scipy.signal.decimate(X, 10, axis=0, zero_phase=True),
-            scipy.signal.decimate(force[49:], 10, zero_phase=True))
+    if filter_force:
+        force = scipy.signal.filtfilt(b, a, force)
+    return np.column_stack([qdd, qd, np.sign(qd), np.ones_like(q)]), force
+
+
+def decimated(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The published pipeline's rows: the first SKIP samples dropped, decimated by 10."""
+    return (scipy.signal.decimate(X[SKIP:], 10, axis=0, zero_phase=True),
+            scipy.signal.decimate(y[SKIP:], 10, zero_phase=True))
+
+
+def benchmark_rows(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """The published IDIM-LS pipeline: decimated columns [q'', q', sign q', 1] and force."""
+    return decimated(*benchmark_columns(path))
 
 
 def relative(X: np.ndarray, y: np.ndarray, theta: np.ndarray) -> float:

@@ -55,9 +55,14 @@ def joint_velocity(x: np.ndarray, h: float, chunk: int | None = None
     running over the same samples), so that memory does not grow with the number of
     candidates; a candidate whose differences already exceed the bound ends the
     candidates after it.  Only the chosen window's velocity is computed over the whole log."""
-    windows = candidate_windows(h, x.size)
-    chosen = windows[_lepski(x, h, windows, chunk or CHUNK)]
+    chosen = _chosen_window(x, h, chunk or CHUNK)
     return savgol_filter(x, chosen, ORDER, deriv=1, delta=h), chosen * h
+
+
+def _chosen_window(x: np.ndarray, h: float, chunk: int) -> int:
+    """The window [samples] Lepski's rule keeps for one joint's positions x."""
+    windows = candidate_windows(h, x.size)
+    return windows[_lepski(x, h, windows, chunk)]
 
 
 def _lepski(x: np.ndarray, h: float, windows: list[int], chunk: int) -> int:
@@ -92,12 +97,22 @@ def _lepski(x: np.ndarray, h: float, windows: list[int], chunk: int) -> int:
 
 def adaptive_velocities(q: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
     """Every joint's zero-phase velocity (N, n) and the window each chose [s] (n,)."""
-    if q.shape[0] < 3 * (ORDER + 3):
-        raise ValueError(f"the log ({q.shape[0]} samples) is too short for the velocities")
+    _check_length(q)
     velocity, windows = np.empty(q.shape), np.empty(q.shape[1])
     for i in range(q.shape[1]):
         velocity[:, i], windows[i] = joint_velocity(q[:, i], h)
     return velocity, windows
+
+
+def velocity_windows(q: np.ndarray, h: float) -> np.ndarray:
+    """The window each joint's velocity would choose [s] (n,), without the velocities."""
+    _check_length(q)
+    return np.array([_chosen_window(q[:, i], h, CHUNK) * h for i in range(q.shape[1])])
+
+
+def _check_length(q: np.ndarray) -> None:
+    if q.shape[0] < 3 * (ORDER + 3):
+        raise ValueError(f"the log ({q.shape[0]} samples) is too short for the velocities")
 
 
 def regression_window(velocity_windows: np.ndarray) -> float:

@@ -32,7 +32,7 @@ from .joint_terms import (
     read_sidecar,
 )
 from .pipeline import JointLog, LogError, savitzky_golay, smooth_column
-from .smoothing import adaptive_velocities, regression_window
+from .smoothing import regression_window, velocity_windows
 from .urdf import Robot
 
 OUTPUT_NAMES = ("validation.json", "validation.png")
@@ -42,7 +42,7 @@ def scoring_window(log: JointLog) -> float:
     """The window validate takes when none is given: identify's (regression_window) for
     this log, so that a coarse encoder's steps are not scored as torque errors."""
     try:
-        return regression_window(adaptive_velocities(log.q, log.step)[1])
+        return regression_window(velocity_windows(log.q, log.step))
     except ValueError as error:  # too short a log
         raise LogError(str(error)) from None
 

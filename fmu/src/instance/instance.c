@@ -866,6 +866,7 @@ static int reals_valid(const Instance *inst, const char *function, const unsigne
     return 1;
 }
 
+/* One field of the model's table (initialized NULL: derived fields are not compared). */
 static int field_valid(const Instance *inst, const char *function, const StateField *f,
                        const unsigned char *data, const unsigned char *initialized,
                        unsigned char *covered)
@@ -882,6 +883,7 @@ static int field_valid(const Instance *inst, const char *function, const StateFi
     mark(covered, f->offset, f->size);
     if (f->check == FIELD_ANY) return 1;
     if (f->check == FIELD_DERIVED) {
+        if (!initialized) return 1;
         if (memcmp(data + f->offset, initialized + f->offset, f->size) == 0) return 1;
         instance_log(inst, STATUS_ERROR, "%s: %s in the state is not what initialization derives "
                      "from the state's own parameters; state refused", function, f->name);
@@ -913,10 +915,9 @@ static int field_valid(const Instance *inst, const char *function, const StateFi
     return 1;
 }
 
-/* The finiteness part of stepping_data_valid, without the initialization it compares
- * derived fields with: every Real variable finite, every FIELD_REAL element within its
- * bounds, and every word that no other field covers a finite double.  Logs the first
- * offender. */
+/* stepping_data_valid without the initialization it compares derived fields with:
+ * every Real variable finite, the model's field table (ranges, finite doubles) and
+ * every word that no field covers a finite double.  Logs the first offender. */
 static int data_finite(const Instance *inst, const char *function, const unsigned char *data)
 {
     unsigned char *covered = calloc(MD.data_size, 1);
@@ -941,28 +942,8 @@ static int data_finite(const Instance *inst, const char *function, const unsigne
         }
     }
     if (inst->resource) mark(covered, MD.resource_offset, MD.resource_size);
-    for (size_t f = 0; ok && f < MD.n_state_fields; ++f) {
-        const StateField *field = &MD.state_fields[f];
-        if (field->check == FIELD_REALS) {
-            ok = reals_valid(inst, function, data, covered, field->name, field->offset,
-                             field->size);
-            continue;
-        }
-        /* a FIELD_REAL's own bounds (an infinite bound admits that infinity) */
-        const double lo = isnan(field->min) ? -DBL_MAX : field->min;
-        const double hi = isnan(field->max) ? DBL_MAX : field->max;
-        for (size_t e = 0; field->check == FIELD_REAL && e < field->size / sizeof(double); ++e) {
-            double value;
-            memcpy(&value, data + field->offset + e * sizeof(double), sizeof value);
-            if (!(value >= lo && value <= hi)) {
-                instance_log(inst, STATUS_ERROR, "%s: %s = %g is not finite or out of its "
-                             "range", function, field->name, value);
-                ok = 0;
-                break;
-            }
-        }
-        mark(covered, field->offset, field->size);
-    }
+    for (size_t f = 0; ok && f < MD.n_state_fields; ++f)
+        ok = field_valid(inst, function, &MD.state_fields[f], data, NULL, covered);
     if (ok) ok = reals_valid(inst, function, data, covered, "the model data", 0, MD.data_size);
     free(covered);
     return ok;
