@@ -5,7 +5,13 @@
 #ifndef ADAPTIVE_RULES_H
 #define ADAPTIVE_RULES_H
 
+#include <math.h>
+
 #include "noise_adaptive.h"
+
+#if ADAPTIVE_REACH < 1
+#error "ADAPTIVE_REACH: the velocity candidate needs the member below the centre"
+#endif
 
 /* The selection after a step: whose velocity is published and whose injection is
  * the published perturbation (member indices, or ADAPTIVE_SUPER_TWISTING). */
@@ -25,27 +31,69 @@ static inline const AdaptiveGains *adaptive_gains_at(const AdaptiveBank *bank, i
                                : &bank->fine[bank->zoom_index[i][index - bank->count]];
 }
 
-/* The member of the smallest one-step innovation mean square (count > 0). */
+/* Bits low..high of a mask of `count` members (none if the range is empty). */
+static inline unsigned adaptive_member_range(int low, int high, int count)
+{
+    low = low < 0 ? 0 : low;
+    high = high > count - 1 ? count - 1 : high;
+    return low > high ? 0u : (~0u >> (31 - (high - low))) << low;
+}
+
+/* Reach: the members that run on DOF i, as bits (bit j: member j).  Every member
+ * runs until the velocities have been compared for ADAPTIVE_SETTLED windows and
+ * there is a centre; then the members within ADAPTIVE_REACH of the centre and of
+ * the published perturbation's member, the fastest (whose innovations are mostly
+ * the noise: the noise estimate's) and the one the identifier follows.  The others
+ * pause (their state is stale) and, when they run again, continue from the nearest
+ * running member (noise_adaptive.c, wake): the rankings then climb the grid step by
+ * step. */
+static inline unsigned adaptive_running_mask(const AdaptiveBank *bank, int i)
+{
+    const int count = bank->count, c = bank->center[i], s = bank->perturbation[i];
+    if (c < 0 || bank->sta[i].velocity_samples * bank->velocity_gain < ADAPTIVE_SETTLED)
+        return adaptive_member_range(0, count - 1, count);
+    unsigned mask = adaptive_member_range(c - ADAPTIVE_REACH, c + ADAPTIVE_REACH, count) |
+                    adaptive_member_range(count - 1, count - 1, count);
+    if (s != ADAPTIVE_SUPER_TWISTING)
+        mask |= adaptive_member_range(s - ADAPTIVE_REACH, s + ADAPTIVE_REACH, count);
+    if (bank->follow != ADAPTIVE_SUPER_TWISTING)
+        mask |= adaptive_member_range(bank->follow, bank->follow, count);
+    return mask;
+}
+
+static inline int adaptive_running(const AdaptiveBank *bank, int i, int j)
+{
+    return j >= 0 && j < bank->count && (adaptive_running_mask(bank, i) >> j & 1u);
+}
+
+/* The running member of the smallest one-step innovation mean square (count > 0). */
 static inline int adaptive_quietest_member(const AdaptiveBank *bank, int i)
 {
     const AdaptiveMember *members = bank->member[i];
-    int best = 0;
-    for (int j = 1; j < bank->count; ++j)
-        if (members[j].stats.mean_square < members[best].stats.mean_square) best = j;
+    int best = -1;
+    for (int j = 0; j < bank->count; ++j)
+        if (adaptive_running(bank, i, j) &&
+            (best < 0 || members[j].stats.mean_square < members[best].stats.mean_square))
+            best = j;
     return best;
 }
 
-/* Ranking: the observer of the smallest mean square of a ranking, or the current
- * one unless the best is smaller by ADAPTIVE_HYSTERESIS.  *best gets the best member. */
+/* Ranking: the observer of the smallest mean square of a ranking among the
+ * super-twisting observer and the running members, or the current one unless the
+ * best is smaller by ADAPTIVE_HYSTERESIS (a paused current one always gives way).
+ * *best gets the best member. */
 static inline int adaptive_choose(const AdaptiveBank *bank, int i, int current, int rank, int *best)
 {
     const AdaptiveMember *members = bank->member[i];
-    *best = 0;
-    for (int j = 1; j < bank->count; ++j)
-        if (members[j].stats.ranking[rank] < members[*best].stats.ranking[rank]) *best = j;
+    *best = -1;
+    for (int j = 0; j < bank->count; ++j)
+        if (adaptive_running(bank, i, j) &&
+            (*best < 0 || members[j].stats.ranking[rank] < members[*best].stats.ranking[rank]))
+            *best = j;
     const double sta = bank->sta[i].ranking[rank], member = members[*best].stats.ranking[rank];
-    const double now =
-        current == ADAPTIVE_SUPER_TWISTING ? sta : members[current].stats.ranking[rank];
+    const double now = current == ADAPTIVE_SUPER_TWISTING ? sta
+                       : adaptive_running(bank, i, current) ? members[current].stats.ranking[rank]
+                                                            : INFINITY;
     const int candidate = member < sta ? *best : ADAPTIVE_SUPER_TWISTING;
     return (member < sta ? member : sta) < ADAPTIVE_HYSTERESIS * now ? candidate : current;
 }
@@ -132,7 +180,7 @@ static inline int adaptive_stand_in(const AdaptiveBank *bank, int i, int selecte
     return adaptive_quietest_member(bank, i);
 }
 
-/* Centre: the member whose velocity matches the corrected secants best becomes
+/* Centre: the running member whose velocity matches the corrected secants best becomes
  * the centre of the zoom members when it beats the current centre by
  * ADAPTIVE_HYSTERESIS (or there is none yet); returns it, or -1 to keep the centre. */
 static inline int adaptive_new_centre(const AdaptiveBank *bank, int i)
@@ -141,8 +189,8 @@ static inline int adaptive_new_centre(const AdaptiveBank *bank, int i)
     const int c = bank->center[i] < 0 ? 0 : bank->center[i];
     int best = c;
     for (int j = 0; j < bank->count; ++j)
-        if (members[j].stats.ranking[ADAPTIVE_RANK_VELOCITY] <
-            members[best].stats.ranking[ADAPTIVE_RANK_VELOCITY])
+        if (adaptive_running(bank, i, j) && members[j].stats.ranking[ADAPTIVE_RANK_VELOCITY] <
+                                                members[best].stats.ranking[ADAPTIVE_RANK_VELOCITY])
             best = j;
     const int due = bank->sta[i].velocity_samples > 0.0 &&
                     (bank->center[i] < 0 || members[best].stats.ranking[ADAPTIVE_RANK_VELOCITY] <

@@ -1,6 +1,7 @@
 #include "noise_adaptive.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "adaptive_rules.h"
@@ -236,13 +237,17 @@ static AdaptiveMeasured measure_strides(AdaptiveSecant *sc, const AdaptiveBank *
         }
         measured.velocity = (y - sc->y[slot]) / bank->span - (w / bank->span - v_middle);
         if (tick >= ADAPTIVE_RING) {
-            /* the nominal velocity change between the two middles */
-            double nominal = 0.0;
-            for (unsigned t = tick - ADAPTIVE_SLOTS / 2 - ADAPTIVE_PERTURBATION_LAG;
-                 t < tick - ADAPTIVE_SLOTS / 2; ++t)
-                nominal += sc->dv[t % ADAPTIVE_RING];
+            /* the nominal velocity change between the two middles: the strides
+             * [first, end), one on from the last stride's */
+            const unsigned end = tick - ADAPTIVE_SLOTS / 2, first = end - ADAPTIVE_PERTURBATION_LAG;
+            if (tick % ADAPTIVE_RING == 0 || tick == ADAPTIVE_RING) {
+                sc->nominal = 0.0; /* afresh, so that rounding does not accumulate */
+                for (unsigned t = first; t < end; ++t) sc->nominal += sc->dv[t % ADAPTIVE_RING];
+            } else {
+                sc->nominal += sc->dv[(end - 1) % ADAPTIVE_RING] - sc->dv[(first - 1) % ADAPTIVE_RING];
+            }
             const double earlier = sc->middle[(tick - ADAPTIVE_PERTURBATION_LAG) % ADAPTIVE_RING];
-            measured.perturbation = (measured.velocity - earlier - nominal) /
+            measured.perturbation = (measured.velocity - earlier - sc->nominal) /
                                     (ADAPTIVE_PERTURBATION_SPANS * bank->span);
         }
         sc->middle[tick % ADAPTIVE_RING] = measured.velocity;
@@ -272,11 +277,25 @@ static inline double expected_sign(double v_hat, double sigma)
  * weighs its innovation; the members average their xi for the published
  * perturbation; at a stride's start (measured given) each is compared with
  * the measured secants. */
-static void step_members(AdaptiveBank *bank, int i, double y, StoAcceleration a, double h,
-                         double h2, double g, const AdaptiveMeasured *measured, unsigned tick)
+/* The index of the lowest set bit of a nonzero mask. */
+static inline int lowest_bit(unsigned mask)
+{
+#if defined(__GNUC__) || defined(__clang__)
+    return __builtin_ctz(mask);
+#else
+    int j = 0;
+    while (!(mask >> j & 1u)) ++j;
+    return j;
+#endif
+}
+
+static void step_members(AdaptiveBank *bank, int i, unsigned running, double y, StoAcceleration a,
+                         double h, double h2, double g, const AdaptiveMeasured *measured,
+                         unsigned tick)
 {
     const double gain = bank->gain;
-    for (int j = 0; j < bank->count; ++j) {
+    for (; running; running &= running - 1u) { /* the running members (bits), lowest first */
+        const int j = lowest_bit(running);
         AdaptiveMember *m = &bank->member[i][j];
         const AdaptiveGains *gj = &bank->gains[j];
         const double r = member_step(m, gj, y, a, h, h2);
@@ -298,13 +317,30 @@ static void step_members(AdaptiveBank *bank, int i, double y, StoAcceleration a,
     }
 }
 
-/* The zoom members move to the new centre; a selected zoom member stays
- * selected where its bandwidth still is on the fine grid, else the centre is.
- * Returns the selection after the move. */
+/* The members of DOF i that run now but did not (bits of `was_running`) continue
+ * from the nearest member that did: state and statistics, as the zoom members start. */
+static void wake(AdaptiveBank *bank, int i, unsigned was_running)
+{
+    const unsigned woken = adaptive_running_mask(bank, i) & ~was_running;
+    for (int j = 0; j < bank->count; ++j) {
+        if (!(woken >> j & 1u)) continue;
+        int nearest = -1;
+        for (int k = 0; k < bank->count; ++k)
+            if ((was_running >> k & 1u) && (nearest < 0 || abs(k - j) < abs(nearest - j)))
+                nearest = k;
+        if (nearest >= 0) bank->member[i][j] = bank->member[i][nearest];
+    }
+}
+
+/* The zoom members and the running members move to the new centre; a selected
+ * zoom member stays selected where its bandwidth still is on the fine grid, else
+ * the centre is.  Returns the selection after the move. */
 static int recentre(AdaptiveBank *bank, int i, int centre, int selected)
 {
     const int fine = selected >= bank->count ? bank->zoom_index[i][selected - bank->count] : -1;
+    const unsigned was_running = adaptive_running_mask(bank, i);
     zoom_to(bank, i, centre);
+    wake(bank, i, was_running);
     if (selected < bank->count) return selected;
     selected = centre;
     for (int z = 0; z < ADAPTIVE_ZOOM; ++z)
@@ -328,6 +364,8 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
         int selected = bank->selected[i], source = bank->perturbation[i];
         int published = bank->published[i];
         const int follow = bank->follow;
+        /* which members run changes only with the rules (and the follow, between runs) */
+        unsigned running = adaptive_running_mask(bank, i);
         for (int k = 0; k < count; ++k) {
             if (bank->started[i]) {
                 const unsigned age = bank->age[i]++;
@@ -345,14 +383,19 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                                   trace->z_filtered[i][k]);
                 }
                 integrate_nominal(&bank->secant[i], a_sta, h, h2);
-                step_members(bank, i, y[i], a[i], h, h2, g, stride_start ? &measured : NULL,
-                             tick);
-                if (age >= ADAPTIVE_MIN_SAMPLES) {
+                step_members(bank, i, running, y[i], a[i], h, h2, g,
+                             stride_start ? &measured : NULL, tick);
+                if (stride_start && age >= ADAPTIVE_MIN_SAMPLES) {
                     const int centre = adaptive_new_centre(bank, i);
                     if (centre >= 0) selected = recentre(bank, i, centre, selected);
                     const AdaptiveSelection choice = adaptive_select(bank, i, selected, source);
                     selected = choice.selected;
-                    source = choice.source;
+                    if (choice.source != source) { /* its reach runs from now on */
+                        const unsigned was_running = adaptive_running_mask(bank, i);
+                        source = bank->perturbation[i] = choice.source;
+                        wake(bank, i, was_running);
+                    }
+                    running = adaptive_running_mask(bank, i);
                 }
             } else if (trace->switching_rate[i][k] >= STO_CONVERGED_RATE ||
                        ++bank->waited[i] >= bank->start_limit) {
@@ -430,7 +473,8 @@ void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank)
         double ratio = mean_square / variance;
         if (o->primed && bank->started[i])
             for (int j = 0; j < bank->count; ++j)
-                ratio = fmin(ratio, bank->member[i][j].stats.mean_square /
+                if (adaptive_running(bank, i, j))
+                    ratio = fmin(ratio, bank->member[i][j].stats.mean_square /
                                         bank->gains[j].innovation_variance);
         bank->noise_std[i] = sqrt(ratio);
     }
@@ -447,8 +491,12 @@ int adaptive_settled(const AdaptiveBank *bank, int n)
 
 void adaptive_follow_published(AdaptiveBank *bank)
 {
+    unsigned was_running[STO_MAX_DOF];
+    for (int i = 0; i < STO_MAX_DOF; ++i) was_running[i] = adaptive_running_mask(bank, i);
     /* a zoom member moves with its centre: the identifier follows the centre */
     bank->follow = bank->selected[0] >= bank->count ? bank->center[0] : bank->selected[0];
+    for (int i = 0; i < STO_MAX_DOF; ++i)
+        if (bank->started[i]) wake(bank, i, was_running[i]);
 }
 
 int adaptive_valid(const AdaptiveBank *bank, int n)

@@ -24,6 +24,15 @@
  * a factor ADAPTIVE_RATIO apart; ADAPTIVE_ZOOM zoom members run on a grid
  * ADAPTIVE_FINE times finer below the centre member.
  *
+ * Reach: every member runs until the rankings have settled (ADAPTIVE_SETTLED
+ * windows of comparisons); then only the members within ADAPTIVE_REACH of the
+ * centre and of the published perturbation's member, the fastest (the noise
+ * estimate's) and the identifier's run (adaptive_running_mask), and the rankings
+ * move the centre and the perturbation's member along the grid one member at a
+ * time, each newly running member starting from its nearest running neighbour.
+ * The members far from both choices only cost: with them the step was twice as
+ * expensive for the same results.
+ *
  * Rankings (all exponentially weighted over ADAPTIVE_WINDOW):
  * - innovation: each observer's one-step innovation mean square, which for
  *   an unknown noise level picks the maximum-likelihood member;
@@ -37,17 +46,19 @@
  *   through the tau filter) against the change between two corrected secants
  *   ADAPTIVE_PERTURBATION_SPANS spans apart minus the nominal model's change.
  *
- * The rules (adaptive_rules.h, one function each): the centre of the zoom
- * members is the member of the best velocity ranking (ADAPTIVE_HYSTERESIS to
- * move); the velocity candidate is the smallest innovation among the centre,
- * the member below it and the zoom members, and the velocity ranking decides
- * between it and the super-twisting observer; the perturbation ranking picks
- * the published perturbation; exact data (the super-twisting innovation below
- * ADAPTIVE_EXACT_RATIO times every member's while its injection saturates in
- * fewer than ADAPTIVE_SATURATION_LIMIT of the steps) keeps the super-twisting
- * observer; while its injection saturates, the quietest member stands in for
- * its velocity.  The measurement noise estimate is the selected member's
- * innovation mean square over its steady-state innovation variance.
+ * The rules (adaptive_rules.h, one function each; the selection is made at each
+ * stride's start, when the rankings change): the centre of the zoom members is the
+ * running member of the best velocity ranking (ADAPTIVE_HYSTERESIS to move); the
+ * velocity candidate is the smallest innovation among the centre, the member below
+ * it and the zoom members, and the velocity ranking decides between it and the
+ * super-twisting observer; the perturbation ranking picks the published
+ * perturbation; exact data (the super-twisting innovation below
+ * ADAPTIVE_EXACT_RATIO times every running member's while its injection saturates
+ * in fewer than ADAPTIVE_SATURATION_LIMIT of the steps) keeps the super-twisting
+ * observer; in each step where its injection saturates, the quietest member stands
+ * in for its velocity.  The measurement noise estimate is the smallest ratio,
+ * over the running members, of the innovation mean square to its steady-state
+ * innovation variance per unit noise variance.
  *
  * The Coulomb regressor of a linear member is E[sign v | x2_hat] =
  * erf(x2_hat / (sqrt 2 sigma_v)), sigma_v its velocity error for the noise
@@ -110,6 +121,9 @@ typedef struct {
                                                    * over each stride: once, twice */
     double v, w;                        /* the same over the running stride */
     double middle[ADAPTIVE_RING];       /* the corrected secants (velocities at the middles) */
+    double nominal; /* the sum of dv between the middles of the secants compared for the
+                     * perturbation (slid by a stride each stride, summed afresh every
+                     * ADAPTIVE_RING strides) */
 } AdaptiveSecant;
 
 /* One member's state for one DOF. */

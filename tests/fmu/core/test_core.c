@@ -1088,6 +1088,40 @@ static int adaptive_rules(void)
     m[1].stats.ranking[V] = 1.0;
     failed += check(adaptive_new_centre(bank, 0) == 1, "1.0 does: the centre moves to 1");
 
+    /* the reach: seven members, centre 3; member 0 ranks best but is paused */
+    bank->count = 7;
+    bank->follow = ST;
+    bank->center[0] = 3;
+    bank->sta[0].mean_square = 10.0;
+    bank->sta[0].ranking[P] = bank->sta[0].ranking[V] = 10.0;
+    for (int j = 0; j < 7; ++j)
+        m[j].stats.mean_square = m[j].stats.ranking[P] = m[j].stats.ranking[V] = 5.0 + j;
+    m[0].stats.mean_square = m[0].stats.ranking[P] = m[0].stats.ranking[V] = 0.1;
+    m[3].stats.mean_square = m[3].stats.ranking[P] = m[3].stats.ranking[V] = 1.0;
+    bank->perturbation[0] = ST;
+    bank->velocity_gain = 0.5 * ADAPTIVE_SETTLED;
+    bank->sta[0].velocity_samples = 1.0; /* half the comparisons to settle: all run */
+    int running = 0;
+    for (int j = 0; j < 7; ++j) running += adaptive_running(bank, 0, j) << j;
+    failed += check(running == 0x7f, "not settled: every member runs (mask %#x)", running);
+    bank->sta[0].velocity_samples = 2.0;
+    running = 0;
+    for (int j = 0; j < 7; ++j) running += adaptive_running(bank, 0, j) << j;
+    const int reach = ((1 << (2 * ADAPTIVE_REACH + 1)) - 1) << (3 - ADAPTIVE_REACH);
+    failed += check(running == (reach | 1 << 6),
+                    "settled: the centre's reach and the fastest member (mask %#x)", running);
+    bank->perturbation[0] = 0;
+    failed += check(adaptive_running(bank, 0, ADAPTIVE_REACH) && adaptive_running(bank, 0, 0),
+                    "and the reach of the published perturbation's member");
+    bank->perturbation[0] = ST;
+    bank->follow = 0;
+    failed += check(adaptive_running(bank, 0, 0), "the member the identifier follows runs");
+    bank->follow = ST;
+    failed += check(adaptive_quietest_member(bank, 0) == 3, "the paused member 0 is not the quietest");
+    failed += check(adaptive_new_centre(bank, 0) == -1, "nor the centre (3 ranks best of the rest)");
+    failed += check(adaptive_choose(bank, 0, 0, P, &best) == 3,
+                    "a paused current member gives way to the best running one");
+
     bank->count = 0;
     const AdaptiveSelection none = adaptive_select(bank, 0, 1, 1);
     failed += check(none.selected == ST && none.source == ST, "no member fits: super-twisting");
