@@ -9,8 +9,8 @@
 
 #include "noise_adaptive.h"
 
-#if ADAPTIVE_REACH < 1
-#error "ADAPTIVE_REACH: the velocity candidate needs the member below the centre"
+#if ADAPTIVE_REACH_SLOWER < 1
+#error "ADAPTIVE_REACH_SLOWER: the velocity candidate needs the member below the centre"
 #endif
 
 /* The selection after a step: whose velocity is published and whose injection is
@@ -41,21 +41,19 @@ static inline unsigned adaptive_member_range(int low, int high, int count)
 
 /* Reach: the members that run on DOF i, as bits (bit j: member j).  Every member
  * runs until the velocities have been compared for ADAPTIVE_SETTLED windows and
- * there is a centre; then the members within ADAPTIVE_REACH of the centre and of
- * the published perturbation's member, the fastest (whose innovations are mostly
- * the noise: the noise estimate's) and the one the identifier follows.  The others
- * pause (their state is stale) and, when they run again, continue from the nearest
- * running member (noise_adaptive.c, wake): the rankings then climb the grid step by
- * step. */
+ * there is a centre; then the members from ADAPTIVE_REACH_SLOWER below to
+ * ADAPTIVE_REACH_FASTER above the centre and the published perturbation's member,
+ * and the one the identifier follows.  The others pause (their state is stale)
+ * and, when they run again, continue from the nearest running member
+ * (noise_adaptive.c, wake): the rankings then climb the grid. */
 static inline unsigned adaptive_running_mask(const AdaptiveBank *bank, int i)
 {
     const int count = bank->count, c = bank->center[i], s = bank->perturbation[i];
     if (c < 0 || bank->sta[i].velocity_samples * bank->velocity_gain < ADAPTIVE_SETTLED)
         return adaptive_member_range(0, count - 1, count);
-    unsigned mask = adaptive_member_range(c - ADAPTIVE_REACH, c + ADAPTIVE_REACH, count) |
-                    adaptive_member_range(count - 1, count - 1, count);
+    unsigned mask = adaptive_member_range(c - ADAPTIVE_REACH_SLOWER, c + ADAPTIVE_REACH_FASTER, count);
     if (s != ADAPTIVE_SUPER_TWISTING)
-        mask |= adaptive_member_range(s - ADAPTIVE_REACH, s + ADAPTIVE_REACH, count);
+        mask |= adaptive_member_range(s - ADAPTIVE_REACH_SLOWER, s + ADAPTIVE_REACH_FASTER, count);
     if (bank->follow != ADAPTIVE_SUPER_TWISTING)
         mask |= adaptive_member_range(bank->follow, bank->follow, count);
     return mask;

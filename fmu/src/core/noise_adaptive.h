@@ -25,13 +25,12 @@
  * ADAPTIVE_FINE times finer below the centre member.
  *
  * Reach: every member runs until the rankings have settled (ADAPTIVE_SETTLED
- * windows of comparisons); then only the members within ADAPTIVE_REACH of the
- * centre and of the published perturbation's member, the fastest (the noise
- * estimate's) and the identifier's run (adaptive_running_mask), and the rankings
- * move the centre and the perturbation's member along the grid one member at a
- * time, each newly running member starting from its nearest running neighbour.
- * The members far from both choices only cost: with them the step was twice as
- * expensive for the same results.
+ * windows of comparisons); then only the members from ADAPTIVE_REACH_SLOWER below
+ * to ADAPTIVE_REACH_FASTER above the centre and the published perturbation's
+ * member, and the identifier's, run (adaptive_running_mask); the rankings move
+ * the two choices along the grid, each newly running member starting from its
+ * nearest running neighbour.  The members far from both choices only cost: with
+ * them the step was twice as expensive for the same results (docs/design).
  *
  * Rankings (all exponentially weighted over ADAPTIVE_WINDOW):
  * - innovation: each observer's one-step innovation mean square, which for

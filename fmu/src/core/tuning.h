@@ -21,8 +21,9 @@
 #define ADAPTIVE_HIGHEST_BANDWIDTH 0.5 /* [1/h] the fastest member: omega h at most this */
 #define ADAPTIVE_RATIO 1.8          /* between the bandwidths of neighbouring members */
 #define ADAPTIVE_FINE 3             /* steps of the zoom members' grid per ADAPTIVE_RATIO */
-#define ADAPTIVE_REACH 1            /* members either side of the centre that run (at least
-                                     * 1: the velocity candidate takes the one below) */
+#define ADAPTIVE_REACH_SLOWER 2     /* members below a chosen one that run (at least 1: the
+                                     * velocity candidate takes the one below the centre) ... */
+#define ADAPTIVE_REACH_FASTER 1     /* ... and above it */
 #define ADAPTIVE_WINDOW 1.0         /* [s] of the mean square innovations */
 #define ADAPTIVE_SECANT_TIME 0.04   /* [s] span of the secants that rank velocities ... */
 #define ADAPTIVE_SLOTS 16           /* ... at least this many strides (the slots in flight) */

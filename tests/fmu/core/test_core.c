@@ -1088,7 +1088,8 @@ static int adaptive_rules(void)
     m[1].stats.ranking[V] = 1.0;
     failed += check(adaptive_new_centre(bank, 0) == 1, "1.0 does: the centre moves to 1");
 
-    /* the reach: seven members, centre 3; member 0 ranks best but is paused */
+    /* the reach: seven members, centre 3; member 0 ranks best but is paused (at
+     * ADAPTIVE_REACH_SLOWER < 3) */
     bank->count = 7;
     bank->follow = ST;
     bank->center[0] = 3;
@@ -1107,11 +1108,14 @@ static int adaptive_rules(void)
     bank->sta[0].velocity_samples = 2.0;
     running = 0;
     for (int j = 0; j < 7; ++j) running += adaptive_running(bank, 0, j) << j;
-    const int reach = ((1 << (2 * ADAPTIVE_REACH + 1)) - 1) << (3 - ADAPTIVE_REACH);
-    failed += check(running == (reach | 1 << 6),
-                    "settled: the centre's reach and the fastest member (mask %#x)", running);
-    bank->perturbation[0] = 0;
-    failed += check(adaptive_running(bank, 0, ADAPTIVE_REACH) && adaptive_running(bank, 0, 0),
+    failed += check(running == (int)adaptive_member_range(3 - ADAPTIVE_REACH_SLOWER,
+                                                          3 + ADAPTIVE_REACH_FASTER, 7),
+                    "settled: the centre's reach (mask %#x)", running);
+    failed += check(adaptive_member_range(2, 4, 7) == 0x1c && adaptive_member_range(-3, 0, 7) == 1 &&
+                        adaptive_member_range(5, 9, 7) == 0x60 && adaptive_member_range(4, 3, 7) == 0,
+                    "member ranges clipped to the bank");
+    bank->perturbation[0] = 6;
+    failed += check(adaptive_running(bank, 0, 6) && adaptive_running(bank, 0, 6 - ADAPTIVE_REACH_SLOWER),
                     "and the reach of the published perturbation's member");
     bank->perturbation[0] = ST;
     bank->follow = 0;
