@@ -9,10 +9,6 @@
 
 #include "noise_adaptive.h"
 
-#if ADAPTIVE_REACH_SLOWER < 1
-#error "ADAPTIVE_REACH_SLOWER: the velocity candidate needs the member below the centre"
-#endif
-
 /* The selection after a step: whose velocity is published and whose injection is
  * the published perturbation (member indices, or ADAPTIVE_SUPER_TWISTING). */
 typedef struct {
@@ -49,11 +45,11 @@ static inline unsigned adaptive_member_range(int low, int high, int count)
 static inline unsigned adaptive_running_mask(const AdaptiveBank *bank, int i)
 {
     const int count = bank->count, c = bank->center[i], s = bank->perturbation[i];
-    if (c < 0 || bank->sta[i].velocity_samples * bank->velocity_gain < ADAPTIVE_SETTLED)
+    const int slower = bank->tuning.reach_slower, faster = bank->tuning.reach_faster;
+    if (c < 0 || bank->sta[i].velocity_samples * bank->velocity_gain < bank->tuning.settled)
         return adaptive_member_range(0, count - 1, count);
-    unsigned mask = adaptive_member_range(c - ADAPTIVE_REACH_SLOWER, c + ADAPTIVE_REACH_FASTER, count);
-    if (s != ADAPTIVE_SUPER_TWISTING)
-        mask |= adaptive_member_range(s - ADAPTIVE_REACH_SLOWER, s + ADAPTIVE_REACH_FASTER, count);
+    unsigned mask = adaptive_member_range(c - slower, c + faster, count);
+    if (s != ADAPTIVE_SUPER_TWISTING) mask |= adaptive_member_range(s - slower, s + faster, count);
     if (bank->follow != ADAPTIVE_SUPER_TWISTING)
         mask |= adaptive_member_range(bank->follow, bank->follow, count);
     return mask;
@@ -93,14 +89,14 @@ static inline int adaptive_choose(const AdaptiveBank *bank, int i, int current, 
                        : adaptive_running(bank, i, current) ? members[current].stats.ranking[rank]
                                                             : INFINITY;
     const int candidate = member < sta ? *best : ADAPTIVE_SUPER_TWISTING;
-    return (member < sta ? member : sta) < ADAPTIVE_HYSTERESIS * now ? candidate : current;
+    return (member < sta ? member : sta) < bank->tuning.hysteresis * now ? candidate : current;
 }
 
 /* Saturation: the super-twisting injection saturates in at least
  * ADAPTIVE_SATURATION_LIMIT of the steps (the perturbation outruns alpha1). */
 static inline int adaptive_saturating(const AdaptiveBank *bank, int i)
 {
-    return bank->sta_saturation[i] >= ADAPTIVE_SATURATION_LIMIT;
+    return bank->sta_saturation[i] >= bank->tuning.saturation_limit;
 }
 
 /* Exact data: unless it saturates, the deadbeat super-twisting corrector that
@@ -109,7 +105,7 @@ static inline int adaptive_exact_data(const AdaptiveBank *bank, int i)
 {
     if (adaptive_saturating(bank, i)) return 0;
     const double smallest = bank->member[i][adaptive_quietest_member(bank, i)].stats.mean_square;
-    return bank->sta[i].mean_square < ADAPTIVE_EXACT_RATIO * smallest;
+    return bank->sta[i].mean_square < bank->tuning.exact_ratio * smallest;
 }
 
 /* Velocity candidate: the member of the smallest one-step innovation mean square
@@ -137,8 +133,8 @@ static inline int adaptive_velocity_choice(const AdaptiveBank *bank, int i, int 
     const double c = adaptive_member_at(bank, i, candidate)->stats.ranking[ADAPTIVE_RANK_VELOCITY];
     const double st = bank->sta[i].ranking[ADAPTIVE_RANK_VELOCITY];
     if (selected == ADAPTIVE_SUPER_TWISTING)
-        return c < ADAPTIVE_HYSTERESIS * st ? candidate : selected;
-    return st < ADAPTIVE_HYSTERESIS * c ? ADAPTIVE_SUPER_TWISTING : candidate;
+        return c < bank->tuning.hysteresis * st ? candidate : selected;
+    return st < bank->tuning.hysteresis * c ? ADAPTIVE_SUPER_TWISTING : candidate;
 }
 
 /* Perturbation: the perturbation ranking; a super-twisting observer whose
@@ -192,7 +188,7 @@ static inline int adaptive_new_centre(const AdaptiveBank *bank, int i)
             best = j;
     const int due = bank->sta[i].velocity_samples > 0.0 &&
                     (bank->center[i] < 0 || members[best].stats.ranking[ADAPTIVE_RANK_VELOCITY] <
-                                                ADAPTIVE_HYSTERESIS *
+                                                bank->tuning.hysteresis *
                                                     members[c].stats.ranking[ADAPTIVE_RANK_VELOCITY]);
     return due ? best : -1;
 }

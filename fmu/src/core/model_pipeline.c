@@ -45,7 +45,7 @@ int mp_init(ModelPipeline *p, const TermProgram *program, const double alpha1[],
         sto_init(&p->obs[g], mp_group_size(n, g), p->h, alpha1 + first, alpha2 + first,
                  MP_INJECTION_TAU, y + first, zero);
         sto_configure(&p->obs[g], (StoScheme)p->scheme, MP_CONVERGENCE_WINDOW);
-        if (p->scheme == STO_SCHEME_ADAPTIVE) adaptive_init(&p->bank[g], p->h);
+        if (p->scheme == STO_SCHEME_ADAPTIVE) adaptive_init(&p->bank[g], p->h, NULL);
     }
     p->gain = p->tau_identifier > 0.0 ? -expm1(-p->h / p->tau_identifier) : 1.0;
     p->warm_up = (int)fmin(ceil(MP_WARM_UP * p->tau_identifier / p->h), 1e9);

@@ -87,34 +87,75 @@ static AdaptiveGains steady_state_gains(double h, double omega)
     return g;
 }
 
-void adaptive_init(AdaptiveBank *bank, double h)
+AdaptiveTuning adaptive_default_tuning(void)
+{
+    const AdaptiveTuning tuning = {
+        .lowest_bandwidth = ADAPTIVE_LOWEST_BANDWIDTH, .highest_bandwidth = ADAPTIVE_HIGHEST_BANDWIDTH,
+        .ratio = ADAPTIVE_RATIO, .window = ADAPTIVE_WINDOW, .secant_time = ADAPTIVE_SECANT_TIME,
+        .start_time = ADAPTIVE_START_TIME, .hysteresis = ADAPTIVE_HYSTERESIS,
+        .exact_ratio = ADAPTIVE_EXACT_RATIO, .saturation_limit = ADAPTIVE_SATURATION_LIMIT,
+        .averaging = ADAPTIVE_AVERAGING, .settled = ADAPTIVE_SETTLED,
+        .min_samples = ADAPTIVE_MIN_SAMPLES, .reach_slower = ADAPTIVE_REACH_SLOWER,
+        .reach_faster = ADAPTIVE_REACH_FASTER};
+    return tuning;
+}
+
+const char *adaptive_tuning_problem(const AdaptiveTuning *t)
+{
+    if (!(t->lowest_bandwidth > 0.0 && isfinite(t->lowest_bandwidth)))
+        return "lowest_bandwidth must be positive and finite";
+    if (!(t->highest_bandwidth > 0.0 && isfinite(t->highest_bandwidth)))
+        return "highest_bandwidth must be positive and finite";
+    if (!(t->ratio > 1.0 && isfinite(t->ratio))) return "ratio must exceed 1";
+    if (!(t->window > 0.0 && isfinite(t->window))) return "window must be positive and finite";
+    if (!(t->secant_time > 0.0 && isfinite(t->secant_time)))
+        return "secant_time must be positive and finite";
+    if (!(t->start_time > 0.0 && isfinite(t->start_time)))
+        return "start_time must be positive and finite";
+    if (!(t->hysteresis > 0.0 && t->hysteresis <= 1.0)) return "hysteresis must be in (0, 1]";
+    if (!(t->exact_ratio >= 0.0 && isfinite(t->exact_ratio))) return "exact_ratio must be >= 0";
+    if (!(t->saturation_limit >= 0.0 && t->saturation_limit <= 1.0))
+        return "saturation_limit must be in [0, 1]";
+    if (!(t->averaging > 0.0 && isfinite(t->averaging))) return "averaging must be positive";
+    if (!(t->settled >= 0.0 && isfinite(t->settled))) return "settled must be >= 0";
+    if (t->min_samples < 0) return "min_samples must be >= 0";
+    if (t->reach_slower < 1) return "reach_slower must be >= 1 (the candidate takes the member "
+                                    "below the centre)";
+    if (t->reach_faster < 0) return "reach_faster must be >= 0";
+    return NULL;
+}
+
+int adaptive_init(AdaptiveBank *bank, double h, const AdaptiveTuning *tuning)
 {
     memset(bank, 0, sizeof *bank);
-    bank->gain = h < ADAPTIVE_WINDOW ? h / ADAPTIVE_WINDOW : 1.0;
-    const double stride = ceil(ADAPTIVE_SECANT_TIME / (ADAPTIVE_SLOTS * h));
+    const int valid = !tuning || !adaptive_tuning_problem(tuning);
+    bank->tuning = valid && tuning ? *tuning : adaptive_default_tuning();
+    const AdaptiveTuning *t = &bank->tuning;
+    bank->gain = h < t->window ? h / t->window : 1.0;
+    const double stride = ceil(t->secant_time / (ADAPTIVE_SLOTS * h));
     bank->stride = stride > ADAPTIVE_MAX_STRIDE ? ADAPTIVE_MAX_STRIDE : stride < 1.0 ? 1 : (int)stride;
     bank->span = bank->stride * ADAPTIVE_SLOTS * h;
     bank->velocity_gain = fmin(1.0, bank->gain * bank->stride);
-    const double start = ceil(ADAPTIVE_START_TIME / h);
+    const double start = ceil(t->start_time / h);
     bank->start_limit = start > 4e9 ? 4000000000u : start < 1.0 ? 1u : (unsigned)start;
-    for (double omega = ADAPTIVE_LOWEST_BANDWIDTH;
-         omega * h <= ADAPTIVE_HIGHEST_BANDWIDTH && bank->count < ADAPTIVE_MAX_MEMBERS;
-         omega *= ADAPTIVE_RATIO)
+    for (double omega = t->lowest_bandwidth;
+         omega * h <= t->highest_bandwidth && bank->count < ADAPTIVE_MAX_MEMBERS; omega *= t->ratio)
     {
         bank->gains[bank->count] = steady_state_gains(h, omega);
-        bank->gains[bank->count++].publish_gain = -expm1(-2.0 * h * omega / ADAPTIVE_AVERAGING);
+        bank->gains[bank->count++].publish_gain = -expm1(-2.0 * h * omega / t->averaging);
     }
     for (int f = 0; bank->count > 0 && f <= (bank->count - 1) * ADAPTIVE_FINE; ++f)
         bank->fine[f] = f % ADAPTIVE_FINE == 0
                             ? bank->gains[f / ADAPTIVE_FINE]
-                            : steady_state_gains(h, ADAPTIVE_LOWEST_BANDWIDTH *
-                                                        pow(ADAPTIVE_RATIO, (double)f / ADAPTIVE_FINE));
+                            : steady_state_gains(h, t->lowest_bandwidth *
+                                                        pow(t->ratio, (double)f / ADAPTIVE_FINE));
     for (int i = 0; i < STO_MAX_DOF; ++i) {
         bank->selected[i] = bank->published[i] = bank->perturbation[i] = ADAPTIVE_SUPER_TWISTING;
         bank->center[i] = -1;
         for (int s = 0; s < ADAPTIVE_ZOOM; ++s) bank->zoom_index[i][s] = -1;
     }
     bank->follow = ADAPTIVE_SUPER_TWISTING;
+    return valid;
 }
 
 /* The super-twisting corrector's innovation variance per unit R on white
@@ -300,7 +341,7 @@ static void step_members(AdaptiveBank *bank, int i, unsigned running, double y, 
         const AdaptiveGains *gj = &bank->gains[j];
         const double r = member_step(m, gj, y, a, h, h2);
         weigh(&m->stats.mean_square, &m->stats.samples, r * r, gain);
-        /* xi averaged over ADAPTIVE_AVERAGING of the member's time constants
+        /* xi averaged over `averaging` of the member's time constants
          * 1/omega, in two first-order stages of half that (less noise for the
          * same delay), at least over tau */
         const double averaging = gj->publish_gain < g ? gj->publish_gain : g;
@@ -385,7 +426,7 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                 integrate_nominal(&bank->secant[i], a_sta, h, h2);
                 step_members(bank, i, running, y[i], a[i], h, h2, g,
                              stride_start ? &measured : NULL, tick);
-                if (stride_start && age >= ADAPTIVE_MIN_SAMPLES) {
+                if (stride_start && age >= (unsigned)bank->tuning.min_samples) {
                     const int centre = adaptive_new_centre(bank, i);
                     if (centre >= 0) selected = recentre(bank, i, centre, selected);
                     const AdaptiveSelection choice = adaptive_select(bank, i, selected, source);
@@ -403,7 +444,7 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                  * converged: its finite-time, bounded reaching phase beats a
                  * linear transient.  On quantized data it may not converge
                  * for seconds (12-bit, 10 kHz: 1.3 s, velocity error 0.2): the
-                 * members start after ADAPTIVE_START_TIME then. */
+                 * members start after the tuning's start_time then. */
                 for (int j = 0; j < bank->count; ++j) start_member(&members[j], trace, i, k, a[i]);
                 memset(&bank->sta[i], 0, sizeof bank->sta[i]);
                 bank->started[i] = 1;
@@ -483,8 +524,8 @@ void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank)
 int adaptive_settled(const AdaptiveBank *bank, int n)
 {
     for (int i = 0; i < n; ++i)
-        if (!bank->started[i] || bank->sta[i].samples * bank->gain < ADAPTIVE_SETTLED ||
-            bank->sta[i].velocity_samples * bank->velocity_gain < ADAPTIVE_SETTLED)
+        if (!bank->started[i] || bank->sta[i].samples * bank->gain < bank->tuning.settled ||
+            bank->sta[i].velocity_samples * bank->velocity_gain < bank->tuning.settled)
             return 0;
     return 1;
 }

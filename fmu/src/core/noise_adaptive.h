@@ -87,6 +87,26 @@
 #define ADAPTIVE_ZOOM (ADAPTIVE_FINE - 1) /* zoom members below the centre */
 #define ADAPTIVE_MAX_FINE ((ADAPTIVE_MAX_MEMBERS - 1) * ADAPTIVE_FINE + 1)
 
+/* The bank's tuning: the values of tuning.h's table (adaptive_default_tuning) unless
+ * a caller sets others (a study of one rule, a test).  Array sizes (ADAPTIVE_FINE,
+ * ADAPTIVE_SLOTS, ADAPTIVE_PERTURBATION_SPANS) are not tuning: they stay compile-time. */
+typedef struct {
+    double lowest_bandwidth;  /* [rad/s] ADAPTIVE_LOWEST_BANDWIDTH */
+    double highest_bandwidth; /* [1/h] ADAPTIVE_HIGHEST_BANDWIDTH */
+    double ratio;             /* ADAPTIVE_RATIO, > 1 */
+    double window;            /* [s] ADAPTIVE_WINDOW */
+    double secant_time;       /* [s] ADAPTIVE_SECANT_TIME */
+    double start_time;        /* [s] ADAPTIVE_START_TIME */
+    double hysteresis;        /* ADAPTIVE_HYSTERESIS, in (0, 1] */
+    double exact_ratio;       /* ADAPTIVE_EXACT_RATIO */
+    double saturation_limit;  /* ADAPTIVE_SATURATION_LIMIT */
+    double averaging;         /* ADAPTIVE_AVERAGING */
+    double settled;           /* ADAPTIVE_SETTLED */
+    int min_samples;          /* ADAPTIVE_MIN_SAMPLES */
+    int reach_slower;         /* ADAPTIVE_REACH_SLOWER, >= 1 */
+    int reach_faster;         /* ADAPTIVE_REACH_FASTER, >= 0 */
+} AdaptiveTuning;
+
 /* Gains of one linear member. */
 typedef struct {
     double omega;     /* bandwidth [rad/s] */
@@ -133,12 +153,13 @@ typedef struct {
 } AdaptiveMember;
 
 typedef struct {
+    AdaptiveTuning tuning;
     int count;                         /* linear members */
-    double gain;                       /* h / ADAPTIVE_WINDOW */
+    double gain;                       /* h / window */
     int stride;                        /* steps between the velocity comparisons */
     double span;                       /* [s] of a secant: ADAPTIVE_SLOTS strides */
     double velocity_gain;              /* the window's gain per comparison */
-    unsigned start_limit;              /* ADAPTIVE_START_TIME in steps */
+    unsigned start_limit;              /* start_time in steps */
     AdaptiveGains gains[ADAPTIVE_MAX_MEMBERS];
     AdaptiveGains fine[ADAPTIVE_MAX_FINE]; /* bandwidths ADAPTIVE_RATIO^(1/ADAPTIVE_FINE) apart:
                                             * fine[j ADAPTIVE_FINE] = gains[j] */
@@ -169,8 +190,16 @@ typedef struct {
     double position[STO_MAX_DOF];        /* and the published observer's corrected position */
 } AdaptiveBank;
 
-/* Gains of the members for step h (steady-state Riccati, at initialization). */
-void adaptive_init(AdaptiveBank *bank, double h);
+/* tuning.h's values. */
+AdaptiveTuning adaptive_default_tuning(void);
+
+/* What is wrong with a tuning (NULL: nothing). */
+const char *adaptive_tuning_problem(const AdaptiveTuning *tuning);
+
+/* Gains of the members for step h (steady-state Riccati, at initialization), with
+ * the tuning (NULL: the defaults).  Returns 0, with the defaults taken, if the
+ * tuning has a problem. */
+int adaptive_init(AdaptiveBank *bank, double h, const AdaptiveTuning *tuning);
 
 /* The scheme's run: the super-twisting observer and the members over `count`
  * steps with y held; the trace gets the selected member's values. */

@@ -134,7 +134,7 @@ int op_init(ObserverPipeline *p, const double alpha1[], const double alpha2[],
 {
     sto_init(&p->obs, p->n, p->h, alpha1, alpha2, p->tau, x1_hat0, x2_hat0);
     sto_configure(&p->obs, (StoScheme)p->scheme, p->convergence_window);
-    adaptive_init(&p->bank, p->h);
+    adaptive_init(&p->bank, p->h, NULL);
     memset(p->shadow, 0, sizeof p->shadow);
     identifier_init(&p->id, (IdentifierKind)p->identifier, p->n, p->m, p->h, p->rho, p->R);
     if (p->identifier == IDENTIFIER_MFF && p->identifier_form == OP_FORM_INFORMATION &&

@@ -2,7 +2,8 @@
  * unit.  The reasoning behind the values is in docs/design/; the mechanisms
  * they tune are described in the header of the algorithm named in each group.
  * Array sizes and limits of the data structures are not tuning and stay with
- * their structures. */
+ * their structures.  The bank's values are the defaults of its run-time tuning
+ * (AdaptiveTuning, noise_adaptive.h), which a caller may replace to study a rule. */
 #ifndef TUNING_H
 #define TUNING_H
 

@@ -24,7 +24,8 @@
 /* An AdaptiveBank (noise_adaptive.h); its indices below its member count are
  * adaptive_valid's to check. */
 #define BANK_STATE_FIELDS(T, b)                                                                  \
-    DERIVED_FIELD(T, b.count), DERIVED_FIELD(T, b.gain), DERIVED_FIELD(T, b.stride),            \
+    DERIVED_FIELD(T, b.tuning), DERIVED_FIELD(T, b.count), DERIVED_FIELD(T, b.gain),            \
+    DERIVED_FIELD(T, b.stride),                                                                  \
     DERIVED_FIELD(T, b.span), DERIVED_FIELD(T, b.velocity_gain), DERIVED_FIELD(T, b.start_limit), \
     DERIVED_FIELD(T, b.gains), DERIVED_FIELD(T, b.fine),                                         \
     STATE_FIELD(T, b.zoom_index, FIELD_INT, -1, (ADAPTIVE_MAX_MEMBERS - 1) * ADAPTIVE_FINE),     \

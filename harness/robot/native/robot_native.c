@@ -160,7 +160,7 @@ int rn_observe_adaptive(AdaptiveBank *bank, int n, long count, double h, const d
         SuperTwistingObserver o;
         sto_init(&o, 1, h, &alpha1, &alpha2, tau, &y0, &zero);
         sto_configure(&o, STO_SCHEME_ADAPTIVE, 0.05); /* the FMU's convergence window */
-        adaptive_init(bank, h);
+        adaptive_init(bank, h, NULL);
         StoTrace trace;
         for (long k = 0; k < count; ++k) {
             const StoAcceleration a = {.held = nominal ? nominal[k * n + i] : 0.0};

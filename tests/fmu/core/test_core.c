@@ -1017,6 +1017,7 @@ static int adaptive_rules(void)
     const int ST = ADAPTIVE_SUPER_TWISTING, P = ADAPTIVE_RANK_PERTURBATION,
               V = ADAPTIVE_RANK_VELOCITY;
     AdaptiveMember *m = bank->member[0];
+    bank->tuning = adaptive_default_tuning();
     bank->count = 3;
     for (int s = 0; s < ADAPTIVE_ZOOM; ++s) bank->zoom_index[0][s] = -1;
     bank->center[0] = -1;
@@ -1126,9 +1127,59 @@ static int adaptive_rules(void)
     failed += check(adaptive_choose(bank, 0, 0, P, &best) == 3,
                     "a paused current member gives way to the best running one");
 
+    /* a tuning that runs every member: the reach covers the bank */
+    bank->tuning.reach_slower = bank->tuning.reach_faster = ADAPTIVE_MAX_MEMBERS;
+    running = (int)adaptive_running_mask(bank, 0);
+    failed += check(running == 0x7f, "a reach of the whole bank runs every member (%#x)", running);
+    bank->tuning = adaptive_default_tuning();
+
     bank->count = 0;
     const AdaptiveSelection none = adaptive_select(bank, 0, 1, 1);
     failed += check(none.selected == ST && none.source == ST, "no member fits: super-twisting");
+    free(bank);
+    return failed;
+}
+
+/* The bank's tuning: tuning.h's table by default, another one honoured, a bad one
+ * named and refused (the defaults taken). */
+static int adaptive_tuning(void)
+{
+    AdaptiveBank *bank = calloc(1, sizeof *bank);
+    if (!bank) return 1;
+    const AdaptiveTuning defaults = adaptive_default_tuning();
+    int failed = check(adaptive_tuning_problem(&defaults) == NULL, "the defaults have no problem");
+    int ok = adaptive_init(bank, 1e-3, NULL);
+    failed += check(ok && bank->count == 10, "1 kHz: ten members 2 rad/s to 0.5/h, 1.8 apart (%d)",
+                    bank->count);
+    failed += check(bank->tuning.hysteresis == ADAPTIVE_HYSTERESIS, "with tuning.h's values");
+    adaptive_init(bank, 1e-4, NULL);
+    failed += check(bank->count == 14, "10 kHz: 14 members (%d)", bank->count);
+
+    AdaptiveTuning coarse = defaults;
+    coarse.ratio = ADAPTIVE_RATIO * ADAPTIVE_RATIO;
+    ok = adaptive_init(bank, 1e-4, &coarse);
+    failed += check(ok && bank->count == 7 && bank->tuning.ratio == coarse.ratio,
+                    "a ratio of 1.8^2 is honoured: 7 members (%d)", bank->count);
+    failed += check(fabs(bank->gains[1].omega - 2.0 * coarse.ratio) < 1e-12,
+                    "the second member at 2 * 3.24 rad/s (%g)", bank->gains[1].omega);
+
+    AdaptiveTuning bad = defaults;
+    bad.reach_slower = 0;
+    const char *problem = adaptive_tuning_problem(&bad);
+    failed += check(problem && strstr(problem, "reach_slower"), "reach_slower 0: %s",
+                    problem ? problem : "(none)");
+    ok = adaptive_init(bank, 1e-4, &bad);
+    failed += check(!ok && bank->tuning.reach_slower == ADAPTIVE_REACH_SLOWER,
+                    "refused: the defaults taken");
+    bad = defaults;
+    bad.ratio = 1.0;
+    problem = adaptive_tuning_problem(&bad);
+    failed += check(problem && strstr(problem, "ratio"), "ratio 1: %s", problem ? problem : "(none)");
+    bad = defaults;
+    bad.hysteresis = NAN;
+    problem = adaptive_tuning_problem(&bad);
+    failed += check(problem && strstr(problem, "hysteresis"), "hysteresis NaN: %s",
+                    problem ? problem : "(none)");
     free(bank);
     return failed;
 }
@@ -1152,6 +1203,7 @@ int main(int argc, char **argv)
         {"anchor_solve_spread", anchor_solve_spread},
         {"pipeline_identifies_a_joint", pipeline_identifies_a_joint},
         {"adaptive_rules", adaptive_rules},
+        {"adaptive_tuning", adaptive_tuning},
     };
     return run_cases("test_core", cases, sizeof cases / sizeof cases[0], argc, argv);
 }
