@@ -64,9 +64,10 @@ static inline int adaptive_running(const AdaptiveBank *bank, int i, int j)
 static inline int adaptive_quietest_member(const AdaptiveBank *bank, int i)
 {
     const AdaptiveMember *members = bank->member[i];
+    const unsigned running = adaptive_running_mask(bank, i);
     int best = -1;
     for (int j = 0; j < bank->count; ++j)
-        if (adaptive_running(bank, i, j) &&
+        if ((running >> j & 1u) &&
             (best < 0 || members[j].stats.mean_square < members[best].stats.mean_square))
             best = j;
     return best;
@@ -79,15 +80,17 @@ static inline int adaptive_quietest_member(const AdaptiveBank *bank, int i)
 static inline int adaptive_choose(const AdaptiveBank *bank, int i, int current, int rank, int *best)
 {
     const AdaptiveMember *members = bank->member[i];
+    const unsigned running = adaptive_running_mask(bank, i);
     *best = -1;
     for (int j = 0; j < bank->count; ++j)
-        if (adaptive_running(bank, i, j) &&
+        if ((running >> j & 1u) &&
             (*best < 0 || members[j].stats.ranking[rank] < members[*best].stats.ranking[rank]))
             *best = j;
+    if (*best < 0) return current; /* no member runs (none fits the step) */
     const double sta = bank->sta[i].ranking[rank], member = members[*best].stats.ranking[rank];
     const double now = current == ADAPTIVE_SUPER_TWISTING ? sta
-                       : adaptive_running(bank, i, current) ? members[current].stats.ranking[rank]
-                                                            : INFINITY;
+                       : (running >> current & 1u) ? members[current].stats.ranking[rank]
+                                                   : INFINITY;
     const int candidate = member < sta ? *best : ADAPTIVE_SUPER_TWISTING;
     return (member < sta ? member : sta) < bank->tuning.hysteresis * now ? candidate : current;
 }
@@ -180,11 +183,12 @@ static inline int adaptive_stand_in(const AdaptiveBank *bank, int i, int selecte
 static inline int adaptive_new_centre(const AdaptiveBank *bank, int i)
 {
     const AdaptiveMember *members = bank->member[i];
+    const unsigned running = adaptive_running_mask(bank, i);
     const int c = bank->center[i] < 0 ? 0 : bank->center[i];
     int best = c;
     for (int j = 0; j < bank->count; ++j)
-        if (adaptive_running(bank, i, j) && members[j].stats.ranking[ADAPTIVE_RANK_VELOCITY] <
-                                                members[best].stats.ranking[ADAPTIVE_RANK_VELOCITY])
+        if ((running >> j & 1u) && members[j].stats.ranking[ADAPTIVE_RANK_VELOCITY] <
+                                       members[best].stats.ranking[ADAPTIVE_RANK_VELOCITY])
             best = j;
     const int due = bank->sta[i].velocity_samples > 0.0 &&
                     (bank->center[i] < 0 || members[best].stats.ranking[ADAPTIVE_RANK_VELOCITY] <

@@ -314,10 +314,6 @@ static inline double expected_sign(double v_hat, double sigma)
     return sigma > 0.0 ? erf(v_hat / (1.4142135623730951 * sigma)) : sto_sign(v_hat);
 }
 
-/* One step of DOF i's members and zoom members: each predicts, corrects and
- * weighs its innovation; the members average their xi for the published
- * perturbation; at a stride's start (measured given) each is compared with
- * the measured secants. */
 /* The index of the lowest set bit of a nonzero mask. */
 static inline int lowest_bit(unsigned mask)
 {
@@ -330,6 +326,10 @@ static inline int lowest_bit(unsigned mask)
 #endif
 }
 
+/* One step of DOF i's members and zoom members: each predicts, corrects and
+ * weighs its innovation; the members average their xi for the published
+ * perturbation; at a stride's start (measured given) each is compared with
+ * the measured secants. */
 static void step_members(AdaptiveBank *bank, int i, unsigned running, double y, StoAcceleration a,
                          double h, double h2, double g, const AdaptiveMeasured *measured,
                          unsigned tick)
@@ -513,10 +513,12 @@ void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank)
          * the members estimates R (measured 3.5 % low on white noise). */
         double ratio = mean_square / variance;
         if (o->primed && bank->started[i])
-            for (int j = 0; j < bank->count; ++j)
-                if (adaptive_running(bank, i, j))
-                    ratio = fmin(ratio, bank->member[i][j].stats.mean_square /
+            for (unsigned running = adaptive_running_mask(bank, i); running;
+                 running &= running - 1u) {
+                const int j = lowest_bit(running);
+                ratio = fmin(ratio, bank->member[i][j].stats.mean_square /
                                         bank->gains[j].innovation_variance);
+            }
         bank->noise_std[i] = sqrt(ratio);
     }
 }
