@@ -76,6 +76,7 @@ static inline void record(DofState *s, double x2_before, double g, double alpha1
 void implicit_run(SuperTwistingObserver *o, const double y[], const StoAcceleration a[], int count,
                   StoTrace *trace)
 {
+    ImplicitState *is = &o->implicit;
     const double h = o->h, h2 = o->h_squared, inverse_h2 = o->inverse_h_squared;
     const double g = o->filter_gain, rate_gain = o->rate_gain;
     for (int i = 0; i < o->n; ++i) {
@@ -83,13 +84,13 @@ void implicit_run(SuperTwistingObserver *o, const double y[], const StoAccelerat
         const StoAcceleration ai = a[i];
         /* a nominal model with a Coulomb term has its level learned */
         const int learning = ai.coulomb > 0.0;
-        DofState s = {o->z1[i], o->mid_velocity[i], o->a_free[i], o->a_mean[i], o->injection[i],
-                      o->z_filtered[i], o->switching_rate[i], o->previous_sign[i], o->x2_now[i],
-                      o->x2_previous[i], learning ? o->coulomb_learned[i] : 0.0,
-                      o->reversal_injection[i], o->reversal_age[i],
-                      o->injection_before[i][0], o->injection_before[i][1], o->smooth_samples[i]};
+        DofState s = {is->z1[i], is->mid_velocity[i], is->a_free[i], is->a_mean[i], is->injection[i],
+                      is->filtered[i], o->switching_rate[i], o->previous_sign[i], is->x2_now[i],
+                      is->x2_previous[i], learning ? is->coulomb_learned[i] : 0.0,
+                      is->reversal_injection[i], is->reversal_age[i],
+                      is->injection_before[i][0], is->injection_before[i][1], is->smooth_samples[i]};
         int k = 0;
-        if (!o->primed) { /* the initial estimates; the leapfrog starts half a step back */
+        if (!is->primed) { /* the initial estimates; the leapfrog starts half a step back */
             s.z1 = o->x1_hat[i];
             s.x2_now = s.x2_previous = o->x2_hat[i];
             const double a0 = sto_acceleration(ai, s.x2_now, sto_sign(s.x2_now));
@@ -117,40 +118,41 @@ void implicit_run(SuperTwistingObserver *o, const double y[], const StoAccelerat
             trace->switching_rate[i][k] = s.rate;
             record(&s, x2_before, g, alpha1, trace, i, k);
         }
-        o->z1[i] = s.z1;
-        o->mid_velocity[i] = s.mid;
-        o->a_free[i] = s.a_free;
-        o->coulomb[i] = ai.coulomb;
-        o->point[i] = ai.point;
-        o->a_mean[i] = s.a_mean;
-        o->injection[i] = s.v;
-        o->z_eq[i] = trace->z_eq[i][count - 1];
-        o->z_filtered[i] = s.z_filtered;
+        is->z1[i] = s.z1;
+        is->mid_velocity[i] = s.mid;
+        is->a_free[i] = s.a_free;
+        is->coulomb[i] = ai.coulomb;
+        is->point[i] = ai.point;
+        is->a_mean[i] = s.a_mean;
+        is->injection[i] = s.v;
+        o->z_eq[i] = is->published[i] = trace->z_eq[i][count - 1];
+        o->z_filtered[i] = is->filtered[i] = s.z_filtered;
         o->switching_rate[i] = s.rate;
         o->previous_sign[i] = s.previous_sign;
-        o->x2_now[i] = s.x2_now;
-        o->x2_previous[i] = s.x2_previous;
-        o->coulomb_learned[i] = s.learned;
-        o->reversal_injection[i] = s.reversal_injection;
-        o->reversal_age[i] = s.reversal_age;
-        o->injection_before[i][0] = s.v1;
-        o->injection_before[i][1] = s.v2;
-        o->smooth_samples[i] = s.smooth;
+        is->x2_now[i] = s.x2_now;
+        is->x2_previous[i] = s.x2_previous;
+        is->coulomb_learned[i] = s.learned;
+        is->reversal_injection[i] = s.reversal_injection;
+        is->reversal_age[i] = s.reversal_age;
+        is->injection_before[i][0] = s.v1;
+        is->injection_before[i][1] = s.v2;
+        is->smooth_samples[i] = s.smooth;
     }
-    o->primed = 1;
+    is->primed = 1;
 }
 
 void implicit_outputs(SuperTwistingObserver *o)
 {
-    if (!o->primed) return; /* still the initial estimates */
+    ImplicitState *is = &o->implicit;
+    if (!is->primed) return; /* still the initial estimates */
     const double h = o->h;
     for (int i = 0; i < o->n; ++i) {
-        const double v = o->injection[i];
-        const double dv = o->smooth_samples[i] >= IMPLICIT_SMOOTH_SAMPLES
-                              ? 0.5 * (v - o->injection_before[i][1])
+        const double v = is->injection[i];
+        const double dv = is->smooth_samples[i] >= IMPLICIT_SMOOTH_SAMPLES
+                              ? 0.5 * (v - is->injection_before[i][1])
                               : 0.0;
-        implicit_predict(o->z1[i], o->mid_velocity[i], o->a_mean[i], o->a_free[i] + o->point[i],
-                         o->coulomb[i] + o->coulomb_learned[i], v, dv, h, &o->x1_hat[i],
+        implicit_predict(is->z1[i], is->mid_velocity[i], is->a_mean[i], is->a_free[i] + is->point[i],
+                         is->coulomb[i] + is->coulomb_learned[i], v, dv, h, &o->x1_hat[i],
                          &o->x2_hat[i]);
     }
 }

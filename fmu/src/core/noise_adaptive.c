@@ -393,14 +393,8 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                   const StoAcceleration a[], int count, StoTrace *trace)
 {
     const double h = o->h, h2 = o->h_squared, g = o->filter_gain, gain = bank->gain;
-    for (int i = 0; i < o->n; ++i) {
-        o->z_eq[i] = bank->sta_v[i];
-        o->z_filtered[i] = bank->sta_filtered[i];
-    }
     implicit_run(o, y, a, count, trace);
     for (int i = 0; i < o->n; ++i) {
-        bank->sta_v[i] = o->z_eq[i];
-        bank->sta_filtered[i] = o->z_filtered[i];
         AdaptiveMember *members = bank->member[i];
         int selected = bank->selected[i], source = bank->perturbation[i];
         int published = bank->published[i];
@@ -487,32 +481,32 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
 
 void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank)
 {
-    for (int i = 0; i < o->n; ++i) o->z_eq[i] = bank->sta_v[i];
     implicit_outputs(o);
     const double h = o->h;
     for (int i = 0; i < o->n; ++i) {
         const int selected = bank->selected[i], published = bank->published[i];
         double mean_square = bank->sta[i].mean_square, variance = STA_INNOVATION_VARIANCE;
         bank->bandwidth[i] = 1.0 / h;
-        if (published != ADAPTIVE_SUPER_TWISTING && o->primed) {
+        if (published != ADAPTIVE_SUPER_TWISTING && o->implicit.primed) {
             const AdaptiveMember *m = adaptive_member_at(bank, i, published);
-            implicit_predict(m->z1, m->mid, m->a_mean, m->a_free + o->point[i], o->coulomb[i],
-                             m->xi, 0.0, h, &o->x1_hat[i], &o->x2_hat[i]);
+            implicit_predict(m->z1, m->mid, m->a_mean, m->a_free + o->implicit.point[i],
+                             o->implicit.coulomb[i], m->xi, 0.0, h, &o->x1_hat[i], &o->x2_hat[i]);
             bank->bandwidth[i] = adaptive_gains_at(bank, i, published)->omega;
         }
-        if (selected != ADAPTIVE_SUPER_TWISTING && o->primed) {
+        if (selected != ADAPTIVE_SUPER_TWISTING && o->implicit.primed) {
             mean_square = adaptive_member_at(bank, i, selected)->stats.mean_square;
             variance = adaptive_gains_at(bank, i, selected)->innovation_variance;
         }
-        if (bank->perturbation[i] != ADAPTIVE_SUPER_TWISTING && o->primed)
-            o->z_eq[i] = bank->member[i][bank->perturbation[i]].xi;
+        o->z_eq[i] = bank->perturbation[i] != ADAPTIVE_SUPER_TWISTING && o->implicit.primed
+                         ? bank->member[i][bank->perturbation[i]].xi
+                         : o->implicit.published[i];
         o->z_filtered[i] = bank->z_filtered[i];
         /* A member faster than the data need sees mostly the noise in its
          * innovations, one slower sees its lag too: the smallest ratio of
          * mean square to steady-state innovation variance (per unit R) over
          * the members estimates R (measured 3.5 % low on white noise). */
         double ratio = mean_square / variance;
-        if (o->primed && bank->started[i])
+        if (o->implicit.primed && bank->started[i])
             for (unsigned running = adaptive_running_mask(bank, i); running;
                  running &= running - 1u) {
                 const int j = lowest_bit(running);

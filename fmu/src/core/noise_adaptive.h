@@ -169,7 +169,6 @@ typedef struct {
     int center[STO_MAX_DOF];             /* the member they surround (-1: none yet) */
     AdaptiveStatistics sta[STO_MAX_DOF]; /* the super-twisting observer's */
     double sta_saturation[STO_MAX_DOF];  /* its rate of saturated steps (window as sta) */
-    double sta_v[STO_MAX_DOF];           /* its injection (o->z_eq publishes the selected one's) */
     AdaptiveSecant secant[STO_MAX_DOF];
     int started[STO_MAX_DOF];            /* the members run (the observer has converged) */
     unsigned waited[STO_MAX_DOF];        /* steps before they started */
@@ -183,7 +182,6 @@ typedef struct {
     int perturbation[STO_MAX_DOF];       /* whose injection is published (adaptive_select) */
     int follow;                          /* the member the identifier follows */
     double z_filtered[STO_MAX_DOF];      /* the published perturbation */
-    double sta_filtered[STO_MAX_DOF];    /* the super-twisting injection through the tau filter */
     double noise_std[STO_MAX_DOF];       /* estimated measurement noise [rad] */
     double bandwidth[STO_MAX_DOF];       /* omega of the published member (1/h: super-twisting) */
     double velocity[STO_MAX_DOF];        /* the published velocity at the last sample */

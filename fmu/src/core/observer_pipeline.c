@@ -104,8 +104,8 @@ static void update_model(ObserverPipeline *p)
      * was instead of relearning it over the next reversals. */
     const double coulomb = p->c_model[JOINT_VELOCITY_SIGN];
     if (coulomb != coulomb_before)
-        p->obs.coulomb_learned[0] =
-            fmax(p->obs.coulomb_learned[0] + coulomb_before - coulomb, -coulomb);
+        p->obs.implicit.coulomb_learned[0] =
+            fmax(p->obs.implicit.coulomb_learned[0] + coulomb_before - coulomb, -coulomb);
 }
 
 int op_select(ObserverPipeline *p)

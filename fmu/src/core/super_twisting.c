@@ -23,7 +23,7 @@ void sto_init(SuperTwistingObserver *o, int n, double h, const double alpha1[],
         o->x1_hat[i] = active ? x1_hat0[i] : 0.0;
         o->x2_hat[i] = active ? x2_hat0[i] : 0.0;
         o->z_eq[i] = 0.0;
-        o->reversal_age[i] = -1;
+        o->implicit.reversal_age[i] = -1;
         o->z_filtered[i] = 0.0;
     }
 }

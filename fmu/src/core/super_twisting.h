@@ -6,13 +6,8 @@
 
 #include "tuning.h"
 
-#define STO_MAX_DOF 4
-
-typedef enum {
-    STO_SCHEME_PAPER = 1,   /* explicit Euler on (12), exactly as the paper implies */
-    STO_SCHEME_IMPLICIT = 2, /* sampling-consistent implicit step, implicit_twisting.c */
-    STO_SCHEME_ADAPTIVE = 3  /* implicit step beside linear observers, noise_adaptive.c */
-} StoScheme;
+#include "implicit_state.h"
+#include "observer_types.h"
 
 typedef struct {
     int n;                       /* degrees of freedom, 1..STO_MAX_DOF */
@@ -32,29 +27,9 @@ typedef struct {
     double switching_rate[STO_MAX_DOF];
     double previous_sign[STO_MAX_DOF];
     double rate_gain;            /* h / convergence window */
-    /* Implicit scheme only (see implicit_twisting.h). */
-    int scheme;
-    int primed;                  /* a corrected sample exists */
-    double z1[STO_MAX_DOF];      /* corrected position at the last sample */
-    double mid_velocity[STO_MAX_DOF]; /* velocity at the middle of the last interval */
-    double a_free[STO_MAX_DOF];  /* nominal acceleration of the interval that starts at the
-                                  * sample, without its Coulomb and position terms
-                                  * (implicit_advance) */
-    double coulomb[STO_MAX_DOF]; /* the nominal Coulomb level of the last run ... */
-    double point[STO_MAX_DOF];   /* ... and its position part (StoAcceleration) */
-    double injection[STO_MAX_DOF]; /* the corrector's injection (z_eq: relative to the nominal) */
-    double x2_previous[STO_MAX_DOF]; /* velocity estimate at the sample before */
-    double coulomb_learned[STO_MAX_DOF]; /* added to the nominal Coulomb level (implicit_twisting.h) */
-    double reversal_injection[STO_MAX_DOF]; /* the injection before the reversal measured ... */
-    int reversal_age[STO_MAX_DOF];           /* ... this many samples ago; -1: none */
-    double injection_before[STO_MAX_DOF][2]; /* the injections one and two samples before */
-    int smooth_samples[STO_MAX_DOF];          /* in the sliding set without a reversal, up to
-                                               * IMPLICIT_SMOOTH_SAMPLES */
-    double a_mean[STO_MAX_DOF];  /* nominal mean acceleration over the leapfrog interval */
-    double x2_now[STO_MAX_DOF];  /* velocity estimate at the current sample */
+    int scheme;                  /* StoScheme */
+    ImplicitState implicit; /* the implicit scheme's (schemes 2 and 3) */
 } SuperTwistingObserver;
-
-/* Rate of switching above which the observer counts as converged. */
 
 /* Sets gains, filter and initial estimates; z_eq and its filter start at 0. */
 void sto_init(SuperTwistingObserver *o, int n, double h, const double alpha1[],
@@ -62,40 +37,6 @@ void sto_init(SuperTwistingObserver *o, int n, double h, const double alpha1[],
 
 /* Selects the scheme and the convergence window [s] (after sto_init). */
 void sto_configure(SuperTwistingObserver *o, StoScheme scheme, double convergence_window);
-
-/* The nominal acceleration of one DOF over a run of steps, affine in its
- * velocity estimate v:  held + point - viscous v - coulomb sign(v).  held is
- * the part held over each interval (the input), point the part that is a
- * function of the measured position, a value at the sample: over the two
- * half intervals around a sample its mean is the value there, where the
- * mean of the held parts of the two intervals lagged half a sample behind
- * (1 kHz, noise-free: the gravity term's lag, c1 h/2 cos(x) v, took the
- * viscous estimate 0.5-1.3 % off).  The built-in joint uses all four; an
- * external model's acceleration F + thetabar phi is held over the run
- * (point = viscous = coulomb = 0). */
-typedef struct {
-    double held, point, viscous, coulomb;
-} StoAcceleration;
-
-/* Longest run of steps sto_run takes at once. */
-#define STO_RUN_MAX 32
-
-/* What each step of a run leaves for the identifier, per DOF and step. */
-typedef struct {
-    double velocity[STO_MAX_DOF][STO_RUN_MAX];      /* x2 estimate at the sample (the regressor's) */
-    double velocity_sign[STO_MAX_DOF][STO_RUN_MAX]; /* its sign */
-    double z_eq[STO_MAX_DOF][STO_RUN_MAX];          /* injection */
-    double z_filtered[STO_MAX_DOF][STO_RUN_MAX];    /* filtered injection */
-    /* Implicit and adaptive schemes: the super-twisting corrector's innovation
-     * (measurement minus prediction with the injection held). */
-    double innovation[STO_MAX_DOF][STO_RUN_MAX];
-    double position[STO_MAX_DOF][STO_RUN_MAX];       /* corrected position at the sample */
-    double mid_velocity[STO_MAX_DOF][STO_RUN_MAX];   /* velocity of the interval just ended */
-    double switching_rate[STO_MAX_DOF][STO_RUN_MAX]; /* the convergence detector's rate */
-    double saturated[STO_MAX_DOF][STO_RUN_MAX];      /* 1: the injection is +-alpha1 */
-    /* Adaptive scheme: the injection of the observer the identifier follows. */
-    double z_identify[STO_MAX_DOF][STO_RUN_MAX];
-} StoTrace;
 
 /* Runs `count` (1..STO_RUN_MAX) steps of the paper's explicit Euler on (12)
  * with the measurement y held, each DOF over the run; trace receives every

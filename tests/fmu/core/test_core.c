@@ -763,8 +763,8 @@ static int coulomb_level_learned(void)
         }
     }
     int failures = 0;
-    failures += check(fabs(o.coulomb_learned[0] + c) < 1e-3,
-                      "learned Coulomb level %.6f (expected %g)", o.coulomb_learned[0], -c);
+    failures += check(fabs(o.implicit.coulomb_learned[0] + c) < 1e-3,
+                      "learned Coulomb level %.6f (expected %g)", o.implicit.coulomb_learned[0], -c);
     failures += check(near < 1e-7, "max |e2| within 3 samples of a reversal %.3g (bound 1e-7)",
                       near);
     failures += check(away < 1e-8, "max |e2| elsewhere %.3g (bound 1e-8)", away);
