@@ -55,11 +55,6 @@ static inline unsigned adaptive_running_mask(const AdaptiveBank *bank, int i)
     return mask;
 }
 
-static inline int adaptive_running(const AdaptiveBank *bank, int i, int j)
-{
-    return j >= 0 && j < bank->count && (adaptive_running_mask(bank, i) >> j & 1u);
-}
-
 /* The running member of the smallest one-step innovation mean square (count > 0). */
 static inline int adaptive_quietest_member(const AdaptiveBank *bank, int i)
 {
