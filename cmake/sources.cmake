@@ -6,14 +6,14 @@
 # model's FMU ships in sources/ (the core library holds their union).
 set(STO_CORE_OBSERVER
     core/observer_pipeline.c core/observer_scheme.c core/super_twisting.c core/implicit_twisting.c core/noise_adaptive.c core/identifier.c
-    core/information_identifier.c core/block_scores.c core/gains.c)
+    core/information_identifier.c core/block_scores.c core/gains.c core/tuning.c)
 set(STO_CORE_ROBOT
     core/robot_pipeline.c core/robot_observer.c core/rigid_body.c core/regressor_identifier.c
-    core/statistics_job.c core/gains.c)
+    core/statistics_job.c core/gains.c core/tuning.c)
 # A model file's regressor as data (harness/model/program.py writes it).
 set(STO_CORE_MODEL core/model_pipeline.c core/term_program.c core/observer_scheme.c
     core/super_twisting.c core/implicit_twisting.c core/noise_adaptive.c
-    core/regressor_identifier.c core/statistics_job.c core/gains.c)
+    core/regressor_identifier.c core/statistics_job.c core/gains.c core/tuning.c)
 set(STO_CORE_SOURCES ${STO_CORE_OBSERVER} ${STO_CORE_ROBOT} ${STO_CORE_MODEL})
 list(REMOVE_DUPLICATES STO_CORE_SOURCES)
 

@@ -82,7 +82,7 @@ int main(int argc, char **argv)
     }
     ro_init(&observer, n, h, alpha1, alpha2, tau, 0.05, y, zero);
     if (ro_regression_init(&regression, &model, h, tau, 0.05, 0.02) != 0 ||
-        rri_init(&identifier, mff ? RRI_MFF : RRI_LSM, n, p, columns, NULL, h, 1e-6, 0.1) != 0)
+        rri_init(&identifier, mff ? RRI_MFF : RRI_LSM, n, p, columns, NULL, h, 1e-6, 0.1, NULL) != 0)
         return 2;
     sj_init(&statistics, p, sj_interval_steps(0.1, h), SJ_BUDGET);
     const RobotPipeline pipeline = {&observer, &regression, &identifier, &statistics};

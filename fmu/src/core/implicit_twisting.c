@@ -35,7 +35,8 @@ static inline double correct(DofState *s, double y, StoAcceleration a, double h,
 /* Learns the Coulomb level from the injection's jump over a velocity
  * reversal (see the header), after the corrector; v_before is the injection
  * before it, coulomb the nominal level. */
-static inline void learn_coulomb(DofState *s, double v_before, double coulomb, double alpha1)
+static inline void learn_coulomb(DofState *s, double v_before, double coulomb, double alpha1,
+                                 double gain)
 {
     const double sign_now = sto_sign(s->x2_now), sign_before = sto_sign(s->x2_previous);
     if (sign_now != sign_before) {
@@ -47,7 +48,7 @@ static inline void learn_coulomb(DofState *s, double v_before, double coulomb, d
         if (!(fabs(s->v) < alpha1)) return;
         /* v = -(c - cbar - learned) sign(v) + smooth: the jump is twice the level's error */
         const double error = -(s->v - s->reversal_injection) * 0.5 * sign_now;
-        const double learned = fmax(s->learned + IMPLICIT_LEARNING_GAIN * error, -coulomb);
+        const double learned = fmax(s->learned + gain * error, -coulomb);
         /* the nominal takes (learned - s->learned) sign(v) from the injection */
         s->v += (learned - s->learned) * sign_now;
         s->a_mean -= (learned - s->learned) * sign_now;
@@ -108,7 +109,7 @@ void implicit_run(SuperTwistingObserver *o, const double y[], const StoAccelerat
             const double v_before = s.v, x2_before = s.x2_previous;
             trace->innovation[i][k] = correct(&s, y[i], ai, h, h2, inverse_h2, reach, b, alpha1,
                                               rate_gain);
-            if (learning) learn_coulomb(&s, v_before, ai.coulomb, alpha1);
+            if (learning) learn_coulomb(&s, v_before, ai.coulomb, alpha1, o->learning_gain);
             s.v2 = s.v1;
             s.v1 = v_before;
             const int steady = fabs(s.v) < alpha1 && sto_sign(s.x2_now) == sto_sign(s.x2_previous);

@@ -42,7 +42,7 @@
  * change from the sample before a reversal to IMPLICIT_REVERSAL_SAMPLES after
  * it (the second differences that do not span it) is -2 (dc - learned)
  * sign(v) plus the smooth perturbation's change; the learned level moves by
- * IMPLICIT_LEARNING_GAIN of the difference, and only between injections in
+ * the learning gain (IMPLICIT_LEARNING_GAIN) of the difference, and only between injections in
  * the sliding set (exact data: on noisy data the injection saturates).  The
  * injection is published relative to the nominal level, so the identifier
  * and z_eq see the same perturbation as without learning. */

@@ -11,9 +11,12 @@
 static int dimension(const InformationIdentifier *id) { return id->drift ? 2 * id->m : id->m; }
 
 void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, double h,
-               double rho, double R, int drift)
+               double rho, double R, int drift, const StoTuning *tuning)
 {
     memset(id, 0, sizeof *id);
+    const StoTuning t = tuning ? *tuning : sto_default_tuning();
+    id->tuning = t.identifier;
+    id->gap_memory = t.leave_out.gap_memory;
     id->rows = rows;
     id->m = m;
     id->drift = drift && kind == IDENTIFIER_MFF && 2 * m <= ID_MAX_REGRESSORS;
@@ -21,17 +24,17 @@ void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, 
     id->rho = rho;
     id->lambda = kind == IDENTIFIER_MFF ? pow(R, h) : 1.0;
     id->one_minus_lambda_rho = (1.0 - id->lambda) * rho;
-    id->batch_gain = -expm1(-h / INFO_BATCH_WINDOW);
-    id->power_gain = -expm1(-h * INFO_STD_INTERVAL / INFO_POWER_WINDOW);
+    id->batch_gain = -expm1(-h / t.identifier.batch_window);
+    id->power_gain = -expm1(-h * INFO_STD_INTERVAL / t.identifier.power_window);
     id->forgetting_rate = kind == IDENTIFIER_MFF ? -log(R) : 0.0;
-    id->reference_lambda = pow(id->lambda, 1.0 / INFO_REFERENCE_MEMORY);
+    id->reference_lambda = pow(id->lambda, 1.0 / t.leave_out.reference_memory);
     id->reference_pull = (1.0 - id->reference_lambda) * rho;
-    id->rest_lambda = pow(id->lambda, 1.0 / INFO_REST_MEMORY);
+    id->rest_lambda = pow(id->lambda, 1.0 / t.leave_out.rest_memory);
     id->rest_pull = (1.0 - id->rest_lambda) * rho;
-    id->skip_threshold = INFO_SKIP_SHARE * m * (1.0 - id->reference_lambda) / h;
+    id->skip_threshold = t.leave_out.skip_share * m * (1.0 - id->reference_lambda) / h;
     /* LSM takes its scores' block increments every 32 samples */
     const double interval = id->forgetting_rate > 0.0
-                                ? INFO_ANCHOR_FORGETTING / (h * id->forgetting_rate)
+                                ? t.identifier.anchor_forgetting / (h * id->forgetting_rate)
                                 : INFO_ANCHOR_MAX_INTERVAL;
     id->anchor_interval = interval >= INFO_ANCHOR_MAX_INTERVAL ? INFO_ANCHOR_MAX_INTERVAL
                           : interval >= 1.0                    ? (int)interval
@@ -65,7 +68,7 @@ void info_reset(InformationIdentifier *id)
         id->eigvec[k] = k < id->m ? 1.0 / sqrt((double)id->m) : 0.0;
     }
     if (id->lambda == 1.0)
-        bs_init(&id->blocks, id->rows, id->m, INFO_LSM_SCORE_WINDOW, &id->P[0][0],
+        bs_init(&id->blocks, id->rows, id->m, id->tuning.lsm_score_window, &id->P[0][0],
                 &id->theta[0][0]);
     id->active_time = 0.0;
     id->gamma_trace = id->m / id->rho;
@@ -165,7 +168,7 @@ KERNEL mff_accumulate(InformationIdentifier *id, const double z[], const double 
     if (!informative(id, phi, m)) {
         /* a short gap (a velocity zero) forgets and extrapolates as before,
          * without the sample's data; a longer one (a rest) freezes the sums */
-        if ((id->gap_time += id->h) * id->forgetting_rate >= INFO_GAP_MEMORY) return;
+        if ((id->gap_time += id->h) * id->forgetting_rate >= id->gap_memory) return;
         static const double none[ID_MAX_ROWS + ID_MAX_REGRESSORS] = {0};
         z = none;
         phi = none;
@@ -282,7 +285,7 @@ static void update_standard_errors(InformationIdentifier *id)
     const int lsm = id->lambda == 1.0;
     /* MFF: the first INFO_SCORE_DELAY seconds hold the estimate's own transient
      * (LSM's scores are at the current estimate: block_scores.h) */
-    if (!lsm && id->active_time < INFO_SCORE_DELAY) return;
+    if (!lsm && id->active_time < id->tuning.score_delay) return;
     if (lsm) {
         /* over all the data, as the estimate weighs it (a growing mean) */
         bs_update_power(&id->blocks, 0.0);
@@ -314,7 +317,7 @@ static void update_standard_errors(InformationIdentifier *id)
      * 1/(2 |ln R|) for MFF. */
     const double memory = id->lambda < 1.0 ? 0.5 / id->forgetting_rate : id->active_time;
     const double scale = memory < id->active_time ? memory : id->active_time;
-    const double window = lsm ? INFO_LSM_SCORE_WINDOW : INFO_BATCH_WINDOW;
+    const double window = lsm ? id->tuning.lsm_score_window : id->tuning.batch_window;
     for (int i = 0; i < id->rows; ++i) {
         double power[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
         if (lsm) {

@@ -60,6 +60,8 @@ typedef struct {
     int rows, m;          /* m: the identified regressors; the sums have 2m with drift */
     int drift;            /* drift model on (MFF only) */
     double h, rho;
+    IdentifierTuning tuning; /* the windows of its statistics (tuning.h) */
+    double gap_memory;    /* MFF's leave-out rule: memories of a gap that freeze the sums */
     double lambda;        /* R^h per step (MFF), 1 (LSM) */
     double one_minus_lambda_rho;
     double forgetting_rate;  /* |ln R| per second (MFF) */
@@ -98,8 +100,9 @@ typedef struct {
     double eigvec[ID_MAX_REGRESSORS]; /* inverse-iteration vector for that eigenvalue */
 } InformationIdentifier;
 
+/* tuning: its identifier and leave_out groups are taken (NULL: tuning.h's). */
 void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, double h,
-               double rho, double R, int drift);
+               double rho, double R, int drift, const StoTuning *tuning);
 
 /* Back to the nominal parameters and P = rho I. */
 void info_reset(InformationIdentifier *id);

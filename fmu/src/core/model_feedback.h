@@ -11,7 +11,7 @@
  * tracks only what is left.
  *
  * Each identified correction Delta_j is taken with the weight
- *     w = Delta_j^2 / (Delta_j^2 + (FEEDBACK_SIGMAS sigma_j)^2),
+ *     w = Delta_j^2 / (Delta_j^2 + (sigmas sigma_j)^2),   (FEEDBACK_SIGMAS by default)
  * sigma_j its standard error: a correction well above its noise enters whole,
  * one within it hardly at all, so a parameter the data do not determine
  * leaves the nominal value in place. */
@@ -21,12 +21,13 @@
 #include "tuning.h"
 
 /* The share of an identified correction the observer's model takes, after
- * `time` s of identification. */
-static inline double feedback_weight(double delta, double sigma, double time)
+ * `time` s of identification (from t->start, over t->ramp). */
+static inline double feedback_weight(const FeedbackTuning *t, double delta, double sigma,
+                                     double time)
 {
     const double d2 = delta * delta;
-    const double s2 = FEEDBACK_SIGMAS * FEEDBACK_SIGMAS * sigma * sigma;
-    const double ramp = (time - FEEDBACK_START) / FEEDBACK_RAMP;
+    const double s2 = t->sigmas * t->sigmas * sigma * sigma;
+    const double ramp = (time - t->start) / t->ramp;
     if (!(ramp > 0.0) || !(d2 > 0.0)) return 0.0;
     return (ramp < 1.0 ? ramp : 1.0) * d2 / (d2 + s2);
 }

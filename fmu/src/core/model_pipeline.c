@@ -60,7 +60,8 @@ int mp_init(ModelPipeline *p, const TermProgram *program, const double alpha1[],
     memset(p->z, 0, sizeof p->z);
     memset(&p->id, 0, sizeof p->id);
     if (p->identifier &&
-        rri_init_dense(&p->id, (RriKind)p->identifier, n, program->p, NULL, p->h, p->rho, p->R))
+        rri_init_dense(&p->id, (RriKind)p->identifier, n, program->p, NULL, p->h, p->rho, p->R,
+                       NULL))
         return refuse(error, error_size, "the identifier refused its settings (h = %g, rho = %g, "
                       "R = %g): rho > 0, and 0 < R < 1 for MFF", p->h, p->rho, p->R);
     sj_init(&p->statistics, p->identifier ? program->p : 1,

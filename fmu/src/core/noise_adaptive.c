@@ -87,49 +87,11 @@ static AdaptiveGains steady_state_gains(double h, double omega)
     return g;
 }
 
-AdaptiveTuning adaptive_default_tuning(void)
-{
-    const AdaptiveTuning tuning = {
-        .lowest_bandwidth = ADAPTIVE_LOWEST_BANDWIDTH, .highest_bandwidth = ADAPTIVE_HIGHEST_BANDWIDTH,
-        .ratio = ADAPTIVE_RATIO, .window = ADAPTIVE_WINDOW, .secant_time = ADAPTIVE_SECANT_TIME,
-        .start_time = ADAPTIVE_START_TIME, .hysteresis = ADAPTIVE_HYSTERESIS,
-        .exact_ratio = ADAPTIVE_EXACT_RATIO, .saturation_limit = ADAPTIVE_SATURATION_LIMIT,
-        .averaging = ADAPTIVE_AVERAGING, .settled = ADAPTIVE_SETTLED,
-        .min_samples = ADAPTIVE_MIN_SAMPLES, .reach_slower = ADAPTIVE_REACH_SLOWER,
-        .reach_faster = ADAPTIVE_REACH_FASTER};
-    return tuning;
-}
-
-const char *adaptive_tuning_problem(const AdaptiveTuning *t)
-{
-    if (!(t->lowest_bandwidth > 0.0 && isfinite(t->lowest_bandwidth)))
-        return "lowest_bandwidth must be positive and finite";
-    if (!(t->highest_bandwidth > 0.0 && isfinite(t->highest_bandwidth)))
-        return "highest_bandwidth must be positive and finite";
-    if (!(t->ratio > 1.0 && isfinite(t->ratio))) return "ratio must exceed 1";
-    if (!(t->window > 0.0 && isfinite(t->window))) return "window must be positive and finite";
-    if (!(t->secant_time > 0.0 && isfinite(t->secant_time)))
-        return "secant_time must be positive and finite";
-    if (!(t->start_time > 0.0 && isfinite(t->start_time)))
-        return "start_time must be positive and finite";
-    if (!(t->hysteresis > 0.0 && t->hysteresis <= 1.0)) return "hysteresis must be in (0, 1]";
-    if (!(t->exact_ratio >= 0.0 && isfinite(t->exact_ratio))) return "exact_ratio must be >= 0";
-    if (!(t->saturation_limit >= 0.0 && t->saturation_limit <= 1.0))
-        return "saturation_limit must be in [0, 1]";
-    if (!(t->averaging > 0.0 && isfinite(t->averaging))) return "averaging must be positive";
-    if (!(t->settled >= 0.0 && isfinite(t->settled))) return "settled must be >= 0";
-    if (t->min_samples < 0) return "min_samples must be >= 0";
-    if (t->reach_slower < 1) return "reach_slower must be >= 1 (the candidate takes the member "
-                                    "below the centre)";
-    if (t->reach_faster < 0) return "reach_faster must be >= 0";
-    return NULL;
-}
-
 int adaptive_init(AdaptiveBank *bank, double h, const AdaptiveTuning *tuning)
 {
     memset(bank, 0, sizeof *bank);
     const int valid = !tuning || !adaptive_tuning_problem(tuning);
-    bank->tuning = valid && tuning ? *tuning : adaptive_default_tuning();
+    bank->tuning = valid && tuning ? *tuning : sto_default_tuning().bank;
     const AdaptiveTuning *t = &bank->tuning;
     bank->gain = h < t->window ? h / t->window : 1.0;
     const double stride = ceil(t->secant_time / (ADAPTIVE_SLOTS * h));

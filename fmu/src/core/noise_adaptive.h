@@ -87,26 +87,6 @@
 #define ADAPTIVE_ZOOM (ADAPTIVE_FINE - 1) /* zoom members below the centre */
 #define ADAPTIVE_MAX_FINE ((ADAPTIVE_MAX_MEMBERS - 1) * ADAPTIVE_FINE + 1)
 
-/* The bank's tuning: the values of tuning.h's table (adaptive_default_tuning) unless
- * a caller sets others (a study of one rule, a test).  Array sizes (ADAPTIVE_FINE,
- * ADAPTIVE_SLOTS, ADAPTIVE_PERTURBATION_SPANS) are not tuning: they stay compile-time. */
-typedef struct {
-    double lowest_bandwidth;  /* [rad/s] ADAPTIVE_LOWEST_BANDWIDTH */
-    double highest_bandwidth; /* [1/h] ADAPTIVE_HIGHEST_BANDWIDTH */
-    double ratio;             /* ADAPTIVE_RATIO, > 1 */
-    double window;            /* [s] ADAPTIVE_WINDOW */
-    double secant_time;       /* [s] ADAPTIVE_SECANT_TIME */
-    double start_time;        /* [s] ADAPTIVE_START_TIME */
-    double hysteresis;        /* ADAPTIVE_HYSTERESIS, in (0, 1] */
-    double exact_ratio;       /* ADAPTIVE_EXACT_RATIO */
-    double saturation_limit;  /* ADAPTIVE_SATURATION_LIMIT */
-    double averaging;         /* ADAPTIVE_AVERAGING */
-    double settled;           /* ADAPTIVE_SETTLED */
-    int min_samples;          /* ADAPTIVE_MIN_SAMPLES */
-    int reach_slower;         /* ADAPTIVE_REACH_SLOWER, >= 1 */
-    int reach_faster;         /* ADAPTIVE_REACH_FASTER, >= 0 */
-} AdaptiveTuning;
-
 /* Gains of one linear member. */
 typedef struct {
     double omega;     /* bandwidth [rad/s] */
@@ -187,12 +167,6 @@ typedef struct {
     double velocity[STO_MAX_DOF];        /* the published velocity at the last sample */
     double position[STO_MAX_DOF];        /* and the published observer's corrected position */
 } AdaptiveBank;
-
-/* tuning.h's values. */
-AdaptiveTuning adaptive_default_tuning(void);
-
-/* What is wrong with a tuning (NULL: nothing). */
-const char *adaptive_tuning_problem(const AdaptiveTuning *tuning);
 
 /* Gains of the members for step h (steady-state Riccati, at initialization), with
  * the tuning (NULL: the defaults).  Returns 0, with the defaults taken, if the

@@ -78,7 +78,8 @@ static void take_identified_model(ObserverPipeline *p)
     for (int j = 0; j < p->m; ++j) {
         const int k = p->selected[j];
         const double delta = p->info.delta[0][j];
-        double D = delta * feedback_weight(delta, p->info.std_error[0][j], p->info.active_time);
+        double D = delta * feedback_weight(&p->feedback, delta, p->info.std_error[0][j],
+                                           p->info.active_time);
         if (k == JOINT_INPUT) { /* Delta = b - bbar */
             D = fmin(fmax(D, fmin(-0.5 * p->b, p->b)), fmax(-0.5 * p->b, p->b));
             p->b_model = p->b + D;
@@ -91,7 +92,8 @@ static void take_identified_model(ObserverPipeline *p)
 }
 
 /* The model the observer predicts with: the nominal one until the LSM has
- * FEEDBACK_START s of data, then the identified one (entering over FEEDBACK_RAMP). */
+ * the feedback tuning's start (FEEDBACK_START) s of data, then the identified one
+ * (entering over its ramp, FEEDBACK_RAMP). */
 static void update_model(ObserverPipeline *p)
 {
     const double coulomb_before = p->c_model[JOINT_VELOCITY_SIGN];
@@ -130,18 +132,22 @@ int op_select(ObserverPipeline *p)
 
 int op_init(ObserverPipeline *p, const double alpha1[], const double alpha2[],
             const double x1_hat0[], const double x2_hat0[], const ObserverInputs *in,
-            ObserverEstimates *out)
+            ObserverEstimates *out, const StoTuning *tuning)
 {
+    if (tuning && sto_tuning_problem(tuning)) return -1;
+    const StoTuning t = tuning ? *tuning : sto_default_tuning();
     sto_init(&p->obs, p->n, p->h, alpha1, alpha2, p->tau, x1_hat0, x2_hat0);
     sto_configure(&p->obs, (StoScheme)p->scheme, p->convergence_window);
-    adaptive_init(&p->bank, p->h, NULL);
+    p->obs.learning_gain = t.implicit.learning_gain;
+    adaptive_init(&p->bank, p->h, &t.bank);
+    p->feedback = t.feedback;
     memset(p->shadow, 0, sizeof p->shadow);
     identifier_init(&p->id, (IdentifierKind)p->identifier, p->n, p->m, p->h, p->rho, p->R);
     if (p->identifier == IDENTIFIER_MFF && p->identifier_form == OP_FORM_INFORMATION &&
         p->mff_drift && 2 * p->m > ID_MAX_REGRESSORS)
         return -1;
     info_init(&p->info, (IdentifierKind)p->identifier, p->n, p->m, p->h, p->rho, p->R,
-              p->mff_drift);
+              p->mff_drift, &t);
     /* Constant parameters need no tracking: the LSM filters the regression over
      * tau_identifier, long enough to keep velocity noise and the plant's
      * discretization mismatch out; MFF tracks and pays a filter's lag, so it

@@ -56,6 +56,7 @@ typedef struct {
     int model_feedback;
     /* derived at initialization */
     int m;                     /* number of identified regressors */
+    FeedbackTuning feedback;   /* model feedback's tuning (tuning.h) */
     int selected[OP_MAX_L];    /* their indices in the full regressor */
     /* state */
     SuperTwistingObserver obs;
@@ -91,11 +92,12 @@ int op_select(ObserverPipeline *p);
 
 /* Starts the observer at x1_hat0, x2_hat0 with the gains in use and the
  * identifier from the nominal parameters (after op_select); `in` holds the
- * first sample's inputs.  Returns 0, or -1 when MFF with drift is asked for
- * more than ID_MAX_REGRESSORS / 2 regressors. */
+ * first sample's inputs; every part takes its group of `tuning` (NULL: tuning.h's
+ * values).  Returns 0, or -1 when MFF with drift is asked for more than
+ * ID_MAX_REGRESSORS / 2 regressors or the tuning has a problem. */
 int op_init(ObserverPipeline *p, const double alpha1[], const double alpha2[],
             const double x1_hat0[], const double x2_hat0[], const ObserverInputs *in,
-            ObserverEstimates *out);
+            ObserverEstimates *out, const StoTuning *tuning);
 
 /* Restarts identification from the nominal parameters (and the observer's model). */
 void op_restart_identifier(ObserverPipeline *p);

@@ -10,7 +10,8 @@ static void anchor_snapshot(RegressorIdentifier *id);
 
 /* The settings shared by both layouts; the columns and runs are set by the caller. */
 static int init_settings(RegressorIdentifier *id, RriKind kind, int rows, int p,
-                         const double torque_scale[], double h, double rho, double R)
+                         const double torque_scale[], double h, double rho, double R,
+                         const LeaveOutTuning *leave_out)
 {
     if (!(h > 0.0) || !isfinite(h) || !(rho > 0.0) || !isfinite(rho)) return -1;
     if (kind == RRI_MFF && !(R > 0.0 && R < 1.0)) return -1;
@@ -29,18 +30,20 @@ static int init_settings(RegressorIdentifier *id, RriKind kind, int rows, int p,
     /* an int: a tiny h (below RRI_BATCH_TIME / RRI_MAX_BATCH_SAMPLES) gets shorter batches */
     id->batch_samples = (int)fmin(ceil(RRI_BATCH_TIME / h), RRI_MAX_BATCH_SAMPLES);
     id->batch_lambda = pow(id->lambda, 2.0 * id->batch_samples); /* variances forget twice as fast */
-    id->reference_lambda = pow(id->lambda, 1.0 / INFO_REFERENCE_MEMORY);
+    const LeaveOutTuning t = leave_out ? *leave_out : sto_default_tuning().leave_out;
+    id->reference_lambda = pow(id->lambda, 1.0 / t.reference_memory);
     id->reference_pull = (1.0 - id->reference_lambda) * rho;
-    id->rest_lambda = pow(id->lambda, 1.0 / INFO_REST_MEMORY);
+    id->rest_lambda = pow(id->lambda, 1.0 / t.rest_memory);
     id->rest_pull = (1.0 - id->rest_lambda) * rho;
-    id->skip_threshold = INFO_SKIP_SHARE * p * (1.0 - id->reference_lambda);
-    id->gap_limit = kind == RRI_MFF ? INFO_GAP_MEMORY / -log(R) : 0.0;
+    id->skip_threshold = t.skip_share * p * (1.0 - id->reference_lambda);
+    id->gap_limit = kind == RRI_MFF ? t.gap_memory / -log(R) : 0.0;
     rri_reset(id);
     return 0;
 }
 
 int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int columns[],
-             const double torque_scale[], double h, double rho, double R)
+             const double torque_scale[], double h, double rho, double R,
+             const LeaveOutTuning *leave_out)
 {
     memset(id, 0, sizeof *id);
     if (rows < 1 || rows > RRI_MAX_ROWS || p < 1 || p > RRI_PARAMETERS_OF(rows)) return -1;
@@ -67,11 +70,12 @@ int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int c
             }
         }
     }
-    return init_settings(id, kind, rows, p, torque_scale, h, rho, R);
+    return init_settings(id, kind, rows, p, torque_scale, h, rho, R, leave_out);
 }
 
 int rri_init_dense(RegressorIdentifier *id, RriKind kind, int rows, int p,
-                   const double torque_scale[], double h, double rho, double R)
+                   const double torque_scale[], double h, double rho, double R,
+                   const LeaveOutTuning *leave_out)
 {
     memset(id, 0, sizeof *id);
     if (rows < 1 || rows > RRI_MAX_ROWS || p < 1 || p > RRI_MAX_PARAMETERS) return -1;
@@ -81,7 +85,7 @@ int rri_init_dense(RegressorIdentifier *id, RriKind kind, int rows, int p,
         id->run_start[i][0] = 0;
         id->run_end[i][0] = p;
     }
-    return init_settings(id, kind, rows, p, torque_scale, h, rho, R);
+    return init_settings(id, kind, rows, p, torque_scale, h, rho, R, leave_out);
 }
 
 void rri_reset(RegressorIdentifier *id)

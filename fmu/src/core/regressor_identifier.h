@@ -100,15 +100,18 @@ typedef struct {
 typedef enum { RRI_LSM = 1, RRI_MFF = 2 } RriKind;
 
 /* columns[p]: the base columns of the full regressor (0..12n-1, distinct);
- * torque_scale[rows]: per-joint torque scales s_i > 0 (NULL: 1).
+ * torque_scale[rows]: per-joint torque scales s_i > 0 (NULL: 1); leave_out: MFF's rule
+ * (NULL: tuning.h's).
  * Returns 0, or -1 for sizes, columns, h, rho or R out of range. */
 int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int columns[],
-             const double torque_scale[], double h, double rho, double R);
+             const double torque_scale[], double h, double rho, double R,
+             const LeaveOutTuning *leave_out);
 
 /* The same over a dense regressor of any model (a model file's, model_pipeline.h):
  * Y's columns 0..p-1 are the parameters and every row may reach every column. */
 int rri_init_dense(RegressorIdentifier *id, RriKind kind, int rows, int p,
-                   const double torque_scale[], double h, double rho, double R);
+                   const double torque_scale[], double h, double rho, double R,
+                   const LeaveOutTuning *leave_out);
 
 /* Back to the nominal parameters and P = rho I. */
 void rri_reset(RegressorIdentifier *id);

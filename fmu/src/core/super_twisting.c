@@ -7,6 +7,7 @@ void sto_init(SuperTwistingObserver *o, int n, double h, const double alpha1[],
               const double alpha2[], double tau, const double x1_hat0[], const double x2_hat0[])
 {
     memset(o, 0, sizeof *o);
+    o->learning_gain = IMPLICIT_LEARNING_GAIN;
     o->scheme = STO_SCHEME_PAPER;
     o->rate_gain = 1.0;
     o->n = n;

@@ -28,6 +28,8 @@ typedef struct {
     double previous_sign[STO_MAX_DOF];
     double rate_gain;            /* h / convergence window */
     int scheme;                  /* StoScheme */
+    double learning_gain;        /* the implicit scheme's (tuning.h; sto_init sets the
+                                  * default, a caller may set another after it) */
     ImplicitState implicit; /* the implicit scheme's (schemes 2 and 3) */
 } SuperTwistingObserver;
 

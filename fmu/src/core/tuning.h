@@ -2,8 +2,8 @@
  * unit.  The reasoning behind the values is in docs/design/; the mechanisms
  * they tune are described in the header of the algorithm named in each group.
  * Array sizes and limits of the data structures are not tuning and stay with
- * their structures.  The bank's values are the defaults of its run-time tuning
- * (AdaptiveTuning, noise_adaptive.h), which a caller may replace to study a rule. */
+ * their structures.  The same values are a struct at run time (StoTuning, below), of
+ * which each part of the core takes its group when it starts. */
 #ifndef TUNING_H
 #define TUNING_H
 
@@ -82,5 +82,75 @@
 #define STATS_EIGEN_ITERATIONS 30   /* inverse iterations at most */
 #define STATS_EIGEN_TOLERANCE 1e-13 /* stop at this relative change of the eigenvalue */
 #define SJ_BUDGET 4096.0            /* multiply-adds of the statistics job per internal step */
+
+/* ---- the same values at run time ------------------------------------------------------
+ * Each part of the core takes its group of this table when it is initialized
+ * (sto_default_tuning: the values above), so that a caller may run it with others:
+ * a study of one rule, a test.  The limits that size arrays or bound a restored
+ * state's counters (IMPLICIT_REVERSAL_SAMPLES, IMPLICIT_SMOOTH_SAMPLES,
+ * INFO_ANCHOR_MAX_INTERVAL, INFO_STD_INTERVAL, RRI_ANCHOR_INTERVAL) stay compile-time. */
+
+/* The noise-adaptive bank's (noise_adaptive.h; ADAPTIVE_FINE, ADAPTIVE_SLOTS and
+ * ADAPTIVE_PERTURBATION_SPANS size its arrays: they are not tuning). */
+typedef struct {
+    double lowest_bandwidth;  /* [rad/s] ADAPTIVE_LOWEST_BANDWIDTH */
+    double highest_bandwidth; /* [1/h] ADAPTIVE_HIGHEST_BANDWIDTH */
+    double ratio;             /* ADAPTIVE_RATIO, > 1 */
+    double window;            /* [s] ADAPTIVE_WINDOW */
+    double secant_time;       /* [s] ADAPTIVE_SECANT_TIME */
+    double start_time;        /* [s] ADAPTIVE_START_TIME */
+    double hysteresis;        /* ADAPTIVE_HYSTERESIS, in (0, 1] */
+    double exact_ratio;       /* ADAPTIVE_EXACT_RATIO */
+    double saturation_limit;  /* ADAPTIVE_SATURATION_LIMIT */
+    double averaging;         /* ADAPTIVE_AVERAGING */
+    double settled;           /* ADAPTIVE_SETTLED */
+    int min_samples;          /* ADAPTIVE_MIN_SAMPLES */
+    int reach_slower;         /* ADAPTIVE_REACH_SLOWER, >= 1 */
+    int reach_faster;         /* ADAPTIVE_REACH_FASTER, >= 0 */
+} AdaptiveTuning;
+
+/* The implicit scheme's (implicit_twisting.h). */
+typedef struct {
+    double learning_gain; /* IMPLICIT_LEARNING_GAIN, in (0, 1] */
+} ImplicitTuning;
+
+/* The information-form identifier's (information_identifier.h). */
+typedef struct {
+    double anchor_forgetting; /* INFO_ANCHOR_FORGETTING, > 0 */
+    double batch_window;      /* [s] INFO_BATCH_WINDOW */
+    double lsm_score_window;  /* [s] INFO_LSM_SCORE_WINDOW */
+    double power_window;      /* [s] INFO_POWER_WINDOW */
+    double score_delay;       /* [s] INFO_SCORE_DELAY, >= 0 */
+} IdentifierTuning;
+
+/* MFF's rule that leaves uninformative samples out (both identifiers). */
+typedef struct {
+    double reference_memory; /* INFO_REFERENCE_MEMORY, > 0 */
+    double rest_memory;      /* INFO_REST_MEMORY, > 0 */
+    double skip_share;       /* INFO_SKIP_SHARE, >= 0 */
+    double gap_memory;       /* INFO_GAP_MEMORY, >= 0 */
+} LeaveOutTuning;
+
+/* Model feedback's (model_feedback.h). */
+typedef struct {
+    double start;  /* [s] FEEDBACK_START, >= 0 */
+    double ramp;   /* [s] FEEDBACK_RAMP, > 0 */
+    double sigmas; /* FEEDBACK_SIGMAS, >= 0 */
+} FeedbackTuning;
+
+typedef struct {
+    AdaptiveTuning bank;
+    ImplicitTuning implicit;
+    IdentifierTuning identifier;
+    LeaveOutTuning leave_out;
+    FeedbackTuning feedback;
+} StoTuning;
+
+/* The table's values. */
+StoTuning sto_default_tuning(void);
+
+/* What is wrong with a tuning, or its bank's part (NULL: nothing). */
+const char *sto_tuning_problem(const StoTuning *tuning);
+const char *adaptive_tuning_problem(const AdaptiveTuning *tuning);
 
 #endif

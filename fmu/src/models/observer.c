@@ -305,7 +305,8 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     double x1_hat0[MAX_N];
     for (int i = 0; i < MAX_N; ++i)
         x1_hat0[i] = d->start_from_measurement ? d->in.y[i] : d->x1_hat_start[i];
-    if (op_init(p, d->alpha1_used, d->alpha2_used, x1_hat0, d->x2_hat_start, &d->in, &d->out)) {
+    if (op_init(p, d->alpha1_used, d->alpha2_used, x1_hat0, d->x2_hat_start, &d->in, &d->out,
+                NULL)) {
         log->log(log->context, MODEL_ERROR,
                  "mff_drift needs 2 m <= %d identified regressors, %d are selected (the "
                  "built-in joint's u counts when identify_b is true); select fewer or set "
@@ -400,11 +401,12 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
 #define U(field) STATE_FIELD(ObserverData, field, FIELD_UNSIGNED, 0, 4294967295.0)
 static const StateField STATE_FIELDS[] = {
     D(pipe.m), D(pipe.selected), D(pipe.slot_velocity), D(pipe.slot_velocity_sign),
-    D(pipe.slot_input), D(pipe.identifier_gain), I(pipe.identifier_active, 0, 1),
+    D(pipe.slot_input), D(pipe.identifier_gain), D(pipe.feedback), I(pipe.identifier_active, 0, 1),
     I(reset_seen, 0, 1), STO_STATE_FIELDS(ObserverData, pipe.obs),
     BANK_STATE_FIELDS(ObserverData, pipe.bank), D(pipe.id.kind),
     D(pipe.id.rows), D(pipe.id.m), D(pipe.id.h), D(pipe.id.h_log_r), D(pipe.info.rows),
-    D(pipe.info.m), D(pipe.info.drift), D(pipe.info.h), D(pipe.info.rho), D(pipe.info.lambda),
+    D(pipe.info.m), D(pipe.info.drift), D(pipe.info.h), D(pipe.info.rho), D(pipe.info.tuning),
+    D(pipe.info.gap_memory), D(pipe.info.lambda),
     D(pipe.info.one_minus_lambda_rho), D(pipe.info.forgetting_rate), D(pipe.info.anchor_interval),
     I(pipe.info.anchor_age, 0, INFO_ANCHOR_MAX_INTERVAL),
     D(pipe.info.reference_lambda), D(pipe.info.reference_pull), D(pipe.info.rest_lambda),

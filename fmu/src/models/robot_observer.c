@@ -377,7 +377,7 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     }
     memset(&d->id, 0, sizeof d->id);
     if (d->identifier && rri_init(&d->id, (RriKind)d->identifier, d->n, d->base_count,
-                                  d->base_columns, d->torque_scale, d->h, d->rho, d->R) != 0) {
+                                  d->base_columns, d->torque_scale, d->h, d->rho, d->R, NULL) != 0) {
         log->log(log->context, MODEL_ERROR, "the identifier refused its settings (h = %g, rho = "
                  "%g, R = %g)", d->h, d->rho, d->R);
         return MODEL_ERROR;

@@ -17,7 +17,8 @@
     DERIVED_FIELD(T, o.n), DERIVED_FIELD(T, o.h), DERIVED_FIELD(T, o.h_squared),                 \
     DERIVED_FIELD(T, o.inverse_h_squared), DERIVED_FIELD(T, o.alpha1),                           \
     DERIVED_FIELD(T, o.alpha2), DERIVED_FIELD(T, o.filter_gain), DERIVED_FIELD(T, o.rate_gain),  \
-    DERIVED_FIELD(T, o.scheme), STATE_FIELD(T, o.implicit.primed, FIELD_INT, 0, 1),                       \
+    DERIVED_FIELD(T, o.scheme), DERIVED_FIELD(T, o.learning_gain),                                \
+    STATE_FIELD(T, o.implicit.primed, FIELD_INT, 0, 1),                       \
     STATE_FIELD(T, o.implicit.reversal_age, FIELD_INT, -1, IMPLICIT_REVERSAL_SAMPLES - 1),                \
     STATE_FIELD(T, o.implicit.smooth_samples, FIELD_INT, 0, IMPLICIT_SMOOTH_SAMPLES)
 

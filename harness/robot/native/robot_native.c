@@ -112,7 +112,8 @@ int rn_identify(const RigidBodyModel *model, RegressorIdentifier *identifier, in
 {
     RegressorIdentifier *id = identifier;
     const int n = model->n;
-    if (rri_init(id, (RriKind)kind, n, p, columns, torque_scale, h, rho, R) != 0) return -1;
+    if (rri_init(id, (RriKind)kind, n, p, columns, torque_scale, h, rho, R, NULL) != 0)
+        return -1;
     double pi[RB_MAX_PARAMETERS];
     rb_get_parameters(model, pi);
     for (long k = 0; k < count; ++k) {
@@ -229,7 +230,7 @@ long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, long count, do
     if (ro_regression_init(&run->regression, model, h, tau, min_speed, reversal_margin) != 0)
         return -4;
     if (kind && rri_init(&run->identifier, (RriKind)kind, n, p, columns, torque_scale, h, rho,
-                         R) != 0)
+                         R, NULL) != 0)
         return -1;
     if (kind) sj_init(&run->statistics, p, sj_interval_steps(statistics_interval, h), SJ_BUDGET);
     const RobotPipeline pipeline = {&run->observer, &run->regression, &run->identifier,

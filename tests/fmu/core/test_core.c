@@ -22,6 +22,7 @@
 #include "identifier.h"
 #include "implicit_twisting.h"
 #include "information_identifier.h"
+#include "model_feedback.h"
 #include "observer_pipeline.h"
 #include "observer_scheme.h"
 #include "regressor_identifier.h"
@@ -267,7 +268,7 @@ static int lsm_exact_data(void)
      * 20 s of data.  Measured: 1.08e-7. */
     {
         InformationIdentifier info;
-        info_init(&info, IDENTIFIER_LSM, 2, 3, 1e-3, 1e-6, 0.5, 0);
+        info_init(&info, IDENTIFIER_LSM, 2, 3, 1e-3, 1e-6, 0.5, 0, NULL);
         for (long k = 0; k < 20000; ++k) {
             const double t = k * 1e-3;
             const double phi[3] = {sin(t), cos(3 * t), 1.0};
@@ -326,7 +327,7 @@ static int lsm_standard_errors(void)
     double reported[2][3];
     for (int blue = 0; blue <= 1; ++blue) {
         InformationIdentifier info;
-        info_init(&info, IDENTIFIER_LSM, 1, 3, h, 1e-6, 0.5, 0);
+        info_init(&info, IDENTIFIER_LSM, 1, 3, h, 1e-6, 0.5, 0, NULL);
         Noise g = {0x9E3779B97F4A7C15ULL};
         double eps[3] = {0.0, 0.0, 0.0}, phi_prev[2][3] = {{0}}, psi_sum[3][3] = {{0}};
         for (long k = 0; k < n; ++k) {
@@ -401,7 +402,7 @@ static double mff_learn(int variant, Identifier *paper, InformationIdentifier *i
 {
     const double h = 1e-3, rho = mff_rho(variant);
     identifier_init(paper, IDENTIFIER_MFF, 1, 1, h, rho, MFF_R);
-    info_init(info, IDENTIFIER_MFF, 1, 1, h, rho, MFF_R, variant == MFF_DRIFT);
+    info_init(info, IDENTIFIER_MFF, 1, 1, h, rho, MFF_R, variant == MFF_DRIFT, NULL);
     double sum = 0.0;
     long n = 0;
     for (long k = 0; k < 60000; ++k) {
@@ -622,7 +623,7 @@ static int rri_mff_pulses_and_resumption(void)
     const double h = 1e-3, delta[4] = {1.0, 2.0, -1.0, 0.5}, doubled[4] = {2.0, 4.0, -2.0, 1.0};
     for (int rule = 1; rule >= 0; --rule) {
         RegressorIdentifier id;
-        if (rri_init(&id, RRI_MFF, 2, 4, RRI_TEST_COLUMNS, NULL, h, 1e-3, 0.1) != 0)
+        if (rri_init(&id, RRI_MFF, 2, 4, RRI_TEST_COLUMNS, NULL, h, 1e-3, 0.1, NULL) != 0)
             return check(0, "rri_init refused the test's settings");
         if (!rule) id.skip_threshold = 0.0;
         RbRegressor Y;
@@ -823,7 +824,7 @@ static int statistics_job_equals_full_solve(void)
         int columns[RRI_MAX_PARAMETERS];
         for (int k = 0; k < p; ++k) columns[k] = k;
         const double h = 1e-3;
-        if (rri_init(&id, (RriKind)kind, rows, p, columns, NULL, h, 1e-6, 0.5) != 0) return 1;
+        if (rri_init(&id, (RriKind)kind, rows, p, columns, NULL, h, 1e-6, 0.5, NULL) != 0) return 1;
         sj_init(&job, p, 700.0, 2000.0);
         unsigned long state = 12345;
         int jobs = 0, sliced = 0;
@@ -888,7 +889,8 @@ static int anchor_solve_spread(void)
         const int rows = 7, p = 57;
         int columns[RRI_MAX_PARAMETERS];
         for (int k = 0; k < p; ++k) columns[k] = k + 12;
-        if (rri_init(&id, (RriKind)kind, rows, p, columns, NULL, 1e-4, 1e-6, 0.5) != 0) return 1;
+        if (rri_init(&id, (RriKind)kind, rows, p, columns, NULL, 1e-4, 1e-6, 0.5, NULL) != 0)
+            return 1;
         snapshot = id;
         unsigned long state = 777;
         int installs = 0, before_snapshot = 1;
@@ -956,7 +958,7 @@ static int pipeline_identifies_a_joint(void)
     int failed = check(m == 2, "two regressors selected (m = %d)", m);
     double a1[1] = {0.0}, a2[1] = {0.0}, zero[1] = {0.0};
     gains_complete(20.0, 0.5, &a1[0], &a2[0]);
-    failed += check(op_init(p, a1, a2, zero, zero, &in, &out) == 0, "the pipeline starts");
+    failed += check(op_init(p, a1, a2, zero, zero, &in, &out, NULL) == 0, "the pipeline starts");
     double x = 0.0, v = 0.0, max_error = 0.0, sum = 0.0;
     long counted = 0;
     const long samples = (long)(t_end / h + 0.5);
@@ -1017,7 +1019,7 @@ static int adaptive_rules(void)
     const int ST = ADAPTIVE_SUPER_TWISTING, P = ADAPTIVE_RANK_PERTURBATION,
               V = ADAPTIVE_RANK_VELOCITY;
     AdaptiveMember *m = bank->member[0];
-    bank->tuning = adaptive_default_tuning();
+    bank->tuning = sto_default_tuning().bank;
     bank->count = 3;
     for (int s = 0; s < ADAPTIVE_ZOOM; ++s) bank->zoom_index[0][s] = -1;
     bank->center[0] = -1;
@@ -1130,7 +1132,7 @@ static int adaptive_rules(void)
     bank->tuning.reach_slower = bank->tuning.reach_faster = ADAPTIVE_MAX_MEMBERS;
     running = (int)adaptive_running_mask(bank, 0);
     failed += check(running == 0x7f, "a reach of the whole bank runs every member (%#x)", running);
-    bank->tuning = adaptive_default_tuning();
+    bank->tuning = sto_default_tuning().bank;
 
     bank->count = 0;
     const AdaptiveSelection none = adaptive_select(bank, 0, 1, 1);
@@ -1145,7 +1147,7 @@ static int adaptive_tuning(void)
 {
     AdaptiveBank *bank = calloc(1, sizeof *bank);
     if (!bank) return 1;
-    const AdaptiveTuning defaults = adaptive_default_tuning();
+    const AdaptiveTuning defaults = sto_default_tuning().bank;
     int failed = check(adaptive_tuning_problem(&defaults) == NULL, "the defaults have no problem");
     int ok = adaptive_init(bank, 1e-3, NULL);
     failed += check(ok && bank->count == 10, "1 kHz: ten members 2 rad/s to 0.5/h, 1.8 apart (%d)",
@@ -1183,6 +1185,62 @@ static int adaptive_tuning(void)
     return failed;
 }
 
+/* The other groups of the run-time tuning: the defaults pass, a bad value is named,
+ * and each part honours its group. */
+static int tuning_groups(void)
+{
+    const StoTuning defaults = sto_default_tuning();
+    int failed = check(sto_tuning_problem(&defaults) == NULL, "the defaults have no problem");
+    StoTuning t = defaults;
+    t.implicit.learning_gain = 0.0;
+    const char *problem = sto_tuning_problem(&t);
+    failed += check(problem && strstr(problem, "learning_gain"), "learning_gain 0: %s",
+                    problem ? problem : "(none)");
+    t = defaults;
+    t.leave_out.rest_memory = -1.0;
+    problem = sto_tuning_problem(&t);
+    failed += check(problem && strstr(problem, "rest_memory"), "rest_memory -1: %s",
+                    problem ? problem : "(none)");
+    t = defaults;
+    t.feedback.ramp = 0.0;
+    problem = sto_tuning_problem(&t);
+    failed += check(problem && strstr(problem, "feedback.ramp"), "feedback ramp 0: %s",
+                    problem ? problem : "(none)");
+    t = defaults;
+    t.bank.hysteresis = 2.0;
+    problem = sto_tuning_problem(&t);
+    failed += check(problem && strstr(problem, "hysteresis"), "the bank's part checked too: %s",
+                    problem ? problem : "(none)");
+
+    /* the identifier takes its windows and the leave-out rule */
+    const double h = 1e-3;
+    InformationIdentifier *id = calloc(2, sizeof *id);
+    if (!id) return failed + 1;
+    t = defaults;
+    t.identifier.batch_window = 2.0 * defaults.identifier.batch_window;
+    t.leave_out.skip_share = 2.0 * defaults.leave_out.skip_share;
+    info_init(&id[0], IDENTIFIER_MFF, 1, 2, h, 1e-3, 0.9, 0, NULL);
+    info_init(&id[1], IDENTIFIER_MFF, 1, 2, h, 1e-3, 0.9, 0, &t);
+    failed += check(fabs(id[1].skip_threshold - 2.0 * id[0].skip_threshold) <=
+                        1e-15 * id[0].skip_threshold,
+                    "twice the skip share, twice the threshold (%g, %g)", id[0].skip_threshold,
+                    id[1].skip_threshold);
+    failed += check(fabs(id[1].batch_gain + expm1(-h / t.identifier.batch_window)) < 1e-18 &&
+                        id[1].batch_gain < id[0].batch_gain,
+                    "the batch window honoured (gain %g, default %g)", id[1].batch_gain,
+                    id[0].batch_gain);
+    free(id);
+
+    /* model feedback: nothing before its start, then the ramp */
+    FeedbackTuning f = defaults.feedback;
+    const double at = f.start + 0.5 * f.ramp;
+    const double w = feedback_weight(&f, 1.0, 0.0, at);
+    failed += check(fabs(w - 0.5) < 1e-12, "half the ramp, an exact correction: weight %g", w);
+    f.start = at + 1.0;
+    failed += check(feedback_weight(&f, 1.0, 0.0, at) == 0.0, "a later start: weight 0");
+    return failed;
+}
+
 int main(int argc, char **argv)
 {
     static const TestCase cases[] = {
@@ -1203,6 +1261,7 @@ int main(int argc, char **argv)
         {"pipeline_identifies_a_joint", pipeline_identifies_a_joint},
         {"adaptive_rules", adaptive_rules},
         {"adaptive_tuning", adaptive_tuning},
+        {"tuning_groups", tuning_groups},
     };
     return run_cases("test_core", cases, sizeof cases / sizeof cases[0], argc, argv);
 }
