@@ -382,7 +382,7 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                 integrate_nominal(&bank->secant[i], a_sta, h, h2);
                 step_members(bank, i, running, y[i], a[i], h, h2, g,
                              stride_start ? &measured : NULL, tick);
-                if (stride_start && age >= (unsigned)bank->tuning.min_samples) {
+                if (stride_start && age >= bank->tuning.min_samples) {
                     const int centre = adaptive_new_centre(bank, i);
                     if (centre >= 0) selected = recentre(bank, i, centre, selected);
                     const AdaptiveSelection choice = adaptive_select(bank, i, selected, source);

@@ -27,9 +27,9 @@ typedef struct {
     double switching_rate[STO_MAX_DOF];
     double previous_sign[STO_MAX_DOF];
     double rate_gain;            /* h / convergence window */
-    int scheme;                  /* StoScheme */
     double learning_gain;        /* the implicit scheme's (tuning.h; sto_init sets the
                                   * default, a caller may set another after it) */
+    int scheme;                  /* StoScheme */
     ImplicitState implicit; /* the implicit scheme's (schemes 2 and 3) */
 } SuperTwistingObserver;
 

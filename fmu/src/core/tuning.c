@@ -52,7 +52,7 @@ const char *adaptive_tuning_problem(const AdaptiveTuning *t)
         return "saturation_limit must be in [0, 1]";
     if (!(t->averaging > 0.0 && isfinite(t->averaging))) return "averaging must be positive";
     if (!(t->settled >= 0.0 && isfinite(t->settled))) return "settled must be >= 0";
-    if (t->min_samples < 0) return "min_samples must be >= 0";
+    if (!(t->min_samples >= 0.0 && t->min_samples <= 1e9)) return "min_samples must be in [0, 1e9]";
     if (t->reach_slower < 1) return "reach_slower must be >= 1 (the candidate takes the member "
                                     "below the centre)";
     if (t->reach_faster < 0) return "reach_faster must be >= 0";

@@ -104,7 +104,7 @@ typedef struct {
     double saturation_limit;  /* ADAPTIVE_SATURATION_LIMIT */
     double averaging;         /* ADAPTIVE_AVERAGING */
     double settled;           /* ADAPTIVE_SETTLED */
-    int min_samples;          /* ADAPTIVE_MIN_SAMPLES */
+    double min_samples;       /* ADAPTIVE_MIN_SAMPLES (a count) */
     int reach_slower;         /* ADAPTIVE_REACH_SLOWER, >= 1 */
     int reach_faster;         /* ADAPTIVE_REACH_FASTER, >= 0 */
 } AdaptiveTuning;
@@ -137,6 +137,10 @@ typedef struct {
     double ramp;   /* [s] FEEDBACK_RAMP, > 0 */
     double sigmas; /* FEEDBACK_SIGMAS, >= 0 */
 } FeedbackTuning;
+
+/* A restored FMU state's tuning is compared byte for byte with a fresh one's: no padding. */
+_Static_assert(sizeof(AdaptiveTuning) == 12 * sizeof(double) + 2 * sizeof(int),
+               "AdaptiveTuning has padding");
 
 typedef struct {
     AdaptiveTuning bank;
