@@ -705,14 +705,16 @@ static Snapshot *new_snapshot(Instance *inst)
     return s;
 }
 
-static int data_finite(const Instance *inst, const char *function, const unsigned char *data);
+static int model_data_valid(Instance *inst, const char *function, const unsigned char *data,
+                            const unsigned char *initialized);
 
 Status instance_get_state(Instance *inst, const char *function, void **state)
 {
     if (!state) return instance_fail(inst, "%s: FMUstate is NULL", function);
     /* never hand out a state that deserialization would refuse: a computation that
      * overflowed (from a restored state of extreme values) leaves no state to take */
-    if ((inst->clock.state & inst->api->stepping_states) && !data_finite(inst, function, inst->data))
+    if ((inst->clock.state & inst->api->stepping_states) &&
+        !model_data_valid(inst, function, inst->data, NULL))
         return instance_fail(inst, "%s: the instance's computation overflowed; no state taken",
                              function);
     Snapshot *s = *state;
@@ -915,59 +917,16 @@ static int field_valid(const Instance *inst, const char *function, const StateFi
     return 1;
 }
 
-/* stepping_data_valid without the initialization it compares derived fields with:
- * every Real variable finite, the model's field table (ranges, finite doubles) and
- * every word that no field covers a finite double.  Logs the first offender. */
-static int data_finite(const Instance *inst, const char *function, const unsigned char *data)
+/* The model data's checks: the variables of the table (calculated parameters as
+ * `initialized` derives them, outputs finite), the model's field table, every other
+ * word a finite double.  initialized NULL: nothing is compared with an initialization
+ * (a state about to be taken, which deserialization would otherwise refuse). */
+static int model_data_valid(Instance *inst, const char *function, const unsigned char *data,
+                            const unsigned char *initialized)
 {
     unsigned char *covered = calloc(MD.data_size, 1);
-    if (!covered) {
-        instance_log(inst, STATUS_ERROR, "%s: out of memory", function);
-        return 0;
-    }
-    int ok = 1;
-    for (size_t v = 0; ok && v < MD.n_variables; ++v) {
-        const ModelVariable *var = &MD.variables[v];
-        const size_t count = model_variable_count(var);
-        mark(covered, var->offset, count * (var->type == TYPE_REAL ? sizeof(double) : sizeof(int)));
-        for (size_t e = 0; ok && var->type == TYPE_REAL && e < count; ++e) {
-            const double value = element_value(data, var, e);
-            if (!isfinite(value)) {
-                char name[64];
-                element_name(var, e, name, sizeof name);
-                instance_log(inst, STATUS_ERROR, "%s: %s = %g is not finite", function, name,
-                             value);
-                ok = 0;
-            }
-        }
-    }
-    if (inst->resource) mark(covered, MD.resource_offset, MD.resource_size);
-    for (size_t f = 0; ok && f < MD.n_state_fields; ++f)
-        ok = field_valid(inst, function, &MD.state_fields[f], data, NULL, covered);
-    if (ok) ok = reals_valid(inst, function, data, covered, "the model data", 0, MD.data_size);
-    free(covered);
-    return ok;
-}
-
-/* A state that can step again: the variables of the table (calculated
- * parameters as initialization derives them, outputs finite), the model's
- * field table, every other word a finite double, then the model's own
- * invariants.  The state's parameters go through initialize on a copy. */
-static int stepping_data_valid(Instance *inst, const char *function, const Clock *clock,
-                               const unsigned char *data)
-{
-    unsigned char *initialized = malloc(MD.data_size);
-    unsigned char *covered = calloc(MD.data_size, 1);
-    int ok = initialized && covered;
+    int ok = covered != NULL;
     if (!ok) instance_log(inst, STATUS_ERROR, "%s: out of memory", function);
-    ModelLogger silent = {silent_log, NULL};
-    if (ok) {
-        memcpy(initialized, data, MD.data_size);
-        ok = MD.initialize(initialized, clock->start_time, &silent) != MODEL_ERROR;
-        if (!ok)
-            instance_log(inst, STATUS_ERROR, "%s: the state's parameters do not initialize; "
-                         "state refused", function);
-    }
     for (size_t v = 0; ok && v < MD.n_variables; ++v) {
         const ModelVariable *var = &MD.variables[v];
         const size_t count = model_variable_count(var);
@@ -975,7 +934,7 @@ static int stepping_data_valid(Instance *inst, const char *function, const Clock
         mark(covered, var->offset, bytes);
         for (size_t e = 0; ok && e < count; ++e) {
             const double value = element_value(data, var, e);
-            const double derived = element_value(initialized, var, e);
+            const double derived = initialized ? element_value(initialized, var, e) : value;
             char name[64];
             element_name(var, e, name, sizeof name);
             if (var->causality == CAUSALITY_CALCULATED_PARAMETER &&
@@ -998,9 +957,31 @@ static int stepping_data_valid(Instance *inst, const char *function, const Clock
     for (size_t f = 0; ok && f < MD.n_state_fields; ++f)
         ok = field_valid(inst, function, &MD.state_fields[f], data, initialized, covered);
     if (ok) ok = reals_valid(inst, function, data, covered, "the model data", 0, MD.data_size);
+    free(covered);
+    return ok;
+}
+
+/* A state that can step again: the variables of the table (calculated
+ * parameters as initialization derives them, outputs finite), the model's
+ * field table, every other word a finite double, then the model's own
+ * invariants.  The state's parameters go through initialize on a copy. */
+static int stepping_data_valid(Instance *inst, const char *function, const Clock *clock,
+                               const unsigned char *data)
+{
+    unsigned char *initialized = malloc(MD.data_size);
+    int ok = initialized != NULL;
+    if (!ok) instance_log(inst, STATUS_ERROR, "%s: out of memory", function);
+    ModelLogger silent = {silent_log, NULL};
+    if (ok) {
+        memcpy(initialized, data, MD.data_size);
+        ok = MD.initialize(initialized, clock->start_time, &silent) != MODEL_ERROR;
+        if (!ok)
+            instance_log(inst, STATUS_ERROR, "%s: the state's parameters do not initialize; "
+                         "state refused", function);
+    }
+    if (ok) ok = model_data_valid(inst, function, data, initialized);
     ModelLogger logger = model_logger(inst);
     if (ok && MD.check_restored) ok = MD.check_restored(data, initialized, &logger) != MODEL_ERROR;
-    free(covered);
     free(initialized);
     return ok;
 }
