@@ -11,10 +11,14 @@ set(STO_CORE_ROBOT
     core/robot_pipeline.c core/robot_observer.c core/rigid_body.c core/regressor_identifier.c
     core/statistics_job.c core/gains.c core/tuning.c)
 # A model file's regressor as data (harness/model/program.py writes it).
-set(STO_CORE_MODEL core/model_pipeline.c core/term_program.c core/observer_scheme.c
+set(STO_CORE_MODEL core/model_pipeline.c core/term_program.c core/small_solve.c
+    core/observer_scheme.c
     core/super_twisting.c core/implicit_twisting.c core/noise_adaptive.c
     core/regressor_identifier.c core/statistics_job.c core/gains.c core/tuning.c)
-set(STO_CORE_SOURCES ${STO_CORE_OBSERVER} ${STO_CORE_ROBOT} ${STO_CORE_MODEL})
+# A model file's equations simulated (identify's scores and refinement; in no FMU).
+set(STO_CORE_SIMULATION core/model_simulation.c core/term_program.c core/small_solve.c)
+set(STO_CORE_SOURCES ${STO_CORE_OBSERVER} ${STO_CORE_ROBOT} ${STO_CORE_MODEL}
+    ${STO_CORE_SIMULATION})
 list(REMOVE_DUPLICATES STO_CORE_SOURCES)
 
 # The model-independent instance core under every FMI version.

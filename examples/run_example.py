@@ -1,7 +1,7 @@
 """An example end to end: simulate its two logs, identify, validate, write its FMU, feed
 the FMU the estimation log (fmpy) and plot how its estimates converge.
 
-    python examples/run_example.py pendulum|two_mass --out DIR [--figures FOLDER]
+    python examples/run_example.py pendulum|two_mass|oscillator --out DIR [--figures FOLDER]
 
 Runs the same commands as the example's README, in DIR; with --figures, copies the
 figures the README shows into FOLDER (validation.png, fmu_convergence.png).
@@ -78,7 +78,7 @@ def plot_convergence(outputs: dict, unknowns: list[str], truth: dict, path: Path
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("example", choices=("pendulum", "two_mass"))
+    parser.add_argument("example", choices=("pendulum", "two_mass", "oscillator"))
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--figures", type=Path, default=None)
     args = parser.parse_args()

@@ -147,6 +147,8 @@ ROBOT_OPTIONS = {"lock": ("--lock", []), "unknown": ("--unknown", "all"),
                  "torque_gains": ("--torque-gains", None),
                  "joint_terms": ("--joint-terms", None),
                  "smooth_coulomb": ("--smooth-coulomb", None)}
+# the options of the model-file path (harness.model.commands), refused without --model
+MODEL_OPTIONS = {"refine": ("--refine", "auto")}
 
 
 def _given(args, options: Mapping[str, tuple[str, object]]) -> list[str]:
@@ -165,6 +167,9 @@ def cmd_identify(args) -> int:
     if args.urdf_tolerance is not None and not args.robot:
         raise InputError("harness identify: --urdf-tolerance is the URDF's prior: it needs "
                          "--robot")
+    if not args.model:
+        _refuse(_given(args, MODEL_OPTIONS), "this log", "it refines a model file's "
+                "parameters: it needs --model")
     if args.model:  # a model file: harness.model.commands
         given = _given(args, LOG_OPTIONS) + _given(args, ROBOT_OPTIONS)
         given += ["--robot"] if args.robot else []
@@ -384,6 +389,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the written table: estimates.csv (default) or estimates.parquet "
                         "(faster for long logs); the log's own format is told by its "
                         "extension")
+    p.add_argument("--refine", choices=["auto", "simulation", "none"],
+                   default=MODEL_OPTIONS["refine"][1],
+                   help="with --model: refine the least-squares estimate by output error "
+                        "(the model simulated from the measured input follows the measured "
+                        "positions): simulation always, none never, auto (default) when it "
+                        "improves the simulation error on held-out halves of the log")
     from .robot.cli import add_arguments as add_robot_arguments
     add_robot_arguments(p)
     p.set_defaults(func=cmd_identify)

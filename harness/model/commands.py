@@ -2,14 +2,17 @@
 ``validate LOG --model MODEL.toml --out DIR`` (docs/model_files.md, "Identify and
 validate").
 
-identify: parameters by least squares on the zero-phase pipeline's regressor rows
-(:mod:`harness.model.zero_phase`, :mod:`harness.model.fit`), velocities by the causal
-observer (:mod:`harness.model.estimates`). validate: the known side of each equation
-reconstructed from the model's nominal values through the same pipeline.
+identify: parameters by :func:`harness.model.identification.identify_model`, velocities by
+the causal observer (:mod:`harness.model.estimates`). validate: the known side of each
+equation reconstructed from the model's nominal values through the zero-phase pipeline.
+Both also print and write the scores that share nothing with a pipeline
+(:mod:`harness.model.scores`): the input reconstruction from raw central differences and
+the free-run simulation error.
 
 Exit status: 0 done; 1 written, but the result cannot be trusted (a weakly excited
-unknown, a model that explains little of the log; said on stderr); 2 bad input (the
-model file, the log, an unknown the log does not excite), nothing written.
+unknown, a model that explains little of the log, a model whose simulation diverges;
+said on stderr); 2 bad input (the model file, the log, an unknown the log does not
+excite), nothing written.
 """
 from __future__ import annotations
 
@@ -17,8 +20,8 @@ import argparse
 import csv
 import json
 import sys
-from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -26,56 +29,21 @@ from ..messages import note
 from ..outputs import Outputs
 from .errors import ModelFileError
 from .estimates import Estimates
-from .fit import Fit, fit, relative_errors
+from .fit import relative_errors
+from .identification import WEAKLY_EXCITED, Identification, NotExcitedError, identify_model
 from .log import LogFileError, ModelLog, read_log
 from .model import Model
 from .reader import read_model
+from .scores import reconstruction_error, simulation_error
+from .selection import POWER_ABOVE, Choice
 from .zero_phase import Regression, derivatives, regression
 
-#: An unknown whose excitation (fit.excitation) is below this is refused (exit 2) ...
-NOT_EXCITED = 1e-3
-#: ... below this it is identified with a warning (exit 1).
-WEAKLY_EXCITED = 1e-2
 #: A pooled relative error above this on the estimation log: the model explains little.
 POOR_FIT = 0.5
 
 IDENTIFY_OUTPUTS = ("parameters.csv", "identified.toml", "estimates.csv", "estimates.png",
                     "identification.json")
 VALIDATE_OUTPUTS = ("validation.json", "validation.png")
-
-
-class NotExcitedError(ValueError):
-    """The log leaves an unknown undetermined (exit status 2)."""
-
-
-@dataclass(frozen=True)
-class Identification:
-    """What identify found on one log."""
-
-    model: Model
-    log: ModelLog
-    rows: Regression
-    result: Fit
-    per_equation: list[float | None]
-    pooled: float
-
-
-def identify_model(model: Model, log: ModelLog) -> Identification:
-    """The unknowns of ``model`` from ``log``; NotExcitedError names an unknown the log
-    does not excite, with its excitation figure."""
-    rows = regression(model, log)
-    result = fit(rows.Y, rows.r, model.nominal)
-    low = [(p.name, e) for p, e in zip(model.parameters, result.excitation) if e < NOT_EXCITED]
-    if low:
-        figures = ", ".join(f"{name} (excitation {e:.2g})" for name, e in low)
-        raise NotExcitedError(
-            f"{log.source}: the log does not excite {figures}: the column of each in the "
-            f"regressor is zero on the log or a combination of the other columns "
-            f"(excitation = the share of the column the others do not explain, 0 to 1; "
-            f"below {NOT_EXCITED:g} is refused). Use a log in which this term varies "
-            "independently, or make it a constant of the model")
-    per, pooled = relative_errors(rows.Y, rows.r, result.theta)
-    return Identification(model, log, rows, result, per, pooled)
 
 
 def _load(args: argparse.Namespace) -> tuple[Model, ModelLog]:
@@ -99,15 +67,17 @@ def identify_command(args: argparse.Namespace) -> int:
         with Outputs(args.out, "identify", inputs=[args.data, args.model],
                      names=IDENTIFY_OUTPUTS) as outputs:
             model, log = _load(args)
-            found = identify_model(model, log)
+            found = identify_model(model, log, args.refine)
             acceleration = derivatives(log, found.rows.settings).qdd
             estimates = causal_estimates(log, acceleration)
-            result = found.result
-            _write_parameters(outputs.file("parameters.csv"), model, result)
+            scores = {"reconstruction_error": reconstruction_error(model, log, found.theta),
+                      "simulation_error": simulation_error(model, log, found.theta)}
+            _write_parameters(outputs.file("parameters.csv"), model, found)
             outputs.file("identified.toml").write_text(model_toml(
-                model, result.theta, result.std_error,
+                model, found.theta, found.std_error,
                 header=[f"{Path(args.model).name} identified from {Path(args.data).name} by "
-                        "sto-harness identify; std errors: sandwich, 1 sigma"]),
+                        f"sto-harness identify ({found.method}); std errors: sandwich, "
+                        "1 sigma"]),
                 encoding="utf-8")
             columns: dict[str, np.ndarray] = {"t": log.t}
             for i, c in enumerate(model.coordinates):
@@ -116,26 +86,82 @@ def identify_command(args: argparse.Namespace) -> int:
             write_csv(outputs.file("estimates.csv"), columns)
             plot_estimates(log.t, estimates, model, outputs.file("estimates.png"))
             outputs.file("identification.json").write_text(json.dumps(
-                _summary(found, estimates), indent=2) + "\n", encoding="utf-8")
+                {**_summary(found, estimates), **scores}, indent=2) + "\n", encoding="utf-8")
     except (ModelFileError, LogFileError, NotExcitedError) as error:
         return _fail("identify", error)
     print(f"wrote {', '.join(str(p) for p in outputs.written)}")
     width = max(len(p.name) for p in model.parameters)
+    print(f"  parameters by {found.method}:")
     for k, p in enumerate(model.parameters):
-        print(f"  {p.name:<{width}} = {result.theta[k]:.6g} {p.unit}   +- "
-              f"{result.std_error[k]:.2g} (1 sigma)")
-    print(f"  input reconstruction error on this log: {100 * found.pooled:.3f} %")
-    for p, e in zip(model.parameters, result.excitation):
+        print(f"  {p.name:<{width}} = {found.theta[k]:.6g} {p.unit}   +- "
+              f"{found.std_error[k]:.2g} (1 sigma)")
+    _print_choice(found.choice)
+    _print_refinement(found)
+    print(f"  input reconstruction error on this log: {100 * found.pooled:.3f} % (through the "
+          "chosen pipeline)")
+    trusted = _print_scores(scores)
+    for p, e in zip(model.parameters, found.least_squares.excitation):
         if e < WEAKLY_EXCITED:
             note(f"{p.name} is weakly excited by the log (excitation {e:.2g}, below "
                  f"{WEAKLY_EXCITED:g}): its value is uncertain beyond its standard error")
     if found.pooled > POOR_FIT:
         note(f"the model reconstructs the log's known side with a relative error of "
              f"{100 * found.pooled:.0f} %: it explains little of this log")
-    return 0
+    return 0 if trusted else 1
 
 
-def _write_parameters(path: Path, model: Model, result: Fit) -> None:
+def _print_choice(choice: Choice) -> None:
+    """The candidates' cross-validation scores and the choice; a band that leaves motion
+    out is said."""
+    if choice.candidates:
+        print(f"  derivative pipeline by {choice.method}; relative simulation error per "
+              "candidate:")
+        for c in choice.candidates:
+            mark = "  <- chosen" if c.settings == choice.settings else ""
+            figure = f"{100 * c.score:.4g} %" if np.isfinite(c.score) else "failed"
+            print(f"    {c.label:<58} {figure}{mark}")
+    else:
+        print(f"  derivative pipeline: {choice.method}")
+    for name, share in choice.power_above.items():
+        if share > POWER_ABOVE:
+            note(f"{name}: {100 * share:.1f} % of its motion's power lies above the chosen "
+                 f"band ({choice.settings.cutoff:.4g} Hz): the identification does not see it")
+
+
+def _print_refinement(found: Identification) -> None:
+    info = found.refinement
+    held_out = info.get("held_out_simulation_error")
+    if isinstance(held_out, dict):
+        print(f"  held-out simulation error: least squares {100 * held_out['least_squares']:.4g} "
+              f"%, refined {100 * held_out['refined']:.4g} %")
+    if info.get("applied"):
+        print(f"  output-error refinement: run error {100 * info['runs_error_start']:.4g} "
+              f"% -> {100 * info['runs_error_end']:.4g} % ({info['evaluations']} "
+              "evaluations)")
+    else:
+        print(f"  output-error refinement not applied: {info.get('reason')}")
+
+
+def _print_scores(scores: dict[str, dict[str, Any]]) -> bool:
+    """The scores that share nothing with the pipeline; a diverging simulation is said
+    (False: the model is not to be trusted)."""
+    reconstruction = scores["reconstruction_error"]
+    if reconstruction["pooled"] is not None:
+        print(f"  input reconstruction, raw central differences at the full rate: "
+              f"{100 * float(reconstruction['pooled']):.3f} %")
+    simulation = scores["simulation_error"]
+    for name, e in simulation["per_coordinate"].items():
+        print(f"  free-run simulation error of {name}: {e['rms']:.4g} {e['unit']} RMS, "
+              f"{100 * e['relative']:.3f} % of its motion")
+    if simulation["diverged_at_s"] is not None:
+        note(f"the model's simulation driven by the measured input diverges after "
+             f"{simulation['diverged_at_s']:.4g} s: the model is unstable on this log (or "
+             "the machine runs in closed loop, which the model file does not describe)")
+        return False
+    return True
+
+
+def _write_parameters(path: Path, model: Model, result: Identification) -> None:
     with path.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle)
         writer.writerow(["name", "value", "std_error", "unit"])
@@ -145,17 +171,25 @@ def _write_parameters(path: Path, model: Model, result: Fit) -> None:
 
 
 def _summary(found: Identification, estimates: Estimates) -> dict[str, object]:
-    model, result = found.model, found.result
+    model, least = found.model, found.least_squares
     return {
         "model": model.source, "log": found.log.source, "samples": found.log.samples,
-        "parameters": {p.name: {"value": float(result.theta[k]),
-                                "std_error": float(result.std_error[k]),
-                                "classical_std_error": float(result.classical_error[k]),
-                                "excitation": float(result.excitation[k]), "unit": p.unit}
+        "method": found.method,
+        "parameters": {p.name: {"value": float(found.theta[k]),
+                                "std_error": float(found.std_error[k]),
+                                "excitation": float(least.excitation[k]), "unit": p.unit}
                        for k, p in enumerate(model.parameters)},
-        "std_error": "sandwich over batches of consecutive regressor rows, 1 sigma",
+        "std_error": ("sandwich over the runs, initial states profiled out, 1 sigma"
+                      if found.method == "output error" else
+                      "sandwich over batches of consecutive regressor rows, 1 sigma"),
+        "least_squares": {p.name: {"value": float(least.theta[k]),
+                                   "std_error": float(least.std_error[k]),
+                                   "classical_std_error": float(least.classical_error[k])}
+                          for k, p in enumerate(model.parameters)},
+        "refinement": found.refinement,
         "relative_error": {"per_equation": found.per_equation, "pooled": found.pooled},
-        "pipeline": found.rows.settings.as_dict(), "rows": result.rows,
+        "pipeline": found.rows.settings.as_dict(), "rows": least.rows,
+        "pipeline_choice": found.choice.as_dict(),
         "velocity": {"estimator": "causal observer (harness.robot.native.observe_adaptive)",
                      "noise_std": {c: float(np.median(estimates.noise[:, i]))
                                    for i, c in enumerate(model.coordinates)}},
@@ -181,6 +215,8 @@ def validate_command(args: argparse.Namespace) -> int:
                      names=VALIDATE_OUTPUTS) as outputs:
             model, log = _load(args)
             rows, predicted, per, pooled = validate_model(model, log)
+            scores = {"reconstruction_error": reconstruction_error(model, log, model.nominal),
+                      "simulation_error": simulation_error(model, log, model.nominal)}
             outputs.file("validation.json").write_text(json.dumps({
                 "model": model.source, "log": log.source,
                 "relative_error": {"per_equation": per, "pooled": pooled},
@@ -188,6 +224,7 @@ def validate_command(args: argparse.Namespace) -> int:
                               "the zero-phase pipeline; r: each equation's known side",
                 "parameters": {p.name: p.nominal for p in model.parameters},
                 "pipeline": rows.settings.as_dict(), "rows": int(rows.Y.shape[0]),
+                **scores,
             }, indent=2) + "\n", encoding="utf-8")
             plot_validation(rows.t, rows.r, predicted, model, outputs.file("validation.png"),
                             f"validate: {Path(args.data).name}, relative error "
@@ -198,5 +235,5 @@ def validate_command(args: argparse.Namespace) -> int:
     for i, e in enumerate(per, start=1):
         print(f"  equation {i}: relative error "
               + ("n/a (its known side is zero)" if e is None else f"{100 * e:.3f} %"))
-    print(f"  pooled: {100 * pooled:.3f} %")
-    return 0
+    print(f"  pooled: {100 * pooled:.3f} % (through the zero-phase pipeline)")
+    return 0 if _print_scores(scores) else 1

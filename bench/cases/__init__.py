@@ -1,0 +1,1 @@
+"""Simulated machines of the identification benchmarks, made independently of the harness."""

@@ -1,0 +1,105 @@
+"""The identification of a model file's unknowns from a log, as ``identify --model`` runs it:
+
+1. the derivative pipeline chosen by blocked cross-validation
+   (:func:`harness.model.selection.choose_pipeline`);
+2. least squares on its regressor rows (:func:`harness.model.fit.fit`), refused when an
+   unknown is not excited;
+3. the output-error refinement (:mod:`harness.model.refine`): always, never, or (auto)
+   when it lowers the simulation error on held-out halves of the log.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .fit import BATCH_SAMPLES, Fit, fit, relative_errors
+from .log import ModelLog
+from .model import Model
+from .refine import check_on_halves, refine
+from .selection import Choice, choose_pipeline
+from .simulation import Dynamics
+from .zero_phase import Regression, regression
+
+#: An unknown whose excitation (fit.excitation) is below this is refused (exit 2) ...
+NOT_EXCITED = 1e-3
+#: ... below this it is identified with a warning (exit 1).
+WEAKLY_EXCITED = 1e-2
+REFINE_MODES = ("auto", "simulation", "none")
+
+
+class NotExcitedError(ValueError):
+    """The log leaves an unknown undetermined (exit status 2)."""
+
+
+@dataclass(frozen=True)
+class Identification:
+    """What identify found on one log: the estimate (``theta``, ``std_error``), the least
+    squares it started from, and how each choice was made."""
+
+    model: Model
+    log: ModelLog
+    rows: Regression
+    least_squares: Fit
+    theta: np.ndarray
+    std_error: np.ndarray     # 1 sigma
+    method: str               # "least squares" or "output error"
+    per_equation: list[float | None]
+    pooled: float
+    choice: Choice
+    refinement: dict[str, Any] = field(default_factory=dict)
+
+
+def identify_model(model: Model, log: ModelLog, refine_mode: str = "auto") -> Identification:
+    """The unknowns of ``model`` from ``log``; NotExcitedError names an unknown the log does
+    not excite, with its excitation figure."""
+    if refine_mode not in REFINE_MODES:
+        raise ValueError(f"refine mode {refine_mode!r} is not one of {', '.join(REFINE_MODES)}")
+    choice = choose_pipeline(model, log)
+    rows = regression(model, log, choice.settings)
+    least = fit(rows.Y, rows.r, model.nominal,
+                batch=max(1, round(BATCH_SAMPLES / choice.settings.decimation)))
+    low = [(p.name, e) for p, e in zip(model.parameters, least.excitation) if e < NOT_EXCITED]
+    if low:
+        figures = ", ".join(f"{name} (excitation {e:.2g})" for name, e in low)
+        raise NotExcitedError(
+            f"{log.source}: the log does not excite {figures}: the column of each in the "
+            f"regressor is zero on the log or a combination of the other columns "
+            f"(excitation = the share of the column the others do not explain, 0 to 1; "
+            f"below {NOT_EXCITED:g} is refused). Use a log in which this term varies "
+            "independently, or make it a constant of the model")
+    theta, std, method, info = _refined(model, log, rows, least, refine_mode)
+    per, pooled = relative_errors(rows.Y, rows.r, theta)
+    return Identification(model, log, rows, least, theta, std, method, per, pooled, choice,
+                          info)
+
+
+def _refined(model: Model, log: ModelLog, rows: Regression, least: Fit, mode: str
+             ) -> tuple[np.ndarray, np.ndarray, str, dict[str, Any]]:
+    """The estimate after the refinement ``mode`` asks for, and what was done."""
+    kept = (least.theta, least.std_error, "least squares")
+    if mode == "none":
+        return (*kept, {"mode": mode, "applied": False, "reason": "--refine none"})
+    dynamics = Dynamics(model)
+    info: dict[str, Any] = {"mode": mode}
+    start = least.theta
+    try:
+        if mode == "auto":
+            check = check_on_halves(model, log, rows.t, rows.Y, rows.r, least.theta, dynamics)
+            info["held_out_simulation_error"] = check.as_dict()
+            if not check.improves:
+                return (*kept, {**info, "applied": False,
+                                "reason": "it does not lower the simulation error on the "
+                                          "held-out halves"})
+            start = check.start()  # nearer the optimum than least squares: fewer steps
+        result = refine(model, log, start, dynamics=dynamics)
+    except (ValueError, np.linalg.LinAlgError, FloatingPointError) as error:
+        return (*kept, {**info, "applied": False, "reason": f"the refinement failed ({error})"})
+    if not (np.all(np.isfinite(result.theta)) and np.all(np.isfinite(result.std_error))):
+        return (*kept, {**info, "applied": False,
+                        "reason": "the refinement ended on non-finite values"})
+    info.update({"applied": True, "runs_error_start": result.cost_start,
+                 "runs_error_end": result.cost_end, "evaluations": result.evaluations,
+                 "solver": result.status})
+    return result.theta, result.std_error, "output error", info
