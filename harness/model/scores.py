@@ -6,11 +6,11 @@
   accelerations here unfiltered, so on a noisy log this figure has a floor, and it
   favours models that weigh the accelerations less: read it beside the simulation.
 * **Simulation**: the model driven by the measured input from the measured initial state
-  (position as logged, velocity by spectral differentiation), free run over the whole log; the
-  RMS of each coordinate's error in its unit and relative to the RMS of the coordinate's
+  (position as logged, velocity by spectral differentiation), free run over the whole
+  log; the RMS of each coordinate's error in its unit and relative to the RMS of the coordinate's
   motion (about its mean). A run that diverges says so.
 
-:func:`segment_error` is the simulation score over short pieces of a log, each from its
+:class:`PieceSimulator` is the simulation score over short runs of a log, each from its
 measured state: what the cross-validation and the output-error refinement minimize.
 """
 from __future__ import annotations
@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from .fit import relative_errors
 from .log import ModelLog
 from .model import Model
 from .simulation import (
@@ -31,19 +32,15 @@ from .simulation import (
     simulate,
     substeps,
 )
+from .zero_phase import spectral
 
 
 def reference_velocity(log: ModelLog) -> np.ndarray:
     """The velocities the simulations start from (samples, coordinates): spectral
-    differentiation of the positions, mirrored at the ends so that they join. Only a first
-    guess of a run's initial state (exact for a band-limited motion, noisy where the
-    positions are): the runs that need it fit their initial state."""
-    extended = np.concatenate([log.q, log.q[::-1]], axis=0)
-    frequency = np.fft.rfftfreq(extended.shape[0], log.step)
-    spectrum = np.fft.rfft(extended, axis=0) * (2j * np.pi * frequency)[:, None]
-    if extended.shape[0] % 2 == 0:
-        spectrum[-1] = 0.0  # the Nyquist bin's derivative is not real
-    return np.fft.irfft(spectrum, extended.shape[0], axis=0)[:log.samples]
+    differentiation of the positions. Only a first guess of a run's initial state (exact
+    for a band-limited motion, noisy where the positions are): the runs fit their initial
+    state."""
+    return spectral(log.q, log.step, 1)
 
 
 def reconstruction_error(model: Model, log: ModelLog, theta: np.ndarray) -> dict[str, Any]:
@@ -52,12 +49,8 @@ def reconstruction_error(model: Model, log: ModelLog, theta: np.ndarray) -> dict
     qd = np.gradient(log.q, log.step, axis=0)
     qdd = np.gradient(qd, log.step, axis=0)
     Y, r = model.regressor(log.q, qd, qdd, log.inputs if model.inputs else None)
-    error = Y @ theta - r
-    per = [float(np.linalg.norm(error[:, i]) / np.linalg.norm(r[:, i]))
-           if np.linalg.norm(r[:, i]) > 0 else None for i in range(r.shape[1])]
-    total = float(np.linalg.norm(r))
-    return {"per_equation": per,
-            "pooled": float(np.linalg.norm(error) / total) if total > 0 else None,
+    per, pooled = relative_errors(Y, r, theta)
+    return {"per_equation": per, "pooled": pooled if math.isfinite(pooled) else None,
             "definition": "norm of (Y theta - r) over norm of r at every sample, Y and r "
                           "from the raw positions (central differences) and raw inputs"}
 

@@ -16,6 +16,7 @@ decimation by 10.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -139,25 +140,33 @@ def derivatives(log: ModelLog, settings: ZeroPhase) -> Derivatives:
     return Derivatives(q, qd, qdd, inputs)
 
 
+def spectral(x: np.ndarray, step: float, power: int,
+             gain: Callable[[np.ndarray], np.ndarray] | None = None) -> np.ndarray:
+    """The ``power``-th derivative of ``x`` (samples, ...) times ``gain`` (of the frequency
+    [Hz]; None: 1) as products in the frequency domain, over ``x`` and its mirror image
+    (so that its ends join and nothing wraps around)."""
+    count = x.shape[0]
+    extended = np.concatenate([x, x[::-1]], axis=0)
+    frequency = np.fft.rfftfreq(extended.shape[0], step)
+    factor = (2j * np.pi * frequency) ** power
+    if gain is not None:
+        factor = factor * gain(frequency)
+    if extended.shape[0] % 2 == 0 and power % 2:
+        factor[-1] = 0.0  # an odd derivative of the Nyquist bin is not real
+    shape = (-1,) + (1,) * (x.ndim - 1)
+    out = np.fft.irfft(np.fft.rfft(extended, axis=0) * factor.reshape(shape),
+                       extended.shape[0], axis=0)
+    return out[:count]
+
+
 def _spectral(log: ModelLog, settings: ZeroPhase) -> Derivatives:
-    """The filter's gain and the derivatives as products in the frequency domain, over the
-    log and its mirror image (so that its ends join and nothing wraps around)."""
-    count = log.samples
-
-    def through(x: np.ndarray, power: int) -> np.ndarray:
-        extended = np.concatenate([x, x[::-1]], axis=0)
-        frequency = np.fft.rfftfreq(extended.shape[0], settings.step)
-        factor = settings.gain(frequency) * (2j * np.pi * frequency) ** power
-        if extended.shape[0] % 2 == 0 and power % 2:
-            factor[-1] = 0.0  # an odd derivative of the Nyquist bin is not real
-        out = np.fft.irfft(np.fft.rfft(extended, axis=0) * factor[:, None], extended.shape[0],
-                           axis=0)
-        return out[:count]
-
-    q = through(log.q, 0)
-    qd = _above_rounding(through(log.q, 1), q, settings.step)
-    qdd = _above_rounding(through(log.q, 2), q, settings.step ** 2)
-    inputs = through(log.inputs, 0) if log.inputs.shape[1] else log.inputs
+    """Steps 1 and 2 with the filter's gain and the derivatives in the frequency domain."""
+    q = spectral(log.q, settings.step, 0, settings.gain)
+    qd = _above_rounding(spectral(log.q, settings.step, 1, settings.gain), q, settings.step)
+    qdd = _above_rounding(spectral(log.q, settings.step, 2, settings.gain), q,
+                          settings.step ** 2)
+    inputs = (spectral(log.inputs, settings.step, 0, settings.gain) if log.inputs.shape[1]
+              else log.inputs)
     return Derivatives(q, qd, qdd, inputs)
 
 
