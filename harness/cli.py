@@ -148,7 +148,7 @@ ROBOT_OPTIONS = {"lock": ("--lock", []), "unknown": ("--unknown", "all"),
                  "joint_terms": ("--joint-terms", None),
                  "smooth_coulomb": ("--smooth-coulomb", None)}
 # the options of the model-file path (harness.model.commands), refused without --model
-MODEL_OPTIONS = {"refine": ("--refine", "auto")}
+MODEL_OPTIONS = {"refine": ("--refine", "auto"), "sample_rate": ("--sample-rate", None)}
 
 
 def _given(args, options: Mapping[str, tuple[str, object]]) -> list[str]:
@@ -291,6 +291,7 @@ SEED = argparse_type(integer, "--seed", low=0, high=2**63 - 1)
 DECIMATION = argparse_type(integer, "--csv-decimation", low=1, high=INT32_MAX)
 TOLERANCE = argparse_type(real, "--time-tolerance", low=0.0)
 RESAMPLE = argparse_type(real, "--resample", low=0.0)
+SAMPLE_RATE = argparse_type(real, "--sample-rate", low=0.0, low_open=True)
 
 
 def global_options() -> argparse.ArgumentParser:
@@ -395,6 +396,11 @@ def build_parser() -> argparse.ArgumentParser:
                         "(the model simulated from the measured input follows the measured "
                         "positions): simulation always, none never, auto (default) when it "
                         "improves the simulation error on held-out halves of the log")
+    p.add_argument("--sample-rate", type=SAMPLE_RATE, default=MODEL_OPTIONS["sample_rate"][1],
+                   metavar="HZ",
+                   help="with --model: the log's samples are evenly spaced at HZ samples per "
+                        "second from t = 0, and no time column is read (a .mat log without a "
+                        "time vector; the model file's [log] sample_rate says the same)")
     from .robot.cli import add_arguments as add_robot_arguments
     add_robot_arguments(p)
     p.set_defaults(func=cmd_identify)

@@ -29,6 +29,10 @@ def register_validate(sub, parents) -> None:
     what.add_argument("--robot", metavar="URDF",
                       help="a serial robot's URDF; the log has columns t, q1..qn, u1..un")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    from .cli import SAMPLE_RATE
+    p.add_argument("--sample-rate", type=SAMPLE_RATE, default=None, metavar="HZ",
+                   help="with --model: the log's samples are evenly spaced at HZ samples per "
+                        "second, and no time column is read (as [log] sample_rate)")
     robot = p.add_argument_group("serial robots (with --robot)")
     robot.add_argument("--columns", default="", metavar="q1=NAME,...",
                        help="log column of each role t, q1..qn, u1..un")
@@ -59,6 +63,10 @@ def _positive_window(text: str) -> float:
 
 def _validate(args: argparse.Namespace) -> int:
     if args.robot:
+        if args.sample_rate is not None:
+            print("harness validate: --sample-rate goes with --model (a robot log has its "
+                  "time column t)", file=sys.stderr)
+            return 2
         from .robot.validate import validate_command as validate_robot
         return validate_robot(args)
     given = [option for option, value, default in (

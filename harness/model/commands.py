@@ -48,7 +48,10 @@ VALIDATE_OUTPUTS = ("validation.json", "validation.png")
 
 def _load(args: argparse.Namespace) -> tuple[Model, ModelLog]:
     model = read_model(args.model)
-    return model, read_log(args.data, model)
+    log = read_log(args.data, model, args.sample_rate)
+    if log.resampled:
+        print(f"{args.data}: {log.resampled}")
+    return model, log
 
 
 def _fail(command: str, error: Exception) -> int:
@@ -95,7 +98,7 @@ def identify_command(args: argparse.Namespace) -> int:
     for k, p in enumerate(model.parameters):
         print(f"  {p.name:<{width}} = {found.theta[k]:.6g} {p.unit}   +- "
               f"{found.std_error[k]:.2g} (1 sigma)")
-    _print_choice(found.choice)
+    _print_choice(found.choice, refined=found.method == "output error")
     _print_refinement(found)
     print(f"  input reconstruction error on this log: {100 * found.pooled:.3f} % (through the "
           "chosen pipeline)")
@@ -110,9 +113,10 @@ def identify_command(args: argparse.Namespace) -> int:
     return 0 if trusted else 1
 
 
-def _print_choice(choice: Choice) -> None:
+def _print_choice(choice: Choice, refined: bool) -> None:
     """The candidates' cross-validation scores and the choice; a band that leaves motion
-    out is said."""
+    out is said: a warning when least squares are the answer, a remark when the output
+    error (which no band limits) refined them."""
     if choice.candidates:
         print(f"  derivative pipeline by {choice.method}; relative simulation error per "
               "candidate:")
@@ -124,8 +128,12 @@ def _print_choice(choice: Choice) -> None:
         print(f"  derivative pipeline: {choice.method}")
     for name, share in choice.power_above.items():
         if share > POWER_ABOVE:
-            note(f"{name}: {100 * share:.1f} % of its motion's power lies above the chosen "
-                 f"band ({choice.settings.cutoff:.4g} Hz): the identification does not see it")
+            text = (f"{name}: {100 * share:.1f} % of its motion's power lies above the chosen "
+                    f"band ({choice.settings.cutoff:.4g} Hz)")
+            if refined:
+                print(f"  {text}; the output-error refinement saw all of it")
+            else:
+                note(f"{text}: least squares do not see it")
 
 
 def _print_refinement(found: Identification) -> None:
@@ -174,7 +182,7 @@ def _summary(found: Identification, estimates: Estimates) -> dict[str, object]:
     model, least = found.model, found.least_squares
     return {
         "model": model.source, "log": found.log.source, "samples": found.log.samples,
-        "method": found.method,
+        "resampled": found.log.resampled, "method": found.method,
         "parameters": {p.name: {"value": float(found.theta[k]),
                                 "std_error": float(found.std_error[k]),
                                 "excitation": float(least.excitation[k]), "unit": p.unit}
@@ -218,7 +226,7 @@ def validate_command(args: argparse.Namespace) -> int:
             scores = {"reconstruction_error": reconstruction_error(model, log, model.nominal),
                       "simulation_error": simulation_error(model, log, model.nominal)}
             outputs.file("validation.json").write_text(json.dumps({
-                "model": model.source, "log": log.source,
+                "model": model.source, "log": log.source, "resampled": log.resampled,
                 "relative_error": {"per_equation": per, "pooled": pooled},
                 "definition": "norm of (Y theta - r) over norm of r on the decimated rows of "
                               "the zero-phase pipeline; r: each equation's known side",

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..clock import ClockError, even_steps
 from ..log_columns import (
     LogColumnError,
     column_of,
@@ -21,13 +22,13 @@ from ..log_columns import (
     note_slow_step,
     read_columns,
     read_header,
-    uneven_step,
 )
 from ..units import factor
 from .model import Model
 from .reader import TIME
 
-#: A sampling step may differ from the mean step by this fraction (clock jitter).
+#: A sampling step may differ from the mean step by this fraction; a clock that jitters
+#: more is resampled onto even steps, a gap refused (harness.clock).
 STEP_TOLERANCE = 0.01
 
 
@@ -43,6 +44,7 @@ class ModelLog:
     t: np.ndarray        # (N,) [s]
     q: np.ndarray        # (N, coordinates)
     inputs: np.ndarray   # (N, inputs)
+    resampled: str | None = None  # what was done to a jittering clock (None: nothing)
 
     @property
     def step(self) -> float:
@@ -54,10 +56,13 @@ class ModelLog:
         return int(self.t.shape[0])
 
 
-def read_log(path: str | Path, model: Model) -> ModelLog:
-    """The time, coordinate and input columns of ``path`` that ``model.columns`` names."""
+def read_log(path: str | Path, model: Model, sample_rate: float | None = None) -> ModelLog:
+    """The time, coordinate and input columns of ``path`` that ``model.columns`` names.
+    With a sample rate [Hz] (``sample_rate``, else the model's [log] sample_rate), the
+    samples are evenly spaced at it from t = 0, and no time column is read."""
     path = Path(path)
-    names = [TIME, *model.coordinates, *model.inputs]
+    rate = sample_rate if sample_rate is not None else model.sample_rate
+    names = ([] if rate is not None else [TIME]) + [*model.coordinates, *model.inputs]
     wanted = {name: model.column(name) for name in names}
     try:
         kind = log_format(path, {".mat": "MATLAB"})
@@ -76,23 +81,24 @@ def read_log(path: str | Path, model: Model) -> ModelLog:
         if bad.size:
             raise LogFileError(f"{path}: column {column!r} ({name}) has {bad.size} NaN or "
                                f"infinite value(s), the first at sample {bad[0] + 1}")
-    t = columns[wanted[TIME]] * factor(model.time_unit or "s", "s")  # [units] t: a time
-    _check_time(path, wanted[TIME], t)
-    if model.time_unit is None:
+    if rate is not None:
+        t = np.arange(len(next(iter(columns.values())))) / rate
+    else:
+        t = columns[wanted[TIME]] * factor(model.time_unit or "s", "s")  # [units] t: a time
+    if len(t) < 3:
+        raise LogFileError(f"{path}: {len(t)} samples; identification needs many more")
+    if model.time_unit is None and rate is None:
         note_slow_step(path, (t[-1] - t[0]) / (len(t) - 1), 'write t = "ms" in the model '
                        'file\'s [units] (t = "s" confirms seconds)')
     q = np.column_stack([columns[wanted[c]] for c in model.coordinates])
     u = (np.column_stack([columns[wanted[u]] for u in model.inputs]) if model.inputs
          else np.empty((len(t), 0)))
-    return ModelLog(str(path), t, q, u)
-
-
-def _check_time(path: Path, column: str, t: np.ndarray) -> None:
-    if len(t) < 3:
-        raise LogFileError(f"{path}: {len(t)} samples; identification needs many more")
-    uneven = uneven_step(t, STEP_TOLERANCE, f"time column {column!r}")
-    if uneven:
-        raise LogFileError(f"{path}: at sample {uneven[0] + 1}, {uneven[1]}")
+    try:
+        even = even_steps(t, q, u, STEP_TOLERANCE, lambda k: f"at sample {k + 1}",
+                          f"time column {model.column(TIME)!r}")
+    except ClockError as error:
+        raise LogFileError(f"{path}: {error}") from None
+    return ModelLog(str(path), even.t, even.q, even.u, even.resampled)
 
 
 def _missing(path: Path, column: str, available: list[str]) -> LogFileError:

@@ -69,6 +69,7 @@ class Model:
     equations: tuple[Equation, ...]
     symbols: Symbols = field(repr=False)
     time_unit: str | None = None  # the log's time column's unit ([units] t; None: s)
+    sample_rate: float | None = None  # [log] sample_rate [Hz]: no time column read
 
     @property
     def parameter_names(self) -> tuple[str, ...]:

@@ -26,7 +26,7 @@ from .units import check_equation, quantity
 #: Most coordinates a model may have (the FMUs' fixed sizes).
 MAX_COORDINATES = 7
 SECTIONS = {"model": True, "parameters": True, "constants": False, "units": False,
-            "columns": False}
+            "columns": False, "log": False}
 _MODEL_KEYS = {"coordinates", "inputs", "equations"}
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 TIME = "t"
@@ -91,6 +91,7 @@ def parse_model(text: str, source: str | Path | None = None) -> Model:
         unit_table = unit_table or None  # t alone: nothing else scaled or checked
     units = _units(unit_table, coordinates, inputs, parameters, constants, fail)
     columns = _columns(data.get("columns", {}), coordinates, inputs, fail)
+    sample_rate = _sample_rate(data.get("log", {}), fail)
     equations = _equations(model, coordinates, symbols, units,
                            {p.name: p.unit for p in parameters},
                            {k.name: k.unit for k in constants}, fail)
@@ -100,7 +101,7 @@ def parse_model(text: str, source: str | Path | None = None) -> Model:
         raise fail(f"parameter(s) {', '.join(unused)} appear in no equation")
     return Model(str(source) if source is not None else "<model>", tuple(coordinates),
                  tuple(inputs), tuple(parameters), tuple(constants), units, columns,
-                 tuple(equations), symbols, time_unit)
+                 tuple(equations), symbols, time_unit, sample_rate)
 
 
 def _names(model: Mapping[str, Any], key: str, fail: Fail, required: bool) -> list[str]:
@@ -204,6 +205,20 @@ def _units(table: Any, coordinates: list[str], inputs: list[str],
         raise fail(f"parameter(s) {', '.join(without)} have no unit, which the dimension "
                    "check of [units] needs (write unit = \"1\" for a dimensionless one)")
     return {name: _unit(table[name], name, fail) for name in (*coordinates, *inputs)}
+
+
+def _sample_rate(table: Any, fail: Fail) -> float | None:
+    """[log] sample_rate [Hz]: the log's samples are evenly spaced at this rate, and its
+    time column (if any) is not read."""
+    unknown = set(table) - {"sample_rate"}
+    if unknown:
+        raise fail(f"[log] has unknown keys {sorted(unknown)} (known: sample_rate)")
+    if "sample_rate" not in table:
+        return None
+    rate = _number(table["sample_rate"], "[log] sample_rate", fail)
+    if not rate > 0.0:
+        raise fail(f"[log] sample_rate must be > 0 (samples per second), not {rate}")
+    return rate
 
 
 def _columns(table: Any, coordinates: list[str], inputs: list[str],

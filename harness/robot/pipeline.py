@@ -32,13 +32,13 @@ from pathlib import Path
 import numpy as np
 from scipy.signal import savgol_filter
 
+from ..clock import ClockError, even_steps
 from ..log_columns import (
     LogColumnError,
     column_of,
     note_slow_step,
     read_columns,
     read_header,
-    uneven_step,
 )
 from .assessment import Choice, choose_model, prediction_error
 from .base_parameters import BaseParameters, base_parameters
@@ -145,40 +145,12 @@ def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
     if units is None or units.time_unit is None:
         note_slow_step(path, (t[-1] - t[0]) / (len(t) - 1),
                        "give --time-unit ms (--time-unit s confirms seconds)")
-    uneven = uneven_step(t, relative_tolerance)
-    if uneven is None:
-        return JointLog(t, data[:, 1:1 + n], data[:, 1 + n:])
-    steps = np.diff(t)
-    typical = float(np.median(steps))
-    gap = int(np.argmax(steps)) if steps.size else 0
-    if not np.all(steps > 0) or steps[gap] > GAP_STEPS * typical:
-        where = uneven[0] if not np.all(steps > 0) else gap + 1
-        why = uneven[1] if not np.all(steps > 0) else (
-            f"a gap of {steps[gap]:.6g} s where the steps are typically {typical:.6g} s: "
-            f"the log is not continuous there; cut it into continuous pieces")
-        raise LogError(f"{path} {header.place(where)}: {why}")
-    return _resampled(t, data[:, 1:1 + n], data[:, 1 + n:])
-
-
-#: A step this many times the median step is a gap (refused); shorter uneven steps are a
-#: jittering clock (the log is resampled).
-GAP_STEPS = 2.5
-
-
-def _resampled(t: np.ndarray, q: np.ndarray, u: np.ndarray) -> JointLog:
-    """A log whose clock jitters, on even steps of its mean step: the positions through
-    cubic splines (their derivatives stay smooth), the torques linearly (a torque held
-    between samples is not smoother than the samples)."""
-    from scipy.interpolate import make_interp_spline
-
-    even = np.linspace(t[0], t[-1], len(t))
-    positions = make_interp_spline(t, q, k=3, axis=0)(even)
-    torques = np.column_stack([np.interp(even, t, u[:, i]) for i in range(u.shape[1])])
-    steps = np.diff(t)
-    return JointLog(even, positions, torques,
-                    f"the clock jitters (steps from {steps.min():.6g} to {steps.max():.6g} s): "
-                    f"the log is resampled onto even steps of {even[1] - even[0]:.6g} s "
-                    f"(positions by cubic splines, torques linearly)")
+    try:
+        even = even_steps(t, data[:, 1:1 + n], data[:, 1 + n:], relative_tolerance,
+                          header.place)
+    except ClockError as error:
+        raise LogError(f"{path} {error}") from None
+    return JointLog(even.t, even.q, even.u, even.resampled)
 
 
 def _odd(count: int) -> int:

@@ -110,6 +110,9 @@ def test_refine_none_keeps_least_squares_and_refine_needs_model(files, tmp_path,
     assert main(["identify", str(folder / "osc.csv"), "--out", str(tmp_path / "x"),
                  "--refine", "simulation"]) == 2
     assert "--refine not available" in capsys.readouterr().err
+    assert main(["identify", str(folder / "osc.csv"), "--out", str(tmp_path / "x"),
+                 "--sample-rate", "610"]) == 2
+    assert "--sample-rate not available" in capsys.readouterr().err
 
 
 def test_power_above_the_chosen_band_is_measured():
@@ -126,3 +129,52 @@ def test_power_above_the_chosen_band_is_measured():
 def read_model_text(text: str):
     from harness.model import parse_model
     return parse_model(text)
+
+
+
+def test_a_gap_is_refused_where_it_is(files, tmp_path, capsys):
+    folder, log = files
+    gap = tmp_path / "gap.csv"
+    keep = np.r_[0:2000, 2010:len(log.t)]
+    np.savetxt(gap, np.column_stack([log.t[keep], log.y[keep], log.u[keep]]), delimiter=",",
+               header="t,y,u", comments="", fmt="%.10g")
+    assert main(["identify", str(gap), "--model", str(folder / "osc.toml"), "--out",
+                 str(tmp_path / "gap")]) == 2
+    assert "at sample 2001: a gap of" in capsys.readouterr().err
+
+
+def test_a_log_without_time_takes_its_sample_rate(files, tmp_path, capsys):
+    """A .mat log with y and u only: --sample-rate, or [log] sample_rate in the model
+    file (written back into identified.toml), gives the parameters of the CSV log with
+    its time column; without either, the missing column is named."""
+    import scipy.io
+
+    folder, log = files
+    scipy.io.savemat(tmp_path / "no_time.mat", {"y": log.y, "u": log.u})
+    with_time = tmp_path / "with_time"
+    assert main(["identify", str(folder / "osc.csv"), "--model", str(folder / "osc.toml"),
+                 "--out", str(with_time), "--refine", "none"]) == 0
+    by_option = tmp_path / "by_option"
+    assert main(["identify", str(tmp_path / "no_time.mat"), "--model",
+                 str(folder / "osc.toml"), "--out", str(by_option), "--refine", "none",
+                 "--sample-rate", str(oscillator.RATE)]) == 0
+    rated = tmp_path / "rated.toml"
+    rated.write_text(oscillator.MODEL_TOML + f"\n[log]\nsample_rate = {oscillator.RATE}\n")
+    by_file = tmp_path / "by_file"
+    assert main(["identify", str(tmp_path / "no_time.mat"), "--model", str(rated), "--out",
+                 str(by_file), "--refine", "none"]) == 0
+    values = [json.loads((out / "identification.json").read_text())["parameters"]
+              for out in (with_time, by_option, by_file)]
+    for name in oscillator.NAMES:
+        assert values[1][name]["value"] == pytest.approx(values[0][name]["value"], rel=1e-6)
+        assert values[2][name]["value"] == values[1][name]["value"]
+    assert read_model(by_file / "identified.toml").sample_rate == oscillator.RATE
+    capsys.readouterr()
+    assert main(["identify", str(tmp_path / "no_time.mat"), "--model",
+                 str(folder / "osc.toml"), "--out", str(tmp_path / "x")]) == 2
+    assert "no column 't'" in capsys.readouterr().err
+    bad = tmp_path / "bad.toml"
+    bad.write_text(oscillator.MODEL_TOML + "\n[log]\nsample_rate = -5\n")
+    assert main(["identify", str(tmp_path / "no_time.mat"), "--model", str(bad), "--out",
+                 str(tmp_path / "y")]) == 2
+    assert "[log] sample_rate must be > 0" in capsys.readouterr().err

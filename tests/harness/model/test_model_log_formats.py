@@ -139,3 +139,26 @@ def test_a_log_of_another_format_exits_2_naming_it(tmp_path, capsys, command, na
     err = capsys.readouterr().err
     assert code == 2, err
     assert str(log) in err and "CSV (.csv, .txt), Parquet (.parquet, .pq), MATLAB (.mat)" in err
+
+
+def test_a_jittering_clock_is_resampled_and_identifies_as_the_even_log(tmp_path, capsys, emps):
+    """EMPS sampled at stamps moved by up to 30 % of a step (the positions interpolated
+    onto them by cubic splines, the voltage linearly): identify resamples the log onto
+    even steps, says so, and lands within a standard error of the even log's values."""
+    rng = np.random.default_rng(7)
+    t = emps.t.to_numpy()
+    stamps = t + 0.3e-3 * rng.uniform(-1, 1, len(t))
+    stamps[0], stamps[-1] = t[0], t[-1]
+    from scipy.interpolate import make_interp_spline
+    jittered = pd.DataFrame({"t": stamps, "qm": make_interp_spline(t, emps.qm, k=3)(stamps),
+                             "vir": np.interp(stamps, t, emps.vir)})
+    emps.to_csv(tmp_path / "even.csv", index=False, float_format="%.17g")
+    jittered.to_csv(tmp_path / "jittered.csv", index=False, float_format="%.17g")
+    even = _identify(tmp_path, tmp_path / "even.csv", EMPS, "even")
+    capsys.readouterr()
+    moved = _identify(tmp_path, tmp_path / "jittered.csv", EMPS, "jittered")
+    assert "the clock jitters" in capsys.readouterr().out
+    summary = json.loads((tmp_path / "jittered" / "identification.json").read_text())
+    assert "resampled onto even steps" in summary["resampled"]
+    errors = np.array([p["std_error"] for p in summary["parameters"].values()])
+    assert np.all(np.abs(moved - even) < errors), (moved - even) / errors
