@@ -35,7 +35,7 @@ from .log import LogFileError, ModelLog, read_log
 from .model import Model
 from .reader import read_model
 from .scores import reconstruction_error, simulation_error
-from .selection import POWER_ABOVE, Choice
+from .selection import CLASS_TOLERANCE, POWER_ABOVE, Choice
 from .zero_phase import Regression, derivatives, regression
 
 #: A pooled relative error above this on the estimation log: the model explains little.
@@ -95,16 +95,19 @@ def identify_command(args: argparse.Namespace) -> int:
     print(f"wrote {', '.join(str(p) for p in outputs.written)}")
     width = max(len(p.name) for p in model.parameters)
     print(f"  parameters by {found.method}:")
+    left_out = found.model_class.left_out if found.model_class else ()
     for k, p in enumerate(model.parameters):
-        print(f"  {p.name:<{width}} = {found.theta[k]:.6g} {p.unit}   +- "
-              f"{found.std_error[k]:.2g} (1 sigma)")
+        print(f"  {p.name:<{width}} = {found.theta[k]:.6g} {p.unit}   " +
+              ("(optional, left out)" if p.name in left_out else
+               f"+- {found.std_error[k]:.2g} (1 sigma)"))
+    _print_class(found)
     _print_choice(found.choice, refined=found.method == "output error")
     _print_refinement(found)
     print(f"  input reconstruction error on this log: {100 * found.pooled:.3f} % (through the "
           "chosen pipeline)")
     trusted = _print_scores(scores)
     for p, e in zip(model.parameters, found.least_squares.excitation):
-        if e < WEAKLY_EXCITED:
+        if e < WEAKLY_EXCITED and p.name not in left_out:
             note(f"{p.name} is weakly excited by the log (excitation {e:.2g}, below "
                  f"{WEAKLY_EXCITED:g}): its value is uncertain beyond its standard error")
     if found.pooled > POOR_FIT:
@@ -134,6 +137,28 @@ def _print_choice(choice: Choice, refined: bool) -> None:
                 print(f"  {text}; the output-error refinement saw all of it")
             else:
                 note(f"{text}: least squares do not see it")
+
+
+def _print_class(found: Identification) -> None:
+    """Which optional unknowns the cross-validation kept, and what leaving each out
+    alone would cost."""
+    choice = found.model_class
+    if choice is None:
+        return
+    print("  model class by cross-validation: " + (
+        f"left out {', '.join(choice.left_out)}" if choice.left_out
+        else "every optional unknown kept"))
+    if choice.not_excited:
+        print(f"    not excited by the log (left out first): {', '.join(choice.not_excited)}")
+    for name, cost in choice.absence_costs.items():
+        if cost > CLASS_TOLERANCE:
+            print(f"    leaving out {name} costs {100 * cost:.3g} % on the cross-validated "
+                  "error")
+    for k, p in enumerate(found.model.parameters):  # the class is chosen on least squares
+        if p.optional and p.name not in choice.left_out and \
+                abs(found.theta[k]) < 2 * found.std_error[k]:
+            print(f"    {p.name} = {found.theta[k]:.3g} is within 2 standard errors of 0 in "
+                  f"the final estimate: this log hardly supports it")
 
 
 def _print_refinement(found: Identification) -> None:
@@ -195,6 +220,7 @@ def _summary(found: Identification, estimates: Estimates) -> dict[str, object]:
                                    "classical_std_error": float(least.classical_error[k])}
                           for k, p in enumerate(model.parameters)},
         "refinement": found.refinement,
+        "model_class": found.model_class.as_dict() if found.model_class else None,
         "relative_error": {"per_equation": found.per_equation, "pooled": found.pooled},
         "pipeline": found.rows.settings.as_dict(), "rows": least.rows,
         "pipeline_choice": found.choice.as_dict(),

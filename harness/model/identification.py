@@ -3,7 +3,8 @@
 1. the derivative pipeline chosen by blocked cross-validation
    (:func:`harness.model.selection.choose_pipeline`);
 2. least squares on its regressor rows (:func:`harness.model.fit.fit`), refused when an
-   unknown is not excited;
+   unknown is not excited; the parameters marked optional kept or left out (at 0) by the
+   same cross-validation (:func:`harness.model.selection.choose_class`);
 3. the output-error refinement (:mod:`harness.model.refine`): always, never, or (auto)
    when it lowers the simulation error on held-out halves of the log.
 """
@@ -18,7 +19,7 @@ from .fit import BATCH_SAMPLES, Fit, fit, relative_errors
 from .log import ModelLog
 from .model import Model
 from .refine import check_on_halves, refine
-from .selection import Choice, choose_pipeline
+from .selection import Choice, ClassChoice, choose_class, choose_pipeline
 from .simulation import Dynamics
 from .zero_phase import Regression, regression
 
@@ -49,6 +50,7 @@ class Identification:
     pooled: float
     choice: Choice
     refinement: dict[str, Any] = field(default_factory=dict)
+    model_class: ClassChoice | None = None   # None: no parameter is optional
 
 
 def identify_model(model: Model, log: ModelLog, refine_mode: str = "auto") -> Identification:
@@ -58,9 +60,10 @@ def identify_model(model: Model, log: ModelLog, refine_mode: str = "auto") -> Id
         raise ValueError(f"refine mode {refine_mode!r} is not one of {', '.join(REFINE_MODES)}")
     choice = choose_pipeline(model, log)
     rows = regression(model, log, choice.settings)
-    least = fit(rows.Y, rows.r, model.nominal,
-                batch=max(1, round(BATCH_SAMPLES / choice.settings.decimation)))
-    low = [(p.name, e) for p, e in zip(model.parameters, least.excitation) if e < NOT_EXCITED]
+    batch = max(1, round(BATCH_SAMPLES / choice.settings.decimation))
+    least = fit(rows.Y, rows.r, model.nominal, batch=batch)
+    low = [(p.name, e) for p, e in zip(model.parameters, least.excitation)
+           if e < NOT_EXCITED and not p.optional]
     if low:
         figures = ", ".join(f"{name} (excitation {e:.2g})" for name, e in low)
         raise NotExcitedError(
@@ -68,16 +71,37 @@ def identify_model(model: Model, log: ModelLog, refine_mode: str = "auto") -> Id
             f"regressor is zero on the log or a combination of the other columns "
             f"(excitation = the share of the column the others do not explain, 0 to 1; "
             f"below {NOT_EXCITED:g} is refused). Use a log in which this term varies "
-            "independently, or make it a constant of the model")
-    theta, std, method, info = _refined(model, log, rows, least, refine_mode)
+            "independently, mark it optional = true, or make it a constant of the model")
+    model_class = None
+    free = np.ones(len(model.parameters), dtype=bool)
+    if any(p.optional for p in model.parameters):
+        model_class = choose_class(model, log, rows, choice.settings.border, least.excitation,
+                                   NOT_EXCITED)
+        free = model_class.free
+        if not free.all():
+            least = _expanded(fit(rows.Y[:, :, free], rows.r, model.nominal[free],
+                                  batch=batch), free, least.excitation)
+    theta, std, method, info = _refined(model, log, rows, least, refine_mode, free)
     per, pooled = relative_errors(rows.Y, rows.r, theta)
     return Identification(model, log, rows, least, theta, std, method, per, pooled, choice,
-                          info)
+                          info, model_class)
 
 
-def _refined(model: Model, log: ModelLog, rows: Regression, least: Fit, mode: str
-             ) -> tuple[np.ndarray, np.ndarray, str, dict[str, Any]]:
-    """The estimate after the refinement ``mode`` asks for, and what was done."""
+def _expanded(part: Fit, free: np.ndarray, excitation: np.ndarray) -> Fit:
+    """A fit of the unknowns ``free`` as one of every unknown: the others 0, with their
+    excitation from the fit of every unknown."""
+    def full(values: np.ndarray) -> np.ndarray:
+        out = np.zeros(len(free))
+        out[free] = values
+        return out
+    return Fit(full(part.theta), full(part.std_error), full(part.classical_error),
+               np.where(free, full(part.excitation), excitation), part.equation_rms, part.rows)
+
+
+def _refined(model: Model, log: ModelLog, rows: Regression, least: Fit, mode: str,
+             free: np.ndarray) -> tuple[np.ndarray, np.ndarray, str, dict[str, Any]]:
+    """The estimate after the refinement ``mode`` asks for (the unknowns ``free`` move),
+    and what was done."""
     kept = (least.theta, least.std_error, "least squares")
     if mode == "none":
         return (*kept, {"mode": mode, "applied": False, "reason": "--refine none"})
@@ -86,14 +110,15 @@ def _refined(model: Model, log: ModelLog, rows: Regression, least: Fit, mode: st
     start = least.theta
     try:
         if mode == "auto":
-            check = check_on_halves(model, log, rows.t, rows.Y, rows.r, least.theta, dynamics)
+            check = check_on_halves(model, log, rows.t, rows.Y, rows.r, least.theta, dynamics,
+                                    free)
             info["held_out_simulation_error"] = check.as_dict()
             if not check.improves:
                 return (*kept, {**info, "applied": False,
                                 "reason": "it does not lower the simulation error on the "
                                           "held-out halves"})
             start = check.start()  # nearer the optimum than least squares: fewer steps
-        result = refine(model, log, start, dynamics=dynamics)
+        result = refine(model, log, start, dynamics=dynamics, free=free)
     except (ValueError, np.linalg.LinAlgError, FloatingPointError) as error:
         return (*kept, {**info, "applied": False, "reason": f"the refinement failed ({error})"})
     if not (np.all(np.isfinite(result.theta)) and np.all(np.isfinite(result.std_error))):

@@ -15,11 +15,13 @@ from .units import si_factor
 
 @dataclass(frozen=True)
 class Parameter:
-    """An unknown to identify: its name, the nominal (first guess) value and its unit."""
+    """An unknown to identify: its name, the nominal (first guess) value and its unit;
+    ``optional``: identify may leave it out (at 0) when the log does not support it."""
 
     name: str
     nominal: float
     unit: str = ""
+    optional: bool = False
 
 
 @dataclass(frozen=True)

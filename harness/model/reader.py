@@ -137,14 +137,18 @@ def _parameter(name: str, spec: Any, fail: Fail) -> Parameter:
     if not isinstance(spec, dict):
         raise fail(f"parameter {name} must be a table such as "
                    f"{name} = {{ nominal = 1.0, unit = \"kg\" }}")
-    unknown = set(spec) - {"nominal", "unit"}
+    unknown = set(spec) - {"nominal", "unit", "optional"}
     if unknown:
-        raise fail(f"parameter {name} has unknown keys {sorted(unknown)} (known: nominal, unit)")
+        raise fail(f"parameter {name} has unknown keys {sorted(unknown)} (known: nominal, "
+                   "unit, optional)")
     if "nominal" not in spec:
         raise fail(f"parameter {name} has no nominal value")
     nominal = _number(spec["nominal"], f"the nominal value of parameter {name}", fail)
     unit = _unit(spec.get("unit", ""), f"parameter {name}", fail)
-    return Parameter(name, nominal, unit)
+    optional = spec.get("optional", False)
+    if not isinstance(optional, bool):
+        raise fail(f"parameter {name}: optional must be true or false, not {optional!r}")
+    return Parameter(name, nominal, unit, optional)
 
 
 def _constant(name: str, spec: Any, fail: Fail) -> Constant:

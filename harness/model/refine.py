@@ -64,9 +64,10 @@ def run_length(log: ModelLog, time_constant: float) -> int:
 
 def refine(model: Model, log: ModelLog, theta: np.ndarray, first: int = 0,
            last: int | None = None, dynamics: Dynamics | None = None,
-           most_runs: int = MOST_RUNS) -> Refinement:
+           most_runs: int = MOST_RUNS, free: np.ndarray | None = None) -> Refinement:
     """The output-error parameters over samples [first, last) of ``log``, from ``theta``,
-    on at most ``most_runs`` runs."""
+    on at most ``most_runs`` runs; only the unknowns ``free`` (a mask; None: all) move,
+    the others keep their values in ``theta`` (standard error 0)."""
     dynamics = dynamics or Dynamics(model)
     last = log.samples if last is None else last
     A = linearized_over(dynamics, log, theta)
@@ -75,7 +76,8 @@ def refine(model: Model, log: ModelLog, theta: np.ndarray, first: int = 0,
     if len(runs.starts) < 2:
         raise ValueError(f"{log.source}: too short for the output-error refinement's runs")
     parts = substeps(A, log.step)
-    problem = _Problem(PieceSimulator(dynamics, log, runs, parts), theta)
+    free = np.ones(len(theta), dtype=bool) if free is None else free
+    problem = _Problem(PieceSimulator(dynamics, log, runs, parts), theta, free)
     start = problem.start_vector()
     cost_start = problem.relative_error(start)
     result = scipy.optimize.least_squares(
@@ -91,11 +93,12 @@ class _Problem:
     """The unknowns [parameters / their scales, run states / their scales] and the
     residuals [(simulated - measured) / motion RMS] of every run's samples."""
 
-    def __init__(self, simulator: PieceSimulator, theta: np.ndarray) -> None:
+    def __init__(self, simulator: PieceSimulator, theta: np.ndarray, free: np.ndarray) -> None:
         self.sim = simulator
         self.runs, self.length, self.n = simulator.measured.shape
-        self.p = len(theta)
-        self.theta_scale = np.where(np.abs(theta) > 0, np.abs(theta), 1.0)
+        self.free = np.flatnonzero(free)
+        self.p = len(self.free)    # the unknowns that move
+        self.theta_scale = np.where(np.abs(theta) > 0, np.abs(theta), 1.0)[self.free]
         velocity = np.sqrt(np.mean(simulator.qd0 ** 2, axis=0))
         self.state_scale = np.concatenate([simulator.motion,
                                            np.where(velocity > 0, velocity, 1.0)])
@@ -103,10 +106,13 @@ class _Problem:
 
     def start_vector(self) -> np.ndarray:
         states = np.concatenate([self.sim.q0, self.sim.qd0], axis=1) / self.state_scale
-        return np.concatenate([self.theta0 / self.theta_scale, states.ravel()])
+        return np.concatenate([self.theta0[self.free] / self.theta_scale, states.ravel()])
 
     def theta(self, x: np.ndarray) -> np.ndarray:
-        return x[:self.p] * self.theta_scale
+        """Every parameter: the free ones from x, the others as they started."""
+        out = self.theta0.copy()
+        out[self.free] = x[:self.p] * self.theta_scale
+        return out
 
     def _states(self, x: np.ndarray) -> np.ndarray:
         return x[self.p:].reshape(self.runs, 2 * self.n) * self.state_scale
@@ -124,7 +130,7 @@ class _Problem:
         return (self.sim.measured / self.sim.motion).reshape(self.runs, -1)
 
     def residuals(self, x: np.ndarray) -> np.ndarray:
-        theta = np.broadcast_to(self.theta(x), (self.runs, self.p))
+        theta = np.broadcast_to(self.theta(x), (self.runs, len(self.theta0)))
         q = self._simulate(theta, self._states(x), 1)[0]
         out = (q - self._measured()).ravel()
         return np.where(np.isfinite(out), out, 1e6)
@@ -139,12 +145,12 @@ class _Problem:
         theta, states = self.theta(x), self._states(x)
         k = self.p + 2 * self.n
         steps = FD_STEP * np.maximum(np.abs(x[:self.p]), 1.0)
-        thetas = [np.broadcast_to(theta, (self.runs, self.p))]
+        thetas = [np.broadcast_to(theta, (self.runs, len(theta)))]
         starts = [states]
-        for j in range(self.p):
+        for j, which in enumerate(self.free):
             moved = theta.copy()
-            moved[j] += steps[j] * self.theta_scale[j]
-            thetas.append(np.broadcast_to(moved, (self.runs, self.p)))
+            moved[which] += steps[j] * self.theta_scale[j]
+            thetas.append(np.broadcast_to(moved, (self.runs, len(theta))))
             starts.append(states)
         state_step = FD_STEP
         for j in range(2 * self.n):
@@ -185,12 +191,15 @@ class _Problem:
         H = np.einsum("rsi,rsj->ij", projected, projected)
         scores = np.einsum("rsi,rs->ri", projected, residual)
         S = scores.T @ scores * self.runs / max(self.runs - self.p, 1)
+        out = np.zeros(len(self.theta0))
         try:
             H_inv = np.linalg.inv(H)
         except np.linalg.LinAlgError:
-            return np.full(self.p, math.inf)
+            out[self.free] = math.inf
+            return out
         variance = np.diag(H_inv @ S @ H_inv)
-        return np.sqrt(np.maximum(variance, 0.0)) * self.theta_scale
+        out[self.free] = np.sqrt(np.maximum(variance, 0.0)) * self.theta_scale
+        return out
 
 
 
@@ -216,10 +225,11 @@ class RefinementCheck:
 
 
 def check_on_halves(model: Model, log: ModelLog, rows_t: np.ndarray, rows_Y: np.ndarray,
-                    rows_r: np.ndarray, theta: np.ndarray,
-                    dynamics: Dynamics | None = None) -> RefinementCheck:
+                    rows_r: np.ndarray, theta: np.ndarray, dynamics: Dynamics | None = None,
+                    free: np.ndarray | None = None) -> RefinementCheck:
     """Fit least squares on the regressor rows of one half of the log, refine it on that
-    half, and score both on the other half; the scores averaged over the two halves."""
+    half, and score both on the other half; the scores averaged over the two halves. Only
+    the unknowns ``free`` (None: all) are fitted; the others stay 0."""
     from .fit import estimate
 
     dynamics = dynamics or Dynamics(model)
@@ -229,10 +239,13 @@ def check_on_halves(model: Model, log: ModelLog, rows_t: np.ndarray, rows_Y: np.
     halves = ((0, middle), (middle, log.samples))
     scores: dict[str, list[float]] = {"least_squares": [], "refined": []}
     refined_halves = []
+    free = np.ones(len(theta), dtype=bool) if free is None else free
     for k, (first, last) in enumerate(halves):
         mine = (rows_t >= log.t[first]) & (rows_t < log.t[last - 1])
-        start = estimate(rows_Y[mine], rows_r[mine], model.nominal)
-        refined = refine(model, log, start, first, last, dynamics, MOST_RUNS // 2).theta
+        start = np.zeros(len(theta))
+        start[free] = estimate(rows_Y[mine][:, :, free], rows_r[mine], model.nominal[free])
+        refined = refine(model, log, start, first, last, dynamics, MOST_RUNS // 2,
+                         free).theta
         refined_halves.append(refined)
         other_first, other_last = halves[1 - k]
         scorer = PieceSimulator(dynamics, log, pieces(other_first, other_last, length,

@@ -99,6 +99,81 @@ def candidates(log: ModelLog) -> list[tuple[str, ZeroPhase]]:
     return out
 
 
+@dataclass(frozen=True)
+class Trial:
+    """A candidate of the cross-validation: regressor rows, the filter's border (the
+    guard around a held-out block), and which unknowns are free (the others are 0)."""
+
+    rows: Regression
+    border: int
+    free: np.ndarray
+
+
+class CrossValidation:
+    """Blocked cross-validation of least-squares estimates on a log: FOLDS contiguous
+    blocks, each scored by simulation runs from the measured state."""
+
+    def __init__(self, model: Model, log: ModelLog) -> None:
+        self.model, self.log = model, log
+        self.dynamics = Dynamics(model)
+        length = int(np.clip(round(RUN_SECONDS / log.step), *RUN_SAMPLES))
+        self.length = min(length, log.samples // (2 * FOLDS))
+        self.edges = np.linspace(0, log.samples, FOLDS + 1).round().astype(int)
+        blocks = [pieces(int(a), int(b), self.length, RUNS_PER_BLOCK)
+                  for a, b in zip(self.edges, self.edges[1:])]
+        self.runs = Pieces(np.concatenate([b.starts for b in blocks]), self.length)
+        self.owner = np.concatenate([np.full(len(b.starts), k) for k, b in enumerate(blocks)])
+        self.blocks: dict[str, np.ndarray] = {}   # each trial's score per block
+
+    @property
+    def method(self) -> str:
+        return (f"blocked cross-validation, {FOLDS} blocks, simulation runs of {self.length} "
+                "samples from the measured state")
+
+    def scores(self, trials: dict[str, Trial]) -> dict[str, float]:
+        """Per trial, the mean over the blocks of its held-out runs' relative error (inf:
+        it cannot be fitted or simulated); trials of one sub-step count run at once."""
+        out: dict[str, float] = {}
+        groups: dict[int, dict[str, np.ndarray]] = {}
+        for label, trial in trials.items():
+            try:
+                full = _estimate(self.model, trial.rows, trial.free, slice(None))
+            except (np.linalg.LinAlgError, ValueError):
+                out[label] = math.inf
+                continue
+            groups.setdefault(_parts(self.dynamics, self.log, full), {})[label] = \
+                self._fold_estimates(trial)
+        for parts, group in groups.items():
+            blocks = _block_scores(self.dynamics, self.log, self.runs, parts, self.owner, group)
+            self.blocks.update(blocks)
+            for label, values in blocks.items():
+                value = float(np.mean(values))
+                out[label] = value if math.isfinite(value) else math.inf
+        return {label: out[label] for label in trials}
+
+    def _fold_estimates(self, trial: Trial) -> np.ndarray:
+        """Per block, the estimate from the rows outside it (NaN where too few remain)."""
+        log, rows = self.log, trial.rows
+        out = np.full((len(self.edges) - 1, len(self.model.parameters)), np.nan)
+        for k, (a, b) in enumerate(zip(self.edges, self.edges[1:])):
+            lo = log.t[0] + (a - trial.border) * log.step
+            hi = log.t[0] + (b + trial.border) * log.step
+            train = (rows.t < lo) | (rows.t > hi)
+            if train.sum() * rows.Y.shape[1] > int(trial.free.sum()):
+                try:
+                    out[k] = _estimate(self.model, rows, trial.free, train)
+                except np.linalg.LinAlgError:
+                    pass
+        return out
+
+
+def _estimate(model: Model, rows: Regression, free: np.ndarray, take) -> np.ndarray:
+    """Least squares over the rows ``take`` with the unknowns outside ``free`` at 0."""
+    theta = np.zeros(len(model.parameters))
+    theta[free] = estimate(rows.Y[take][:, :, free], rows.r[take], model.nominal[free])
+    return theta
+
+
 def choose_pipeline(model: Model, log: ModelLog) -> Choice:
     """The candidate pipeline of the best blocked cross-validated simulation score. The
     log must be long enough for the noise-floor pipeline (LogFileError). A log on which no
@@ -106,48 +181,111 @@ def choose_pipeline(model: Model, log: ModelLog) -> Choice:
     ``method``."""
     fallback = ZeroPhase.for_log(log)
     check_length(model, log, fallback)
-
-    def kept(why: str) -> Choice:
-        return Choice(fallback, (), f"not cross-validated ({why})",
-                      power_above(model, log, fallback))
-
-    dynamics = Dynamics(model)
     tried = [(label, settings) for label, settings in candidates(log)
              if log.samples >= minimum_samples(settings, len(model.parameters))
              and log.samples // FOLDS > 4 * settings.border]
-    rows = {label: regression(model, log, settings) for label, settings in tried}
-    full = {}
-    for label, r in rows.items():
-        try:
-            full[label] = estimate(r.Y, r.r, model.nominal)
-        except (np.linalg.LinAlgError, ValueError):
-            continue
-    tried = [(label, settings) for label, settings in tried if label in full]
-    if not tried:
-        return kept("no candidate pipeline can be fitted on this log")
-    length = int(np.clip(round(RUN_SECONDS / log.step), *RUN_SAMPLES))
-    length = min(length, log.samples // (2 * FOLDS))
-    edges = np.linspace(0, log.samples, FOLDS + 1).round().astype(int)
-    blocks = [pieces(int(a), int(b), length, RUNS_PER_BLOCK) for a, b in zip(edges, edges[1:])]
-    runs = Pieces(np.concatenate([b.starts for b in blocks]), length)
-    owner = np.concatenate([np.full(len(b.starts), k) for k, b in enumerate(blocks)])
-    folds = {label: _fold_estimates(model, log, rows[label], edges, settings.border)
-             for label, settings in tried}
-    groups: dict[int, list[str]] = {}
-    for label, _ in tried:  # candidates of one sub-step count are simulated together
-        groups.setdefault(_parts(dynamics, log, full[label]), []).append(label)
-    scores: dict[str, float] = {}
-    for parts, labels in groups.items():
-        scores.update(_scores(dynamics, log, runs, parts, owner,
-                              {label: folds[label] for label in labels}))
+    every = np.ones(len(model.parameters), dtype=bool)
+    cv = CrossValidation(model, log)
+    scores = cv.scores({label: Trial(regression(model, log, settings), settings.border, every)
+                        for label, settings in tried})
     scored = [Candidate(settings, scores[label], label) for label, settings in tried]
     finite = [c for c in scored if math.isfinite(c.score)]
     if not finite:
-        return kept("no candidate's model stays finite in simulation on the held-out blocks")
+        return Choice(fallback, tuple(scored), "not cross-validated (no candidate's model can "
+                      "be fitted and stays finite in simulation on the held-out blocks)",
+                      power_above(model, log, fallback))
     best = min(finite, key=lambda c: c.score)
-    return Choice(best.settings, tuple(scored),
-                  f"blocked cross-validation, {FOLDS} blocks, simulation runs of {length} "
-                  f"samples from the measured state", power_above(model, log, best.settings))
+    return Choice(best.settings, tuple(scored), cv.method,
+                  power_above(model, log, best.settings))
+
+
+#: A model class that scores within this fraction of the best one scored, or within one
+#: standard error of the blocks' differences from it, is as good: the one with fewer
+#: unknowns is kept (the one-standard-error rule of cross-validation).
+CLASS_TOLERANCE = 0.01
+
+
+@dataclass(frozen=True)
+class ClassChoice:
+    """The unknowns kept (``free``), the optional ones left out, every class scored
+    (by the names it leaves out) and what leaving each optional unknown out alone costs
+    (relative change of the cross-validated error, from the full class)."""
+
+    free: np.ndarray
+    left_out: tuple[str, ...]
+    scores: dict[str, float]
+    absence_costs: dict[str, float]
+    not_excited: tuple[str, ...] = ()   # left out before the scoring: the log cannot tell
+
+    def as_dict(self) -> dict[str, object]:
+        return {"left_out": list(self.left_out), "not_excited": list(self.not_excited),
+                "scores": {k: (v if math.isfinite(v) else None) for k, v in self.scores.items()},
+                "absence_costs": {k: (v if math.isfinite(v) else None)
+                                  for k, v in self.absence_costs.items()},
+                "rule": f"the fewest unknowns within {100 * CLASS_TOLERANCE:g} % or one "
+                        "standard error of the best cross-validated error (backward "
+                        "elimination of optional unknowns)"}
+
+
+def choose_class(model: Model, log: ModelLog, rows: Regression, border: int,
+                 excitation: np.ndarray, too_weak: float) -> ClassChoice:
+    """The model class among the parameters marked optional: backward elimination by the
+    blocked cross-validation on ``rows``; an optional unknown whose excitation is below
+    ``too_weak`` is left out first (the log cannot determine it)."""
+    names = [p.name for p in model.parameters]
+    optional = [k for k, p in enumerate(model.parameters) if p.optional]
+    free = np.ones(len(names), dtype=bool)
+    free[[k for k in optional if excitation[k] < too_weak]] = False
+
+    def label(mask: np.ndarray) -> str:
+        out = [names[k] for k in optional if not mask[k]]
+        return "without " + ", ".join(out) if out else "every unknown"
+
+    cv = CrossValidation(model, log)
+    scores = cv.scores({label(free): Trial(rows, border, free)})
+    current = free.copy()
+    costs: dict[str, float] = {}
+    while True:
+        trials = {}
+        for k in optional:
+            if current[k]:
+                mask = current.copy()
+                mask[k] = False
+                trials[label(mask)] = Trial(rows, border, mask)
+        if not trials:
+            break
+        found = cv.scores(trials)
+        scores.update(found)
+        if not costs:  # the first round: each optional unknown's absence from the full class
+            base = scores[label(current)]
+            costs = {names[k]: found[label(_without(current, k))] / base - 1.0
+                     for k in optional if current[k]}
+        best = min(scores, key=lambda key: scores[key])
+        step = min(found, key=lambda key: found[key])
+        if not _as_good(cv.blocks[step], cv.blocks[best]):
+            break
+        current = trials[step].free
+    weak = tuple(names[k] for k in optional if excitation[k] < too_weak)
+    return ClassChoice(current, tuple(names[k] for k in optional if not current[k]), scores,
+                       costs, weak)
+
+
+def _as_good(candidate: np.ndarray, best: np.ndarray) -> bool:
+    """Whether a class's block scores are as good as the best class's: its mean within
+    CLASS_TOLERANCE of the best mean, or within one standard error of the paired block
+    differences."""
+    if not np.all(np.isfinite(candidate)):
+        return False
+    difference = candidate - best
+    standard_error = float(np.std(difference, ddof=1) / np.sqrt(len(difference)))
+    return float(np.mean(difference)) <= max(CLASS_TOLERANCE * float(np.mean(best)),
+                                             standard_error)
+
+
+def _without(mask: np.ndarray, k: int) -> np.ndarray:
+    out = mask.copy()
+    out[k] = False
+    return out
 
 
 def _parts(dynamics: Dynamics, log: ModelLog, theta: np.ndarray) -> int:
@@ -157,29 +295,13 @@ def _parts(dynamics: Dynamics, log: ModelLog, theta: np.ndarray) -> int:
         return 1
 
 
-def _fold_estimates(model: Model, log: ModelLog, rows: Regression, edges: np.ndarray,
-                    border: int) -> np.ndarray:
-    """Per block, the least-squares estimate from the rows outside it (guard: the filter's
-    border each side); NaN where too few rows remain."""
-    t0 = log.t[0]
-    out = np.full((len(edges) - 1, len(model.parameters)), np.nan)
-    for k, (a, b) in enumerate(zip(edges, edges[1:])):
-        lo, hi = t0 + (a - border) * log.step, t0 + (b + border) * log.step
-        train = (rows.t < lo) | (rows.t > hi)
-        if train.sum() * rows.Y.shape[1] > len(model.parameters):
-            try:
-                out[k] = estimate(rows.Y[train], rows.r[train], model.nominal)
-            except np.linalg.LinAlgError:
-                pass
-    return out
-
-
-def _scores(dynamics: Dynamics, log: ModelLog, runs: Pieces, parts: int, owner: np.ndarray,
-            folds: dict[str, np.ndarray]) -> dict[str, float]:
-    """Per candidate, the mean over the blocks of its held-out runs' relative error (the
-    candidates' runs simulated at once)."""
+def _block_scores(dynamics: Dynamics, log: ModelLog, runs: Pieces, parts: int,
+                  owner: np.ndarray, folds: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Per candidate, each block's held-out runs' relative error (inf for a candidate
+    without an estimate in every block); the candidates' runs simulated at once."""
     usable = {label: theta for label, theta in folds.items() if np.all(np.isfinite(theta))}
-    out = {label: math.inf for label in folds if label not in usable}
+    blocks = np.unique(owner)
+    out = {label: np.full(len(blocks), np.inf) for label in folds if label not in usable}
     if not usable:
         return out
     count = len(runs.starts)
@@ -188,13 +310,12 @@ def _scores(dynamics: Dynamics, log: ModelLog, runs: Pieces, parts: int, owner: 
     theta = np.concatenate([fold[owner] for fold in usable.values()])
     with np.errstate(all="ignore"):
         error = simulator.residuals(theta)
-    for c, label in enumerate(usable):
-        mine = error[c * count:(c + 1) * count]
-        per_block = [np.sqrt(np.mean(mine[owner == k] ** 2, axis=(0, 1))) / simulator.motion
-                     for k in np.unique(owner)]
-        value = float(np.mean([np.sqrt(np.mean(b ** 2)) for b in per_block]))
-        out[label] = value if math.isfinite(value) else math.inf
-    return out
+        for c, label in enumerate(usable):
+            mine = error[c * count:(c + 1) * count]
+            out[label] = np.array([
+                np.sqrt(np.mean((np.sqrt(np.mean(mine[owner == k] ** 2, axis=(0, 1)))
+                                 / simulator.motion) ** 2)) for k in blocks])
+    return {label: np.where(np.isfinite(v), v, np.inf) for label, v in out.items()}
 
 
 def power_above(model: Model, log: ModelLog, settings: ZeroPhase) -> dict[str, float]:

@@ -31,8 +31,9 @@ def model_toml(model: Model, values: Sequence[float] | np.ndarray,
               "[parameters]"]
     width = max(len(p.name) for p in model.parameters)
     for k, p in enumerate(model.parameters):
+        optional = ", optional = true" if p.optional else ""
         entry = (f"{p.name:<{width}} = {{ nominal = {_number(values[k])}, "
-                 f"unit = {_string(p.unit)} }}")
+                 f"unit = {_string(p.unit)}{optional} }}")
         if std_errors is not None:
             entry += f"   # std error {float(std_errors[k]):.3g}"
         lines.append(entry)
