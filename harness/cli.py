@@ -148,7 +148,9 @@ ROBOT_OPTIONS = {"lock": ("--lock", []), "unknown": ("--unknown", "all"),
                  "joint_terms": ("--joint-terms", None),
                  "smooth_coulomb": ("--smooth-coulomb", None)}
 # the options of the model-file path (harness.model.commands), refused without --model
-MODEL_OPTIONS = {"refine": ("--refine", "auto"), "sample_rate": ("--sample-rate", None)}
+MODEL_OPTIONS = {"refine": ("--refine", "auto")}
+# the options of the model-file and robot paths (one log reader), refused without either
+SIGNAL_OPTIONS = {"sample_rate": ("--sample-rate", None)}
 
 
 def _given(args, options: Mapping[str, tuple[str, object]]) -> list[str]:
@@ -170,6 +172,9 @@ def cmd_identify(args) -> int:
     if not args.model:
         _refuse(_given(args, MODEL_OPTIONS), "this log", "it refines a model file's "
                 "parameters: it needs --model")
+    if not (args.model or args.robot):
+        _refuse(_given(args, SIGNAL_OPTIONS), "a t, y, u log", "it states the sample rate of "
+                "a log read with --model or --robot; --resample evens a t, y, u log's clock")
     if args.model:  # a model file: harness.model.commands
         given = _given(args, LOG_OPTIONS) + _given(args, ROBOT_OPTIONS)
         given += ["--robot"] if args.robot else []
@@ -396,11 +401,12 @@ def build_parser() -> argparse.ArgumentParser:
                         "(the model simulated from the measured input follows the measured "
                         "positions): simulation always, none never, auto (default) when it "
                         "improves the simulation error on held-out halves of the log")
-    p.add_argument("--sample-rate", type=SAMPLE_RATE, default=MODEL_OPTIONS["sample_rate"][1],
+    p.add_argument("--sample-rate", type=SAMPLE_RATE, default=SIGNAL_OPTIONS["sample_rate"][1],
                    metavar="HZ",
-                   help="with --model: the log's samples are evenly spaced at HZ samples per "
-                        "second from t = 0, and no time column is read (a .mat log without a "
-                        "time vector; the model file's [log] sample_rate says the same)")
+                   help="with --model or --robot: the log's samples are evenly spaced at HZ "
+                        "samples per second from t = 0, and no time column is read (a .mat "
+                        "log without a time vector; a model file's [log] sample_rate says the "
+                        "same)")
     from .robot.cli import add_arguments as add_robot_arguments
     add_robot_arguments(p)
     p.set_defaults(func=cmd_identify)

@@ -22,7 +22,7 @@ def register_validate(sub, parents) -> None:
                        "Writes validation.json (relative_error, per equation or joint and "
                        "pooled) and validation.png.")
     p.add_argument("data", metavar="LOG",
-                   help="CSV (header row), Parquet (.parquet) or, with --model, MATLAB .mat")
+                   help="CSV (header row), Parquet (.parquet) or MATLAB .mat")
     what = p.add_mutually_exclusive_group(required=True)
     what.add_argument("--model", metavar="MODEL.toml",
                       help="the model file (e.g. an identify run's identified.toml)")
@@ -31,8 +31,9 @@ def register_validate(sub, parents) -> None:
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     from .cli import SAMPLE_RATE
     p.add_argument("--sample-rate", type=SAMPLE_RATE, default=None, metavar="HZ",
-                   help="with --model: the log's samples are evenly spaced at HZ samples per "
-                        "second, and no time column is read (as [log] sample_rate)")
+                   help="the log's samples are evenly spaced at HZ samples per second, and "
+                        "no time column is read (a model file's [log] sample_rate says the "
+                        "same)")
     robot = p.add_argument_group("serial robots (with --robot)")
     robot.add_argument("--columns", default="", metavar="q1=NAME,...",
                        help="log column of each role t, q1..qn, u1..un")
@@ -63,10 +64,6 @@ def _positive_window(text: str) -> float:
 
 def _validate(args: argparse.Namespace) -> int:
     if args.robot:
-        if args.sample_rate is not None:
-            print("harness validate: --sample-rate goes with --model (a robot log has its "
-                  "time column t)", file=sys.stderr)
-            return 2
         from .robot.validate import validate_command as validate_robot
         return validate_robot(args)
     given = [option for option, value, default in (

@@ -47,7 +47,6 @@ def write_log(name: str, samples: int, path: Path) -> str:
 
 def least_squares_seconds(urdf: str, path: Path) -> float:
     from harness.robot.base_parameters import base_parameters
-    from harness.robot.least_squares import torque_least_squares
     from harness.robot.pipeline import JointLog, savitzky_golay
 
     robot = read_urdf(urdf)
@@ -58,7 +57,8 @@ def least_squares_seconds(urdf: str, path: Path) -> float:
     q, qd, qdd, u = savitzky_golay(log, 0.05)
     body = robot.rigid_body()
     base = base_parameters(body, robot.arrays()["types"], robot.joint_names, "all")
-    torque_least_squares(base.regressor(body.regressor(q, qd, qdd)), u)
+    Yb = base.regressor(body.regressor(q, qd, qdd))
+    np.linalg.lstsq(Yb.reshape(-1, base.count), u.ravel(), rcond=None)
     return time.perf_counter() - start
 
 

@@ -49,7 +49,6 @@ from bench.reports.robot_observer_methods import MODEL_METHODS, model_observer
 from bench.reports.robot_trajectories import quantize, simulate
 from harness.robot.base_parameters import base_parameters
 from harness.robot.examples import example_urdf
-from harness.robot.least_squares import torque_least_squares
 from harness.robot.pipeline import JointLog, identify_robot, savitzky_golay
 from harness.robot.urdf import read_urdf
 
@@ -154,11 +153,12 @@ def run_case(name: str, rate: float, seconds: float, seed: int = 1,
                 Y = body.regressor(qs[used], qds[used], qdds[used])
                 known = np.setdiff1d(np.arange(12 * robot.n), np.union1d(base.base, base.dependent))
                 z = us[used] - Y[:, :, known] @ robot.parameters()[known]
-                fit = torque_least_squares(base.regressor(Y), z)
+                Yb = base.regressor(Y)  # the practitioner's plain least squares
+                beta = np.linalg.lstsq(Yb.reshape(-1, base.count), z.ravel(), rcond=None)[0]
                 # prediction with the base parameters directly (no consistency step)
                 pi = robot.parameters().copy()  # project(pi) = beta, the known columns kept
                 pi[base.dependent] = 0.0
-                pi[base.base] = fit.beta
+                pi[base.base] = beta
                 velocity = qds
             else:
                 result = identify_robot(robot, log, unknown=unknown, method=method)

@@ -1,5 +1,6 @@
 """Least squares on a model's regressor rows, regularized relative to each column's scale,
-with standard errors from the residuals and an excitation figure per unknown.
+with standard errors from the residuals and an excitation figure per unknown: the one
+least squares of every identification path (model files and robots).
 
 Each column k of Y is divided by its RMS s_k (:func:`harness.model.rms_columns`), so
 the unknowns solved for are phi_k = s_k theta_k, each the size of its term in the
@@ -34,26 +35,31 @@ class Fit:
     std_error: np.ndarray       # sandwich, 1 sigma
     classical_error: np.ndarray  # residual variance times (Y'Y)^-1, 1 sigma
     excitation: np.ndarray      # per unknown, 0 (absent or collinear) .. 1 (orthogonal)
-    equation_rms: np.ndarray    # residual RMS per equation (SI)
+    equation_rms: np.ndarray    # residual RMS per equation (SI), over the rows used
     rows: int
+    covariance: np.ndarray      # sandwich covariance of theta (p, p)
+    condition: float            # of the weighted regressor with its columns normalized
 
 
-def excitation(Y: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
-    """How far each unknown's column stands out of the others, over the rows of Y
-    (rows, equations, unknowns): |part of column k not explained by the other columns| /
-    |column k|, i.e. sqrt(1 - R_k^2) (1/sqrt of the variance inflation factor). 0 for a
-    column that is zero on the log or a combination of the others."""
-    A = _weighted(Y, weights).reshape(-1, Y.shape[2])
-    norms = np.linalg.norm(A, axis=0)
-    out = np.zeros(A.shape[1])
-    for k in np.flatnonzero(norms > 0):
-        others = np.delete(A, k, axis=1) / np.where(np.delete(norms, k) > 0,
-                                                    np.delete(norms, k), 1.0)
-        column = A[:, k] / norms[k]
-        if others.shape[1]:
-            coefficients, *_ = np.linalg.lstsq(others, column, rcond=None)
-            column = column - others @ coefficients
-        out[k] = float(np.linalg.norm(column))
+def _excitation(gram: np.ndarray) -> np.ndarray:
+    """How far each unknown's column stands out of the others: |part of column k not
+    explained by the other columns| / |column k|, i.e. sqrt(1 - R_k^2) (1/sqrt of the
+    variance inflation factor); 0 for a column that is zero on the log or a combination of
+    the others. From the columns' Gram matrix ``gram``: each column's regression on the
+    others is solved in the p x p normal equations (a long log costs one pass over its
+    rows, not one per unknown)."""
+    norms = np.sqrt(np.maximum(np.diag(gram), 0.0))
+    present = norms > 0
+    G = gram / np.outer(np.where(present, norms, 1.0), np.where(present, norms, 1.0))
+    out = np.zeros(len(G))
+    for k in np.flatnonzero(present):
+        others = np.flatnonzero(present & (np.arange(len(G)) != k))
+        explained = 0.0
+        if others.size:
+            coefficients, *_ = np.linalg.lstsq(G[np.ix_(others, others)], G[others, k],
+                                               rcond=None)
+            explained = float(G[others, k] @ coefficients)
+        out[k] = np.sqrt(max(1.0 - explained, 0.0))
     return out
 
 
@@ -62,50 +68,66 @@ def _weighted(Y: np.ndarray, weights: np.ndarray | None) -> np.ndarray:
 
 
 def fit(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float = RIDGE,
-        batch: int = BATCH_SAMPLES) -> Fit:
+        batch: int = BATCH_SAMPLES, mask: np.ndarray | None = None) -> Fit:
     """theta minimizing sum over rows and equations of (W (Y theta - r))^2 plus the
     relative ridge toward ``nominal``. With several equations, W weighs each by 1 / its
     residual RMS after an unweighted pass, so that equations in different units count by
     their fit. Standard errors: the sandwich (H^-1 S H^-1, S from the residual scores
     summed over ``batch`` consecutive rows: pass BATCH_SAMPLES / the rows' decimation) and
-    the classical residual-variance ones."""
+    the classical residual-variance ones. ``mask`` (rows, equations): the equations to use
+    (False leaves that equation of that row out: no information, no residual)."""
+    if mask is not None:
+        Y, r = Y * mask[:, :, None], r * mask
     rows, equations, p = Y.shape
-    scales, weights, theta, H, Z, rw, rms = _weighted_solve(Y, r, nominal, ridge)
+    used = (np.full(equations, rows) if mask is None else
+            np.maximum(mask.sum(axis=0), 1)).astype(float)
+    scales, weights, theta, H, Z, rw, rms = _weighted_solve(Y, r, nominal, ridge, used)
     residual_w = rw - Z @ (theta * scales)  # (rows, equations)
     H_inv = np.linalg.inv(H)
     scores = np.einsum("sek,se->sk", Z, residual_w)
     usable = rows // batch * batch
     batched = scores[:usable].reshape(-1, batch, p).sum(axis=1)
     S = batched.T @ batched * (rows / max(usable, 1))
-    sandwich = np.sqrt(np.maximum(np.diag(H_inv @ S @ H_inv), 0.0)) / scales
-    variance = float(np.sum(residual_w ** 2)) / max(rows * equations - p, 1)
+    covariance = H_inv @ S @ H_inv / np.outer(scales, scales)
+    covariance = 0.5 * (covariance + covariance.T)
+    sandwich = np.sqrt(np.maximum(np.diag(covariance), 0.0))
+    variance = float(np.sum(residual_w ** 2)) / max(float(used.sum()) - p, 1.0)
     information = np.einsum("sek,sel->kl", Z, Z)
     classical = np.sqrt(np.maximum(variance * np.diag(H_inv @ information @ H_inv), 0.0)) \
         / scales
-    return Fit(theta, sandwich, classical, excitation(Y, weights), rms, rows)
+    return Fit(theta, sandwich, classical, _excitation(information), rms, rows, covariance,
+               _condition(information))
+
+
+def _condition(information: np.ndarray) -> float:
+    """The condition number of the regressor whose normal matrix is ``information``."""
+    eigenvalues = np.linalg.eigvalsh(information)
+    return float(np.sqrt(eigenvalues[-1] / eigenvalues[0])) if eigenvalues[0] > 0 \
+        else float("inf")
 
 
 def estimate(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float = RIDGE
              ) -> np.ndarray:
     """The values of :func:`fit` alone (no standard errors, no excitation)."""
-    return _weighted_solve(Y, r, nominal, ridge)[2]
+    return _weighted_solve(Y, r, nominal, ridge, np.full(Y.shape[1], float(Y.shape[0])))[2]
 
 
-def _weighted_solve(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float
-                    ) -> tuple[np.ndarray, ...]:
-    """:func:`_solve` with the equations weighted by their residual RMS (two passes when
-    there are several equations); also returns the scales, weights and residual RMS."""
+def _weighted_solve(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float,
+                    used: np.ndarray) -> tuple[np.ndarray, ...]:
+    """:func:`_solve` with the equations weighted by their residual RMS over their ``used``
+    rows (two passes when there are several equations); also returns the scales, weights
+    and residual RMS."""
     rows, equations, p = Y.shape
-    if rows * equations <= p:
-        raise ValueError(f"{rows} rows of {equations} equation(s) cannot determine {p} "
-                         "unknowns")
+    if used.sum() <= p:
+        raise ValueError(f"{int(used.sum())} equations ({rows} rows of {equations}) cannot "
+                         f"determine {p} unknowns")
     scales = rms_columns(Y)
     scales = np.where(scales > 0, scales, 1.0)
     weights = np.ones(equations)
     for _ in range(2 if equations > 1 else 1):
         theta, H, Z, rw = _solve(Y, r, nominal, scales, weights, ridge)
         residual = r - Y @ theta
-        rms = np.sqrt(np.mean(residual ** 2, axis=0))
+        rms = np.sqrt(np.sum(residual ** 2, axis=0) / used)
         if equations > 1 and rms.max() > 0:
             weights = np.maximum(rms, 1e-9 * rms.max())
     return scales, weights, theta, H, Z, rw, rms

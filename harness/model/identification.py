@@ -94,8 +94,11 @@ def _expanded(part: Fit, free: np.ndarray, excitation: np.ndarray) -> Fit:
         out = np.zeros(len(free))
         out[free] = values
         return out
+    covariance = np.zeros((len(free), len(free)))
+    covariance[np.ix_(free, free)] = part.covariance
     return Fit(full(part.theta), full(part.std_error), full(part.classical_error),
-               np.where(free, full(part.excitation), excitation), part.equation_rms, part.rows)
+               np.where(free, full(part.excitation), excitation), part.equation_rms, part.rows,
+               covariance, part.condition)
 
 
 def _refined(model: Model, log: ModelLog, rows: Regression, least: Fit, mode: str,

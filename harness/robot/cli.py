@@ -122,10 +122,14 @@ def column_mapping(text: str, command: str) -> dict[str, str] | None:
 def robot_and_log(args, mapping: dict[str, str]):
     """The robot of --robot (with --lock) and its log in SI units (--columns mapped, the
     unit options applied): what identify and validate --robot both read first."""
-    from .pipeline import read_log
+    from .pipeline import LogError, read_log
     from .urdf import read_urdf
+    if args.sample_rate is not None and args.time_unit is not None:
+        raise LogError("--sample-rate and --time-unit: with a sample rate no time column is "
+                       "read; give one of the two")
     robot = read_urdf(args.robot, locked=tuple(args.lock))
-    return robot, read_log(args.data, robot.n, mapping, units=units_of(args, robot))
+    return robot, read_log(args.data, robot.n, mapping, units=units_of(args, robot),
+                           sample_rate=args.sample_rate)
 
 
 def identify_command(args) -> int:

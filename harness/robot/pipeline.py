@@ -2,10 +2,11 @@
 
     python -m harness identify DATA.csv --robot ROBOT.urdf --out DIR
 
-DATA.csv (or a Parquet file) has columns t, q1..qn (rad, or m for prismatic joints),
+DATA.csv (or a Parquet or MATLAB file) has columns t, q1..qn (rad, or m for prismatic joints),
 u1..un (N.m or N); other names map with --columns q1=shoulder_pos etc., other units
 with --time-unit, --angle-unit, --length-unit and --torque-gains (currents times the
-drives' gains; harness.robot.log_units).  Steps:
+drives' gains; harness.robot.log_units); a MATLAB file or a log without a time column
+with --sample-rate.  Steps:
 1. velocities: Savitzky-Golay (zero-phase, the default: the velocities written over
    a window each joint chooses, the regression's signals over the longest of them,
    accelerations and torques filtered alike, harness.robot.smoothing) or a causal, model-free
@@ -13,8 +14,8 @@ drives' gains; harness.robot.log_units).  Steps:
    (observer_velocities);
 2. the base regressor of the URDF's model (C core): at the smoothed signals (sg) or in
    momentum form through a causal filter, with no acceleration (observer,
-   harness.robot.filtered_regression); torque-space weighted least squares with
-   standard errors (harness.robot.least_squares);
+   harness.robot.filtered_regression); the joints' equations weighted by their residual
+   RMS, least squares with standard errors (harness.model.fit, the model files' too);
 3. physically consistent link parameters near the URDF's (harness.robot.consistency),
    written as DIR/identified.urdf with the joints' viscous and Coulomb friction.
 Extra joint terms (--joint-terms, --smooth-coulomb: offsets, armature, asymmetric or
@@ -32,14 +33,9 @@ from pathlib import Path
 import numpy as np
 from scipy.signal import savgol_filter
 
-from ..clock import ClockError, even_steps
-from ..log_columns import (
-    LogColumnError,
-    column_of,
-    note_slow_step,
-    read_columns,
-    read_header,
-)
+from ..log_signals import Column, LogSignalsError, header_of, read_signals
+from ..model.fit import Fit
+from ..model.fit import fit as least_squares
 from .assessment import Choice, choose_model, prediction_error
 from .base_parameters import BaseParameters, base_parameters
 from .consistency import (
@@ -57,7 +53,6 @@ from .joint_terms import (
     check_directions,
     write_sidecar,
 )
-from .least_squares import Fit, torque_least_squares
 from .log_units import LogUnits
 from .native import core_defaults
 from .smoothing import SHORTEST_REGRESSION_WINDOW, adaptive_velocities, regression_window
@@ -73,8 +68,8 @@ OUTPUT_NAMES = ("velocities.csv", "parameters.csv", "identified.urdf", "summary.
                 "velocities.png", SIDECAR_NAME)
 
 
-class LogError(ValueError):
-    """The joint log cannot be used; the message names the file and line or column."""
+#: A joint log that cannot be used; the message names the file and line or column.
+LogError = LogSignalsError
 
 
 @dataclass
@@ -91,66 +86,47 @@ class JointLog:
 
 
 def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
-             relative_tolerance: float = 0.01, units: LogUnits | None = None) -> JointLog:
+             relative_tolerance: float = 0.01, units: LogUnits | None = None,
+             sample_rate: float | None = None) -> JointLog:
     """Columns t, q1..qn, u1..un (or the names or 1-based column numbers `mapping` gives
-    them; a CSV file without a header row has them in that order) of a CSV or Parquet
-    log (harness.log_columns), evenly sampled: every step within `relative_tolerance`
-    of the mean step (a logger's jitter, the rounding of epoch time stamps), the samples
-    then taken as evenly spaced.  `units` (harness.robot.log_units) brings the columns
-    to s, rad or m and N.m or N (None: they are in these units).  Read in chunks, so
-    that a long log takes little more than its numbers' memory."""
+    them; a CSV file without a header row has them in that order) of a CSV, Parquet or
+    MATLAB log, read by the one log reader (harness.log_signals): a clock whose steps
+    differ from the mean step by more than `relative_tolerance` is resampled onto even
+    steps, a gap refused.  `units` (harness.robot.log_units) brings the columns to s, rad
+    or m and N.m or N (None: they are in these units).  With a `sample_rate` [Hz] no time
+    column is read: the samples are evenly spaced at it from t = 0."""
     path, mapping = Path(path), dict(mapping or {})
-    wanted = ["t"] + [f"q{i}" for i in range(1, n + 1)] + [f"u{i}" for i in range(1, n + 1)]
+    positions, torques = [f"q{i}" for i in range(1, n + 1)], [f"u{i}" for i in range(1, n + 1)]
+    wanted = ([] if sample_rate is not None else ["t"]) + positions + torques
     if units is not None and len(units.position) != n:
         raise ValueError(f"units for {len(units.position)} joints, the robot has {n}")
-    try:
-        header = read_header(path)
-    except LogColumnError as error:
-        raise LogError(str(error)) from None
-    if not header.present and not mapping:
-        # no header row: the columns in the roles' order, t, q1..qn, u1..un
-        if len(header) != len(wanted):
-            raise LogError(f"{path}: no header row and {len(header)} columns; a robot of {n} "
-                           f"joints needs {len(wanted)} (t, q1..q{n}, u1..u{n}) or --columns "
-                           "with column numbers")
-        mapping = {role: str(k + 1) for k, role in enumerate(wanted)}
-    positions = [k for k in header if k.startswith("q") and k[1:].isdigit()]
-    columns = []
-    for name in wanted:
-        column = column_of(header, mapping.get(name, name))
-        if column is None:
-            hint = (f"; the file has {len(positions)} position columns but the robot has {n} "
-                    f"joints" if positions and len(positions) != n else "")
-            found = ", ".join(header) if header.present else f"{len(header)} unnamed columns"
-            raise LogError(f"{path}: no column {mapping.get(name, name)!r} (needed: "
-                           f"{', '.join(wanted)}; found: {found}){hint}")
-        columns.append(column)
-    if len(positions) > n and not mapping:
-        raise LogError(f"{path}: {len(positions)} position columns for a robot of {n} joints")
-    try:
-        data = read_columns(path, header, columns, wanted)
-    except LogColumnError as error:
-        raise LogError(str(error)) from None
-    bad = ~np.isfinite(data)
-    if bad.any():
-        row = int(np.argmax(bad.any(axis=1)))
-        which = [wanted[k] for k in range(len(wanted)) if bad[row, k]]
-        raise LogError(f"{path} {header.place(row)}: {', '.join(which)} is NaN, "
-                       "infinite or missing")
-    if len(data) < 10:
-        raise LogError(f"{path}: {len(data)} samples; identification needs many more")
-    if units is not None:  # to s, rad or m, N.m or N; a factor of 1 leaves the numbers
-        data *= np.concatenate([[units.time], units.position, units.torque])
-    t = data[:, 0]
-    if units is None or units.time_unit is None:
-        note_slow_step(path, (t[-1] - t[0]) / (len(t) - 1),
-                       "give --time-unit ms (--time-unit s confirms seconds)")
-    try:
-        even = even_steps(t, data[:, 1:1 + n], data[:, 1 + n:], relative_tolerance,
-                          header.place)
-    except ClockError as error:
-        raise LogError(f"{path} {error}") from None
-    return JointLog(even.t, even.q, even.u, even.resampled)
+    header, hint = header_of(path), f"; needed: {', '.join(wanted)}"
+    if header is not None:
+        if not header.present and not mapping:
+            # no header row: the columns in the roles' order, t, q1..qn, u1..un
+            if len(header) != len(wanted):
+                raise LogError(f"{path}: no header row and {len(header)} columns; a robot of "
+                               f"{n} joints needs {len(wanted)} ({', '.join(wanted[:1])}"
+                               f"{', ' if sample_rate is None else ''}q1..q{n}, u1..u{n}) or "
+                               "--columns with column numbers")
+            mapping = {role: str(k + 1) for k, role in enumerate(wanted)}
+        found = [k for k in header if k.startswith("q") and k[1:].isdigit()]
+        if found and len(found) != n:
+            hint += f"; the file has {len(found)} position columns but the robot has {n} joints"
+        if len(found) > n and not mapping:
+            raise LogError(f"{path}: {len(found)} position columns for a robot of {n} joints")
+
+    def columns(roles: list[str]) -> list[Column]:
+        return [Column(role, mapping.get(role, role)) for role in roles]
+    signals = read_signals(
+        path, None if sample_rate is not None else Column("t", mapping.get("t", "t")),
+        columns(positions), columns(torques), sample_rate=sample_rate,
+        time_factor=1.0 if units is None else units.time,
+        factors=None if units is None else np.concatenate([units.position, units.torque]),
+        missing_hint=hint, tolerance=relative_tolerance,
+        slow_step_hint=None if units is not None and units.time_unit is not None else
+        "give --time-unit ms (--time-unit s confirms seconds)")
+    return JointLog(signals.t, signals.q, signals.inputs, signals.resampled)
 
 
 def _odd(count: int) -> int:
@@ -320,7 +296,10 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     one_way = check_directions(terms, speed, mask, robot.joint_names)
     if one_way is not None:
         raise LogError(one_way)
-    fit = torque_least_squares(base.regressor(Y), z, batch=correlation, mask=mask)
+    # the ridge of the one least squares pulls a weakly excited base parameter toward the
+    # URDF's value
+    nominal_beta = base.project(np.concatenate([nominal, np.zeros(terms.count(robot.n))]))
+    fit = least_squares(base.regressor(Y), z, nominal_beta, batch=correlation, mask=mask)
     # each parameter's value that alone would explain the torques (prior_scales)
     measured = torque * mask
     with np.errstate(divide="ignore"):
@@ -335,11 +314,11 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     def score(beta: np.ndarray) -> float:
         """The pooled training-log error of base parameters beta (prediction_error)."""
         return float(np.linalg.norm(left - Yb @ beta)) / total if total > 0 else 0.0
-    projection = consistent_parameters(robot, base, fit.beta, fit.covariance, data_scale,
+    projection = consistent_parameters(robot, base, fit.theta, fit.covariance, data_scale,
                                        urdf_tolerance, score, terms)
     predictions = {
         "urdf": prediction_error(core @ nominal, torque, mask, names),
-        "estimate": prediction_error(known_torque + base.regressor(Y) @ fit.beta, torque,
+        "estimate": prediction_error(known_torque + base.regressor(Y) @ fit.theta, torque,
                                      mask, names),
         "consistent": prediction_error(Y @ projection.pi, torque, mask, names)}
     choice = choose_model(predictions, projection.pi,
@@ -494,7 +473,7 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
         writer.writerow(["parameter", "urdf", "estimate", "std_error", "consistent", "definition"])
         for k in range(result.base.count):
             writer.writerow([result.base.names[k], f"{nominal_beta[k]:.10g}",
-                             f"{result.fit.beta[k]:.10g}", f"{result.fit.std_error[k]:.3g}",
+                             f"{result.fit.theta[k]:.10g}", f"{result.fit.std_error[k]:.3g}",
                              f"{consistent_beta[k]:.10g}", result.base.description(k)])
     urdf = out / "identified.urdf"
     kept = result.urdf_kept
@@ -515,7 +494,7 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
         "viscous": dict(zip(names, standard[10 * n::2].tolist())),
         "coulomb": dict(zip(names, standard[10 * n + 1::2].tolist())),
         "masses": dict(zip([j.child_link for j in robot.joints], result.pi[:10 * n:10].tolist())),
-        "residual_rms": dict(zip(names, result.fit.residual_rms.tolist())),
+        "residual_rms": dict(zip(names, result.fit.equation_rms.tolist())),
         "condition_number": result.fit.condition,
         "base_parameters": result.base.count,
         "samples_used": int(len(result.used)),

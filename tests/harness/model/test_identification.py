@@ -140,7 +140,7 @@ def test_a_gap_is_refused_where_it_is(files, tmp_path, capsys):
                header="t,y,u", comments="", fmt="%.10g")
     assert main(["identify", str(gap), "--model", str(folder / "osc.toml"), "--out",
                  str(tmp_path / "gap")]) == 2
-    assert "at sample 2001: a gap of" in capsys.readouterr().err
+    assert "line 2002: a gap of" in capsys.readouterr().err
 
 
 def test_a_log_without_time_takes_its_sample_rate(files, tmp_path, capsys):

@@ -194,7 +194,7 @@ def test_non_finite_data(tmp_path, capsys):
     columns = _emps_columns()
     columns["qm"][1234] = np.nan
     code, err = _run(capsys, tmp_path, _write_csv(tmp_path / "log.csv", columns))
-    assert code == 2 and "'qm'" in err and "NaN or infinite" in err and "1235" in err
+    assert code == 2 and "'qm'" in err and "NaN, infinite" in err and "line 1236" in err
 
 
 def test_too_short_a_log(tmp_path, capsys):

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from harness.model.fit import fit as least_squares
 from harness.robot.base_parameters import base_parameters, random_states
 from harness.robot.examples import example_urdf
-from harness.robot.least_squares import torque_least_squares
 from harness.robot.urdf import read_urdf
 
 # known counts: planar 2R (6 inertial), UR5 (36), Panda (43), plus 2 friction per joint
@@ -45,9 +45,10 @@ def test_offline_least_squares_is_exact_without_noise():
     q, qd, qdd = random_states(types, 400, rng)
     truth = robot.parameters() * rng.uniform(0.7, 1.3, 12 * robot.n)
     tau = body.regressor(q, qd, qdd) @ truth
-    fit = torque_least_squares(base.regressor(body.regressor(q, qd, qdd)), tau)
+    fit = least_squares(base.regressor(body.regressor(q, qd, qdd)), tau,
+                        base.project(robot.parameters()))
     expected = base.project(truth)
-    assert np.abs(fit.beta - expected).max() < 1e-8 * np.abs(expected).max()
+    assert np.abs(fit.theta - expected).max() < 1e-8 * np.abs(expected).max()
 
 
 def noisy_pendulum(seed: int, samples: int = 4000, noise: float = 0.05):
@@ -63,8 +64,8 @@ def test_standard_errors_match_the_spread_of_repeated_fits():
     estimates, errors = [], []
     for seed in range(40):
         robot, body, base, (q, qd, qdd, tau), truth = noisy_pendulum(seed)
-        fit = torque_least_squares(base.regressor(body.regressor(q, qd, qdd)), tau, batch=20)
-        estimates.append(fit.beta - truth)
+        fit = least_squares(base.regressor(body.regressor(q, qd, qdd)), tau, truth, batch=20)
+        estimates.append(fit.theta - truth)
         errors.append(fit.std_error)
     spread, predicted = np.std(estimates, axis=0), np.mean(errors, axis=0)
     assert np.all(np.abs(np.mean(estimates, axis=0)) < 3 * spread / np.sqrt(40) + 1e-12)
@@ -84,7 +85,7 @@ def test_online_lsm_is_the_regularized_least_squares():
     assert np.abs(online["delta"] - expected).max() < 1e-9 * np.abs(expected).max()
     assert online["gamma_trace"] == pytest.approx(np.trace(np.linalg.inv(P)), rel=1e-9)
     # the estimate is the truth within a few standard errors, which are of the offline size
-    offline = torque_least_squares(Yb, tau, batch=20)
+    offline = least_squares(Yb, tau, truth, batch=20)
     errors = np.abs(online["delta"] + base.project(robot.parameters()) - truth)
     assert np.all(errors < 4 * online["std_error"])
     assert np.all(online["std_error"] < 3 * offline.std_error)

@@ -1,6 +1,7 @@
 """A robot log in other units and formats identifies and validates as the same log in
 s, rad and N.m as CSV: time in ms, angles in deg, prismatic positions in mm, torque
-columns holding drive currents with --torque-gains, and Parquet files."""
+columns holding drive currents with --torque-gains, Parquet files and MATLAB files
+without a time vector (--sample-rate)."""
 from __future__ import annotations
 
 import csv
@@ -45,6 +46,13 @@ def _write(path, t, q, u):
     return path
 
 
+def _write_mat(path, q, u):
+    """A MATLAB file of the joints' vectors, without a time vector."""
+    import scipy.io
+    scipy.io.savemat(path, {"q1": q[:, 0], "q2": q[:, 1], "u1": u[:, 0], "u2": u[:, 1]})
+    return path
+
+
 def _estimates(folder) -> np.ndarray:
     """The identified base parameters (parameters.csv's estimates, 10 digits)."""
     with (folder / "parameters.csv").open() as handle:
@@ -77,6 +85,7 @@ def test_other_units_currents_and_parquet_identify_the_same_parameters(tmp_path,
         "parquet": (_write(tmp_path / "si.parquet", t, q, tau), []),
         "all": (_write(tmp_path / "all.parquet", 1e3 * t, np.degrees(q), tau / np.array(GAINS)),
                 ["--time-unit", "ms", "--angle-unit", "deg", "--torque-gains", "0.37,2.5"]),
+        "mat": (_write_mat(tmp_path / "log.mat", q, tau), ["--sample-rate", "1000"]),
     }
     for name, (data, options) in cases.items():
         found = _identify(tmp_path, arm, data, name, *options)
@@ -99,8 +108,8 @@ def test_a_log_in_ms_and_deg_gives_the_parameters_to_full_precision(tmp_path, ar
     log = read_log(_write(tmp_path / "deg_ms.csv", 1e3 * t, np.degrees(q), tau), 2, units=units)
     assert log.step != 1e-3  # a rounding away from the reference's step
     found = identify_robot(robot, log)
-    beta = reference.fit.beta
-    assert np.abs(found.fit.beta - beta).max() < 1e-12 * np.abs(beta).max()  # measured: 2.5e-14
+    beta = reference.fit.theta
+    assert np.abs(found.fit.theta - beta).max() < 1e-12 * np.abs(beta).max()  # measured: 2.5e-14
 
 
 def test_validate_takes_the_same_units_and_parquet(tmp_path, arm, signals):
