@@ -5,48 +5,73 @@
 
 #include "small_solve.h"
 
-/* The residual Y theta - r of every equation at one sample. */
-static void residual(const TermProgram *program, const double theta[], const TpSample *sample,
-                     double e[])
+/* Which accelerations each entry (i, k) reads, bit j for q''_j: an entry that
+ * reads none has the same value at every q'' (the entries are affine in q''), so
+ * the mass matrix needs only the others evaluated again. */
+typedef struct {
+    unsigned reads[TP_MAX_COORDINATES][TP_MAX_PARAMETERS + 1];
+} Reads;
+
+static void find_reads(const TermProgram *program, Reads *out)
 {
-    double Y[TP_MAX_COORDINATES][TP_MAX_PARAMETERS], r[TP_MAX_COORDINATES];
-    tp_evaluate(program, sample, Y, r);
-    for (int i = 0; i < program->n; ++i) {
-        double sum = -r[i];
-        for (int k = 0; k < program->p; ++k) sum += Y[i][k] * theta[k];
-        e[i] = sum;
-    }
+    for (int i = 0; i < program->n; ++i)
+        for (int k = 0; k <= program->p; ++k) {
+            unsigned bits = 0u;
+            const int end = program->start[i][k] + program->length[i][k];
+            for (int t = program->start[i][k]; t < end; ++t)
+                if (program->op[t] == TP_ACCELERATION) bits |= 1u << program->arg[t];
+            out->reads[i][k] = bits;
+        }
 }
 
-int ms_accelerations(const TermProgram *program, const double theta[], const double q[],
-                     const double qd[], const double u[], double qdd[])
+static int accelerations(const TermProgram *program, const Reads *reads, const double theta[],
+                         const double q[], const double qd[], const double u[], double qdd[])
 {
-    const int n = program->n;
+    const int n = program->n, p = program->p;
     TpSample sample = {{0.0}, {0.0}, {0.0}, {0.0}};
     for (int i = 0; i < n; ++i) {
         sample.q[i] = q[i];
         sample.qd[i] = qd[i];
-        sample.qdd[i] = 0.0;
     }
     for (int j = 0; j < program->m; ++j) sample.u[j] = u[j];
-    double at_rest[TP_MAX_COORDINATES], moved[TP_MAX_COORDINATES];
+    double Y[TP_MAX_COORDINATES][TP_MAX_PARAMETERS], r[TP_MAX_COORDINATES];
     double M[TP_MAX_COORDINATES][TP_MAX_COORDINATES], b[TP_MAX_COORDINATES];
-    residual(program, theta, &sample, at_rest);
-    for (int j = 0; j < n; ++j) {  /* the residual is affine in q'': a unit step gives M */
-        sample.qdd[j] = 1.0;
-        residual(program, theta, &sample, moved);
-        sample.qdd[j] = 0.0;
-        for (int i = 0; i < n; ++i) M[i][j] = moved[i] - at_rest[i];
+    tp_evaluate(program, &sample, Y, r);  /* at q'' = 0: b = -(Y theta - r) */
+    for (int i = 0; i < n; ++i) {
+        double sum = -r[i];
+        for (int k = 0; k < p; ++k) sum += Y[i][k] * theta[k];
+        b[i] = -sum;
     }
-    for (int i = 0; i < n; ++i) b[i] = -at_rest[i];
+    for (int j = 0; j < n; ++j) {  /* column j of M: the change of Y theta - r as q''_j 0 -> 1 */
+        const unsigned bit = 1u << j;
+        sample.qdd[j] = 1.0;
+        for (int i = 0; i < n; ++i) {
+            double change = 0.0;
+            for (int k = 0; k < p; ++k)
+                if (reads->reads[i][k] & bit)
+                    change += (tp_entry(program, &sample, i, k) - Y[i][k]) * theta[k];
+            if (reads->reads[i][p] & bit) change -= tp_entry(program, &sample, i, p) - r[i];
+            M[i][j] = change;
+        }
+        sample.qdd[j] = 0.0;
+    }
     const int status = small_solve(n, M, b, qdd, 0.0);
     if (status)
         for (int i = 0; i < n; ++i) qdd[i] = NAN;
     return status;
 }
 
+int ms_accelerations(const TermProgram *program, const double theta[], const double q[],
+                     const double qd[], const double u[], double qdd[])
+{
+    Reads reads;
+    find_reads(program, &reads);
+    return accelerations(program, &reads, theta, q, qd, u, qdd);
+}
+
 /* One run (model_simulation.h, ms_simulate); u: this run's inputs. */
-static long run(const TermProgram *program, MsShape shape, const double theta[],
+static long run(const TermProgram *program, const Reads *reads, MsShape shape,
+                const double theta[],
                 const double q0[], const double qd0[], const double *u, const double limit[],
                 double *q_out, double *qd_out)
 {
@@ -66,22 +91,22 @@ static long run(const TermProgram *program, MsShape shape, const double theta[],
         for (int j = 0; j < shape.parts && diverged < 0; ++j) {
             const long i0 = 2 * ((s - 1) * shape.parts + j);
             const double *u0 = u + i0 * m, *um = u0 + m, *u1 = um + m;
-            ms_accelerations(program, theta, q, qd, u0, a1);
+            accelerations(program, reads, theta, q, qd, u0, a1);
             for (int i = 0; i < n; ++i) {
                 qs[i] = q[i] + half * qd[i];
                 vs2[i] = qd[i] + half * a1[i];
             }
-            ms_accelerations(program, theta, qs, vs2, um, a2);
+            accelerations(program, reads, theta, qs, vs2, um, a2);
             for (int i = 0; i < n; ++i) {
                 qs[i] = q[i] + half * vs2[i];
                 vs3[i] = qd[i] + half * a2[i];
             }
-            ms_accelerations(program, theta, qs, vs3, um, a3);
+            accelerations(program, reads, theta, qs, vs3, um, a3);
             for (int i = 0; i < n; ++i) {
                 qs[i] = q[i] + h * vs3[i];
                 vs4[i] = qd[i] + h * a3[i];
             }
-            ms_accelerations(program, theta, qs, vs4, u1, a4);
+            accelerations(program, reads, theta, qs, vs4, u1, a4);
             for (int i = 0; i < n; ++i) {
                 q[i] += sixth * (qd[i] + 2.0 * (vs2[i] + vs3[i]) + vs4[i]);
                 qd[i] += sixth * (a1[i] + 2.0 * (a2[i] + a3[i]) + a4[i]);
@@ -106,8 +131,10 @@ void ms_simulate(const TermProgram *program, MsShape shape, const double *theta,
 {
     const int n = program->n;
     const long inputs = (2L * shape.parts * (shape.samples - 1) + 1) * program->m;
+    Reads reads;
+    find_reads(program, &reads);
     for (int r = 0; r < shape.runs; ++r)
-        diverged[r] = run(program, shape, theta + (long)r * program->p, q0 + (long)r * n,
+        diverged[r] = run(program, &reads, shape, theta + (long)r * program->p, q0 + (long)r * n,
                           qd0 + (long)r * n, u + r * inputs, limit, q + r * shape.samples * n,
                           qd + r * shape.samples * n);
 }

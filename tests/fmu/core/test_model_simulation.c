@@ -35,6 +35,16 @@ static const char TWO_MASSES[] =
     "entry 1 2 4  1 1  1 0  8 0  5 0\n"
     "entry 1 3 1  0 0\n";
 
+/* m q'' = u - q''/2: a known inertia on the right side (r reads q''): theta = [m]. */
+static const char KNOWN_INERTIA[] =
+    "sto-term-program 1\n"
+    "sizes 1 1 1\n"
+    "constants 1 0.5\n"
+    "nominal 1\n"
+    "scale 1\n"
+    "entry 0 0 1  3 0\n"
+    "entry 0 1 6  4 0  0 0  3 0  6 0  8 0  5 0\n";
+
 static int parse(TermProgram *program, const char *text)
 {
     char error[256] = "";
@@ -55,6 +65,12 @@ static int solves_the_mass_matrix(void)
     const double massless[] = {0.0, 1.0, 50.0};
     failed += check(ms_accelerations(&program, massless, q, qd, u, qdd) == -1 && isnan(qdd[0]),
                     "a singular mass matrix gives -1 and NaN");
+    static TermProgram known;
+    failed += parse(&known, KNOWN_INERTIA);
+    const double m[] = {1.5}, force[] = {2.0};
+    failed += check(ms_accelerations(&known, m, q, qd, force, qdd) == 0 &&
+                    fabs(qdd[0] - 1.0) < 1e-15, "the right side's inertia: q'' = %.17g, "
+                    "expected 1", qdd[0]);
     return failed;
 }
 

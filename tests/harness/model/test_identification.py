@@ -5,6 +5,7 @@ refinement, and the scores that share nothing with either."""
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -215,7 +216,8 @@ def test_optional_terms_are_kept_or_left_out_by_the_data(files, tmp_path, capsys
     assert "model class by cross-validation: left out k2, K" in printed
     assert "not excited by the log (left out first): K" in printed
     assert "leaving out k3 costs" in printed
-    assert "c = 0.147 is within 2 standard errors of 0" in printed
+    flagged = re.search(r"c = (\S+) is within 2 standard errors of 0", printed)
+    assert flagged and abs(float(flagged.group(1)) - 0.147) < 0.01  # measured: 0.147, 0.148
     summary = json.loads((out / "identification.json").read_text())
     assert summary["model_class"]["left_out"] == ["k2", "K"]
     assert summary["model_class"]["absence_costs"]["k3"] > 1.0
