@@ -47,6 +47,7 @@ from bench.reports import REPORTS, commit, robot_report
 from bench.reports.realdata.baselines import kalman, tune_log10
 from bench.reports.robot_observer_methods import MODEL_METHODS, model_observer
 from bench.reports.robot_trajectories import quantize, simulate
+from harness.model.fit import fit as least_squares
 from harness.robot.base_parameters import base_parameters
 from harness.robot.examples import example_urdf
 from harness.robot.pipeline import JointLog, identify_robot, savitzky_golay
@@ -153,8 +154,9 @@ def run_case(name: str, rate: float, seconds: float, seed: int = 1,
                 Y = body.regressor(qs[used], qds[used], qdds[used])
                 known = np.setdiff1d(np.arange(12 * robot.n), np.union1d(base.base, base.dependent))
                 z = us[used] - Y[:, :, known] @ robot.parameters()[known]
-                Yb = base.regressor(Y)  # the practitioner's plain least squares
-                beta = np.linalg.lstsq(Yb.reshape(-1, base.count), z.ravel(), rcond=None)[0]
+                # torque-space least squares, the joints weighted by their residual RMS
+                beta = least_squares(base.regressor(Y), z,
+                                     base.project(robot.parameters())).theta
                 # prediction with the base parameters directly (no consistency step)
                 pi = robot.parameters().copy()  # project(pi) = beta, the known columns kept
                 pi[base.dependent] = 0.0

@@ -79,8 +79,7 @@ def fit(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float = RIDGE,
     if mask is not None:
         Y, r = Y * mask[:, :, None], r * mask
     rows, equations, p = Y.shape
-    used = (np.full(equations, rows) if mask is None else
-            np.maximum(mask.sum(axis=0), 1)).astype(float)
+    used = _used(Y, mask)
     scales, weights, theta, H, Z, rw, rms = _weighted_solve(Y, r, nominal, ridge, used)
     residual_w = rw - Z @ (theta * scales)  # (rows, equations)
     H_inv = np.linalg.inv(H)
@@ -106,10 +105,19 @@ def _condition(information: np.ndarray) -> float:
         else float("inf")
 
 
-def estimate(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float = RIDGE
-             ) -> np.ndarray:
+def estimate(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float = RIDGE,
+             mask: np.ndarray | None = None) -> np.ndarray:
     """The values of :func:`fit` alone (no standard errors, no excitation)."""
-    return _weighted_solve(Y, r, nominal, ridge, np.full(Y.shape[1], float(Y.shape[0])))[2]
+    if mask is not None:
+        Y, r = Y * mask[:, :, None], r * mask
+    return _weighted_solve(Y, r, nominal, ridge, _used(Y, mask))[2]
+
+
+def _used(Y: np.ndarray, mask: np.ndarray | None) -> np.ndarray:
+    """The rows each equation uses (every row without a mask)."""
+    rows, equations = Y.shape[:2]
+    return (np.full(equations, float(rows)) if mask is None else
+            np.maximum(mask.sum(axis=0), 1).astype(float))
 
 
 def _weighted_solve(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float,

@@ -262,7 +262,7 @@ def choose_class(model: Model, log: ModelLog, rows: Regression, border: int,
                      for k in optional if current[k]}
         best = min(scores, key=lambda key: scores[key])
         step = min(found, key=lambda key: found[key])
-        if not _as_good(cv.blocks[step], cv.blocks[best]):
+        if not as_good(cv.blocks[step], cv.blocks[best]):
             break
         current = trials[step].free
     weak = tuple(names[k] for k in optional if excitation[k] < too_weak)
@@ -270,7 +270,7 @@ def choose_class(model: Model, log: ModelLog, rows: Regression, border: int,
                        costs, weak)
 
 
-def _as_good(candidate: np.ndarray, best: np.ndarray) -> bool:
+def as_good(candidate: np.ndarray, best: np.ndarray) -> bool:
     """Whether a class's block scores are as good as the best class's: its mean within
     CLASS_TOLERANCE of the best mean, or within one standard error of the paired block
     differences."""

@@ -42,8 +42,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--joint-terms", default=None, metavar="TERM,...",
                        help="extra terms of every joint, identified with the rest: offset "
                             "(a constant torque), armature (reflected rotor inertia, x q''), "
-                            "asymmetric-coulomb (a Coulomb level per direction); written to "
-                            "DIR/joint_terms.csv, which validate --robot reads")
+                            "asymmetric-coulomb (a Coulomb level per direction), or auto (the "
+                            "combination of these the log supports, by cross-validation); "
+                            "written to DIR/joint_terms.csv, which validate --robot reads")
     group.add_argument("--smooth-coulomb", type=_positive("--smooth-coulomb"), default=None,
                        metavar="VS",
                        help="Coulomb friction as fc tanh(q'/VS) instead of fc sign(q') "
@@ -141,8 +142,13 @@ def identify_command(args) -> int:
     mapping = column_mapping(args.columns, "identify")
     if mapping is None:
         return 2
+    auto = (args.joint_terms or "").strip() == "auto"
     try:
-        terms = parse_terms(args.joint_terms, args.smooth_coulomb)
+        if auto and args.smooth_coulomb is not None:
+            raise JointTermsError("--joint-terms auto chooses among offset, armature and "
+                                  "asymmetric-coulomb; --smooth-coulomb cannot join that "
+                                  "choice: name the terms instead")
+        terms = None if auto else parse_terms(args.joint_terms, args.smooth_coulomb)
     except JointTermsError as error:
         print(f"harness identify: {error}", file=sys.stderr)
         return 2
@@ -154,7 +160,8 @@ def identify_command(args) -> int:
             if args.urdf_tolerance is not None:
                 speed["urdf_tolerance"] = args.urdf_tolerance
             result = identify_robot(robot, log, unknown=args.unknown, method=args.velocity,
-                                    window=args.window, terms=terms, **speed)
+                                    window=args.window, terms=terms, choose_terms=auto,
+                                    **speed)
             written = write_results(outputs.staging, robot, log, result, Path(args.data).name)
     except (UrdfError, LogError, UnitError) as error:
         print(f"harness identify: {error}", file=sys.stderr)
@@ -165,7 +172,9 @@ def identify_command(args) -> int:
     if args.window is None:
         print(f"  regression window {result.window:.3g} s (the joints' longest velocity "
               f"window, at least 0.05 s; --window sets it)")
-    n = robot.n
+    n, terms = robot.n, result.terms
+    if result.terms_choice is not None:
+        _print_terms_choice(result.terms_choice)
     standard = result.standard(n)
     values = result.term_values(n)
     for i, joint in enumerate(robot.joints):
@@ -182,6 +191,18 @@ def identify_command(args) -> int:
         print(f"  the joint terms: {outputs.final(written[-1])}{mean}")
     _print_assessment(result)
     return 0
+
+
+def _print_terms_choice(choice) -> None:
+    """--joint-terms auto: every class's cross-validated error and the one kept."""
+    from .model_class import BLOCKS, label
+    print(f"  joint terms by cross-validation (held-out torque error, mean of {BLOCKS} "
+          "blocks):")
+    for name, score in choice.scores.items():
+        mark = "  <- chosen" if name == label(choice.terms) else ""
+        shown = f"{100 * score:.3f} %" if score is not None else choice.reasons.get(
+            name, "could not be fitted")
+        print(f"    {name:<36} {shown}{mark}")
 
 
 def _print_assessment(result) -> None:

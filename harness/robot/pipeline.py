@@ -27,6 +27,7 @@ from __future__ import annotations
 import csv
 import json
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -54,6 +55,7 @@ from .joint_terms import (
     write_sidecar,
 )
 from .log_units import LogUnits
+from .model_class import TermsChoice, choose_joint_terms
 from .native import core_defaults
 from .smoothing import SHORTEST_REGRESSION_WINDOW, adaptive_velocities, regression_window
 from .urdf import Robot
@@ -179,6 +181,7 @@ class Identification:
     choice: Choice | None = None          # the training-log scores, what is written, warnings
     passive: list[str] = field(default_factory=list)  # joints whose torque is 0 throughout
     terms: JointTerms = field(default_factory=JointTerms)  # the extra joint terms
+    terms_choice: TermsChoice | None = None  # how they were chosen (choose_terms)
 
     @property
     def warnings(self) -> list[str]:
@@ -216,11 +219,28 @@ class Identification:
         return out
 
 
+@dataclass
+class Rows:
+    """The samples identify regresses: the core model's regressor (rows, n, 12 n) and the
+    torques (rows, n) at the samples `used`, each joint's speed there, the joint equations
+    that enter (friction_rows), the rows over which residuals may be correlated, and the
+    regressor of a model class (`extend`: the core's with its extra joint terms)."""
+
+    used: np.ndarray
+    core: np.ndarray
+    torque: np.ndarray
+    speed: np.ndarray
+    mask: np.ndarray
+    correlation: int
+    extend: Callable[[JointTerms], np.ndarray]
+
+
 def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: str = "sg",
                    window: float | None = None, tau: float = 0.02, max_samples: int = 20000,
                    skip: float = 0.5, min_speed: float | None = None,
                    urdf_tolerance: float = DEFAULT_URDF_TOLERANCE,
-                   terms: JointTerms | None = None) -> Identification:
+                   terms: JointTerms | None = None, choose_terms: bool = False
+                   ) -> Identification:
     """Identify the unknown parameters ("all" or "payload") from the log.
 
     window: the regression's Savitzky-Golay window [s] (None: "sg" takes the joints'
@@ -236,8 +256,8 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     (assessment.py).  A joint whose torque is 0 throughout is passive: its equation
     (torque = 0) constrains the parameters like any other.  terms: the extra joint terms
     (harness.robot.joint_terms; None: the core's model alone), identified with the rest;
+    choose_terms: the terms chosen from the log instead (harness.robot.model_class);
     the URDF's prediction is the core's model with the URDF's values."""
-    terms = terms or JointTerms()
     if log.q.shape[1] != robot.n:
         raise LogError(f"the log has {log.q.shape[1]} joints, the robot {robot.n}")
     if method not in ("sg", "observer"):
@@ -257,35 +277,62 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     stride = max(1, (last - first) // max_samples)
     used = np.arange(first, last, stride)
     body = robot.rigid_body()
+    if method == "observer":
+        bound = 1.5 * np.array([np.abs(smooth_column(log, log.q[:, i], max(window, 0.05), deriv=2)
+                                       ).max() for i in range(robot.n)]) + 1e-3
+        velocity = observer_velocities(log, bound)
+    rows = regression_rows(robot, log, method, window, tau, used, velocity,
+                           core_defaults().min_speed if min_speed is None else min_speed)
     types = robot.arrays()["types"]
-    base = base_parameters(body, types, robot.joint_names, unknown, terms=terms)
-    if min_speed is None:
-        min_speed = core_defaults().min_speed
+
+    def base_for(model: JointTerms) -> BaseParameters:
+        return base_parameters(body, types, robot.joint_names, unknown, terms=model)
+    choice = None
+    if choose_terms:
+        choice = choose_joint_terms(rows, base_for, robot.parameters(), robot.joint_names)
+        terms = choice.terms
+    terms = terms or JointTerms()
+    one_way = check_directions(terms, rows.speed, rows.mask, robot.joint_names)
+    if one_way is not None:
+        raise LogError(one_way)
+    base = base_for(terms)
+    Y = rows.extend(terms)
+    result = _identified(robot, rows, base, Y, terms, urdf_tolerance)
+    passive = [name for i, name in enumerate(robot.joint_names) if not np.any(log.u[:, i])]
+    return Identification(result[0], result[1], result[2], velocity, used, velocity_window,
+                          window, result[3], result[4], passive, terms, choice)
+
+
+def regression_rows(robot: Robot, log: JointLog, method: str, window: float, tau: float,
+                    used: np.ndarray, velocity: np.ndarray, min_speed: float) -> Rows:
+    """The Rows of `method` ("sg": the Savitzky-Golay signals of `window` s; "observer":
+    the momentum form through the causal filter of time constant tau, from the observer's
+    `velocity`) at the samples `used`, each joint's equation left out near its reversals
+    and below min_speed (friction_rows)."""
+    body = robot.rigid_body()
     # each joint's velocity over the whole log is needed only for its friction rows
     # (friction_rows): one column at a time, the regression's signals at `used` only
     if method == "sg":
         q, qd, qdd, u = savitzky_golay(log, window, at=used)
-        core = body.regressor(q, qd, qdd)
-        Y, torque = terms.extend(core, qd, qdd), u
+        core, torque = body.regressor(q, qd, qdd), u
         margin, slow_margin, memory = window, 0.0, window
+
+        def extend(model: JointTerms) -> np.ndarray:
+            return model.extend(core, qd, qdd)
 
         def joint_speed(i: int) -> np.ndarray:
             return smooth_column(log, log.q[:, i], window, deriv=1)
     else:
-        bound = 1.5 * np.array([np.abs(smooth_column(log, log.q[:, i], max(window, 0.05), deriv=2)
-                                       ).max() for i in range(robot.n)]) + 1e-3
-        velocity = observer_velocities(log, bound)
         core, torque = filtered_regression(body, log.q, velocity, log.u, log.step, tau, used)
-        Y = terms.extend_filtered(core, velocity, log.step, tau, used)
         margin = slow_margin = max(window, 4 * tau)
         memory = max(window, tau)
 
+        def extend(model: JointTerms) -> np.ndarray:
+            return model.extend_filtered(core, velocity, log.step, tau, used)
+
         def joint_speed(i: int) -> np.ndarray:
             return low_pass(velocity[:, i], log.step, tau)
-    # the known part of the model (all but the unknown columns) moves to the left side
-    known = np.setdiff1d(np.arange(12 * robot.n), np.union1d(base.base, base.dependent))
-    nominal = robot.parameters()
-    z = torque - Y[:, :, known] @ nominal[known]
+    stride = int(used[1] - used[0]) if len(used) > 1 else 1
     correlation = max(1, int(np.ceil(2 * memory / (stride * log.step) - 1e-9)))
     mask, speed = np.empty((len(used), robot.n), dtype=bool), np.empty((len(used), robot.n))
     for i in range(robot.n):
@@ -293,20 +340,33 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
         mask[:, i] = joint_friction_rows(x, log.step, margin, min_speed, slow_margin, used)
         speed[:, i] = x[used]
     check_friction_rows(mask, speed, robot.joint_names, min_speed)
-    one_way = check_directions(terms, speed, mask, robot.joint_names)
-    if one_way is not None:
-        raise LogError(one_way)
+    return Rows(used, core, torque, speed, mask, correlation, extend)
+
+
+def known_columns(n: int, base: BaseParameters) -> np.ndarray:
+    """The standard parameters taken as the URDF's (neither base nor folded into one)."""
+    return np.setdiff1d(np.arange(12 * n), np.union1d(base.base, base.dependent))
+
+
+def _identified(robot: Robot, rows: Rows, base: BaseParameters, Y: np.ndarray,
+                terms: JointTerms, urdf_tolerance: float):
+    """The least squares of the base parameters, the consistent parameters near the URDF
+    and the choice of what identified.urdf holds."""
+    names, torque, mask = robot.joint_names, rows.torque, rows.mask
+    # the known part of the model (all but the unknown columns) moves to the left side
+    known = known_columns(robot.n, base)
+    nominal = robot.parameters()
+    known_torque = Y[:, :, known] @ nominal[known]
     # the ridge of the one least squares pulls a weakly excited base parameter toward the
     # URDF's value
     nominal_beta = base.project(np.concatenate([nominal, np.zeros(terms.count(robot.n))]))
-    fit = least_squares(base.regressor(Y), z, nominal_beta, batch=correlation, mask=mask)
+    fit = least_squares(base.regressor(Y), torque - known_torque, nominal_beta,
+                        batch=rows.correlation, mask=mask)
     # each parameter's value that alone would explain the torques (prior_scales)
     measured = torque * mask
     with np.errstate(divide="ignore"):
         data_scale = (np.linalg.norm(measured) /
                       np.sqrt(np.einsum("kij,kij,ki->j", Y, Y, mask.astype(float))))
-    names = robot.joint_names
-    known_torque = Y[:, :, known] @ nominal[known]
     Yb = base.regressor(Y)  # a copy (fancy indexing): masked in place
     Yb *= mask[:, :, None]
     left, total = measured - known_torque * mask, float(np.linalg.norm(measured))
@@ -317,16 +377,14 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     projection = consistent_parameters(robot, base, fit.theta, fit.covariance, data_scale,
                                        urdf_tolerance, score, terms)
     predictions = {
-        "urdf": prediction_error(core @ nominal, torque, mask, names),
+        "urdf": prediction_error(rows.core @ nominal, torque, mask, names),
         "estimate": prediction_error(known_torque + base.regressor(Y) @ fit.theta, torque,
                                      mask, names),
         "consistent": prediction_error(Y @ projection.pi, torque, mask, names)}
     choice = choose_model(predictions, projection.pi,
                           np.concatenate([nominal, np.zeros(terms.count(robot.n))]),
                           [joint.child_link for joint in robot.joints])
-    passive = [name for i, name in enumerate(names) if not np.any(log.u[:, i])]
-    return Identification(base, fit, choice.pi, velocity, used, velocity_window, window,
-                          projection, choice, passive, terms)
+    return base, fit, choice.pi, projection, choice
 
 
 def friction_rows(velocity: np.ndarray, h: float, margin: float,
@@ -427,10 +485,13 @@ def _assessment_json(result: Identification) -> dict:
 
 
 def _terms_json(result: Identification, names: list[str]) -> dict:
-    """summary.json's record of the extra joint terms (none: nothing)."""
+    """summary.json's record of the extra joint terms and how they were chosen (none
+    asked for: nothing)."""
     terms = result.terms
+    chosen = ({} if result.terms_choice is None else
+              {"joint_terms_choice": result.terms_choice.as_dict()})
     if not terms.any:
-        return {}
+        return chosen
     n = len(names)
     values, errors = result.term_values(n), result.term_std_errors(n).reshape(n, -1)
     record: dict = {
@@ -444,7 +505,7 @@ def _terms_json(result: Identification, names: list[str]) -> dict:
         "nowhere: identified.urdf keeps the URDF's values"}
     if terms.asymmetric_coulomb:
         record["coulomb_in_urdf"] = "the mean of coulomb_positive and coulomb_negative"
-    return {"joint_terms": record}
+    return {"joint_terms": record, **chosen}
 
 
 def write_results(out: Path, robot: Robot, log: JointLog, result: Identification,

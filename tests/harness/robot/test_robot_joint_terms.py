@@ -30,10 +30,11 @@ def arm():
 
 
 def drive_log(path, robot, offset=True, armature=True, asymmetric=True, smooth=False,
-              seconds: float = 10.0, bits: int = 17):
+              seconds: float = 10.0, bits: int = 17, noise: float = 0.0):
     """The payload arm's torques with viscous friction FRICTION[:, 0] and the drive terms
     asked for (symmetric Coulomb FRICTION[:, 1] as sign(q'), or tanh(q'/SMOOTH) if smooth,
-    unless asymmetric); positions rounded to `bits`-bit encoders."""
+    unless asymmetric), and white noise of `noise` times each torque's RMS; positions
+    rounded to `bits`-bit encoders."""
     friction = FRICTION.copy()
     friction[:, 1] = 0.0
     truth = robot.rigid_body(link=payload_link(robot.arrays()["link"]), friction=friction)
@@ -43,6 +44,8 @@ def drive_log(path, robot, offset=True, armature=True, asymmetric=True, smooth=F
     else:
         tau = tau + FRICTION[:, 1] * (np.tanh(qd / SMOOTH) if smooth else np.sign(qd))
     tau = tau + (OFFSET if offset else 0.0) + (ARMATURE * qdd if armature else 0.0)
+    rms = np.sqrt(np.mean(tau ** 2, axis=0))
+    tau = tau + noise * rms * np.random.default_rng(7).normal(size=tau.shape)
     resolution = 2 * np.pi / 2 ** bits
     q = np.round(q / resolution) * resolution
     np.savetxt(path, np.column_stack([t, q, tau]), delimiter=",", header="t,q1,q2,u1,u2",
@@ -192,7 +195,31 @@ def test_an_identification_without_terms_leaves_an_empty_sidecar(tmp_path, arm):
     assert not read_sidecar(tmp_path / "id" / "joint_terms.csv", robot.joint_names).terms.any
 
 
+@pytest.mark.parametrize("drive, chosen", [
+    # two Coulomb levels are one symmetric level and an offset: the same model, fewer terms
+    ({"offset": False, "armature": True, "asymmetric": True}, "offset,armature"),
+    ({"offset": True, "armature": False, "asymmetric": False}, "offset"),
+    ({"offset": False, "armature": False, "asymmetric": False}, "none"),
+])
+def test_auto_chooses_the_terms_the_drives_have(tmp_path, arm, capsys, drive, chosen):
+    """--joint-terms auto: of the eight classes, the one the log's drives have (the
+    fewest terms as good as the best on held-out blocks), printed and recorded."""
+    urdf, robot = arm
+    data = drive_log(tmp_path / "log.csv", robot, seconds=8.0, noise=0.02, **drive)
+    summary = identify(tmp_path, urdf, data, "auto", "--joint-terms", "auto")
+    record = summary["joint_terms_choice"]
+    assert record["chosen"] == chosen, record["scores"]
+    assert len(record["scores"]) == 8 and all(v is not None for v in record["scores"].values())
+    best = min(record["scores"].values())
+    assert record["scores"][chosen] <= 1.01 * best + 1e-3, record["scores"]
+    printed = capsys.readouterr().out
+    assert "joint terms by cross-validation" in printed and f"{chosen:<36}" in printed
+    if chosen != "none":  # the chosen terms are identified and written as asked by name
+        assert "joint_terms" in summary
+
+
 @pytest.mark.parametrize("options, message", [
+    (["--joint-terms", "auto", "--smooth-coulomb", "0.1"], "cannot join that choice"),
     (["--joint-terms", "offset,stiction"], "'stiction' is not one of"),
     (["--joint-terms", ","], "names no term"),
     (["--smooth-coulomb", "0"], "--smooth-coulomb"),

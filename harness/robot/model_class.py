@@ -1,0 +1,111 @@
+"""The robot's model class from its log: which extra joint terms (offset, armature,
+asymmetric Coulomb friction; harness.robot.joint_terms) the data support.
+
+Every combination of the three is fitted by the one least squares (harness.model.fit)
+outside each of BLOCKS contiguous blocks of the regression's rows, with a guard of the
+rows over which residuals are correlated, and scored on the held-out block: the RMS of
+the predicted minus the measured torques over the RMS of the measured ones, over the
+joint equations the regression uses. The class kept has the fewest terms among those
+as good as the best (its mean within 1 % or one standard error of the paired block
+differences, harness.model.selection.as_good), the lower mean breaking a tie.
+"""
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..model.fit import estimate
+from ..model.selection import as_good
+from .base_parameters import BaseParameters
+from .joint_terms import OPTION_ITEMS, JointTerms, check_directions
+
+if TYPE_CHECKING:
+    from .pipeline import Rows
+
+#: Contiguous blocks of the cross-validation.
+BLOCKS = 5
+#: Every class: each combination of the terms --joint-terms names.
+CANDIDATES = tuple(JointTerms(**dict(zip(OPTION_ITEMS.values(), switches)))
+                   for switches in itertools.product((False, True), repeat=len(OPTION_ITEMS)))
+
+
+def label(terms: JointTerms) -> str:
+    """The class as --joint-terms writes it ("none" for the core's model alone)."""
+    items = [item for item, switch in OPTION_ITEMS.items() if getattr(terms, switch)]
+    return ",".join(items) or "none"
+
+
+@dataclass(frozen=True)
+class TermsChoice:
+    """The class kept and every class's cross-validated torque error (None: the class
+    cannot be identified from this log, with the reason)."""
+
+    terms: JointTerms
+    scores: dict[str, float | None]
+    reasons: dict[str, str]
+
+    def as_dict(self) -> dict[str, object]:
+        return {"chosen": label(self.terms), "scores": self.scores, "refused": self.reasons,
+                "definition": f"mean over {BLOCKS} contiguous held-out blocks of the RMS of "
+                              "(predicted - measured torque) over the RMS of the measured "
+                              "torque, the model fitted outside each block",
+                "rule": "the fewest terms within 1 % or one standard error of the best"}
+
+
+def choose_joint_terms(rows: Rows, base_for: Callable[[JointTerms], BaseParameters],
+                       nominal: np.ndarray, joint_names: list[str]) -> TermsChoice:
+    """The model class of CANDIDATES the log supports (see the module); ``base_for`` gives
+    a class's base parameters, ``nominal`` the URDF's 12 n standard parameters."""
+    n = len(joint_names)
+    blocks: dict[str, np.ndarray] = {}
+    reasons: dict[str, str] = {}
+    for terms in CANDIDATES:
+        one_way = check_directions(terms, rows.speed, rows.mask, joint_names)
+        if one_way is not None:
+            reasons[label(terms)] = one_way
+            continue
+        blocks[label(terms)] = _block_errors(rows, base_for(terms), terms, nominal, n)
+    means = {key: float(np.mean(errors)) for key, errors in blocks.items()}
+    finite = {key: value for key, value in means.items() if math.isfinite(value)}
+    if not finite:
+        raise ValueError("no model class can be fitted on this log's blocks")
+    best = min(finite, key=lambda key: finite[key])
+    by_label = {label(terms): terms for terms in CANDIDATES}
+    good = [key for key in finite if as_good(blocks[key], blocks[best])]
+    chosen = min(good, key=lambda key: (len(by_label[key].kinds), finite[key]))
+    scores: dict[str, float | None] = {
+        label(t): (means[label(t)] if math.isfinite(means.get(label(t), math.nan)) else None)
+        for t in CANDIDATES}
+    return TermsChoice(by_label[chosen], scores, reasons)
+
+
+def _block_errors(rows: Rows, base: BaseParameters, terms: JointTerms, nominal: np.ndarray,
+                  n: int) -> np.ndarray:
+    """Each block's held-out relative torque error of the class ``terms``."""
+    from .pipeline import known_columns
+
+    Y = rows.extend(terms)
+    known = known_columns(n, base)
+    z = rows.torque - Y[:, :, known] @ nominal[known]
+    Yb = base.regressor(Y)
+    start = base.project(np.concatenate([nominal, np.zeros(terms.count(n))]))
+    count = len(z)
+    errors = np.full(BLOCKS, math.inf)
+    for b, block in enumerate(np.array_split(np.arange(count), BLOCKS)):
+        train = np.ones(count, dtype=bool)
+        train[max(0, block[0] - rows.correlation):block[-1] + 1 + rows.correlation] = False
+        try:
+            beta = estimate(Yb[train], z[train], start, mask=rows.mask[train])
+        except (ValueError, np.linalg.LinAlgError):
+            continue
+        held = rows.mask[block]
+        measured = np.linalg.norm(rows.torque[block] * held)
+        if measured > 0:
+            error = (z[block] - Yb[block] @ beta) * held
+            errors[b] = float(np.linalg.norm(error) / measured)
+    return errors
