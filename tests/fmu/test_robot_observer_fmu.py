@@ -70,6 +70,20 @@ def test_the_fmu_runs_the_offline_path_exactly(case):
     assert np.all(np.sqrt(np.mean(error ** 2, axis=0)) < 0.02)
 
 
+def test_the_estimates_do_not_depend_on_the_communication_step(case):
+    """The log's samples held over 10 internal steps, fed at a communication step of h and
+    of 10 h: the same velocities at the common points and the same estimates, standard
+    errors and statistics at the end (the statistics follow the internal steps)."""
+    log, _, parameters, _ = case
+    held = (np.arange(len(log.t)) // 10) * 10
+    steady = JointLog(log.t, log.q[held], log.u[held])
+    fine = run_fmu(fmu_path("RobotObserver"), parameters, steady)
+    coarse = run_fmu(fmu_path("RobotObserver"), parameters, steady, samples_per_step=10)
+    np.testing.assert_array_equal(fine["velocity"][9::10], coarse["velocity"])
+    for name in ("base_estimate", "base_std", "gamma_trace", "excitation"):
+        np.testing.assert_array_equal(fine[name], coarse[name], err_msg=name)
+
+
 def test_the_rule_of_left_out_equations_reaches_the_fmu(case):
     """min_speed and reversal_margin other than the defaults: still the offline numbers,
     and not the defaults' (the parameters reach the identifier)."""

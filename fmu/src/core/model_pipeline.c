@@ -158,6 +158,7 @@ static void regression_step(ModelPipeline *p, const TermProgram *program, const 
     }
     rri_step(&p->id, p->z, &p->Y);
     sj_step(&p->statistics);
+    sj_schedule(&p->statistics, &p->id); /* on the internal steps, whatever the importer's */
 }
 
 /* Every group's bank of linear observers has settled (noise_adaptive.h). */
@@ -227,7 +228,6 @@ void mp_communicate(ModelPipeline *p)
         if (p->scheme == STO_SCHEME_ADAPTIVE) adaptive_outputs(&p->obs[g], &p->bank[g]);
         else sto_update_outputs(&p->obs[g]);
     }
-    if (p->identifying) sj_schedule(&p->statistics, &p->id);
 }
 
 int mp_groups(int n) { return (n + MP_GROUP_SIZE - 1) / MP_GROUP_SIZE; }

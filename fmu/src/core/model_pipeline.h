@@ -74,8 +74,8 @@ int mp_init(ModelPipeline *p, const TermProgram *program, const double alpha1[],
 void mp_run(ModelPipeline *p, const TermProgram *program, const double y[], const double u[],
             double start_time, unsigned long long k, unsigned long long k_end);
 
-/* A communication point: the observer's outputs and, while identifying, the
- * statistics' next snapshot when one is due. */
+/* A communication point: the observer's outputs (the statistics follow the
+ * internal steps, mp_run). */
 void mp_communicate(ModelPipeline *p);
 
 /* The parameters in the file's units and their standard errors (0 until the

@@ -13,12 +13,14 @@ void rp_run(const RobotPipeline *p, const RigidBodyModel *model, const double y[
         if (j == join) ro_regression_restart(p->regression);
         ro_regression_step(p->regression, model, p->observer, yj, uj,
                            identifying ? p->identifier : NULL);
-        if (identifying) sj_step(p->statistics);
+        if (identifying) { /* the statistics on the internal steps' own schedule */
+            sj_step(p->statistics);
+            sj_schedule(p->statistics, p->identifier);
+        }
     }
 }
 
-void rp_communicate(const RobotPipeline *p, int identifying)
+void rp_communicate(const RobotPipeline *p)
 {
     ro_outputs(p->observer);
-    if (identifying) sj_schedule(p->statistics, p->identifier);
 }

@@ -34,8 +34,8 @@ enum { RP_NEVER = -1, RP_ALREADY = -2 };
 void rp_run(const RobotPipeline *p, const RigidBodyModel *model, const double y[],
             const double u[], long stride, long count, long join);
 
-/* A communication point after a sample: the observer's outputs and, while
- * identifying, the statistics' next snapshot when one is due. */
-void rp_communicate(const RobotPipeline *p, int identifying);
+/* A communication point after a sample: the observer's outputs (the statistics
+ * follow the internal steps, rp_run). */
+void rp_communicate(const RobotPipeline *p);
 
 #endif

@@ -4,8 +4,10 @@
  * that no step of a hard real-time loop carries its O(p^3) work at once.
  *
  * A job starts from a snapshot of P (upper triangle), b and S (the scores'
- * outer products) taken at a communication point (sj_schedule), at least
- * `interval` internal steps after the last and when no job runs; each later
+ * outer products) taken at the end of an internal step (sj_schedule), at least
+ * `interval` internal steps after the last and when no job runs, so that the
+ * results follow the internal steps alone, never the importer's communication
+ * step; each later
  * internal step (sj_step) does units of work (a column of the Cholesky
  * factor, a solve, a sandwich row, an inverse iteration) up to `budget`
  * multiply-adds; the results are published when the job completes.  Every unit
@@ -81,10 +83,8 @@ void sj_reset(StatisticsJob *job);
  * the job completed in this step. */
 int sj_step(StatisticsJob *job);
 
-/* At a communication point: a snapshot (sj_start) if one is due and no job runs.
- * At most one job per communication step: at H = h one every `interval` steps, in
- * a long communication step one per step, as the solve at communication points
- * was. */
+/* After an internal step's sj_step: a snapshot (sj_start) if one is due and no
+ * job runs: one every `interval` internal steps at most. */
 void sj_schedule(StatisticsJob *job, const RegressorIdentifier *id);
 
 /* The snapshot (what sj_schedule takes): copies P, b, S and the settings. */

@@ -436,7 +436,7 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
 {
     RobotData *d = data;
     const RobotPipeline pipeline = {&d->obs, NULL, &d->id, &d->statistics};
-    rp_communicate(&pipeline, d->identifier_active);
+    rp_communicate(&pipeline);
     publish_estimates(d);
     if (d->obs.model_failures > d->failures_seen) {
         d->failures_seen = d->obs.model_failures;

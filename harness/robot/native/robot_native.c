@@ -240,7 +240,7 @@ long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, long count, do
         rp_run(&pipeline, model, y + k * n, u + k * n, 0, 1,
                !kind ? RP_NEVER : k == start ? 0 : identifying ? RP_ALREADY : RP_NEVER);
         /* the FMU's communication point after the sample (doStep(t_k, h)) */
-        rp_communicate(&pipeline, identifying);
+        rp_communicate(&pipeline);
         for (int i = 0; i < n; ++i) {
             velocity[k * n + i] = ro_velocity(&run->observer, i);
             prediction[k * n + i] = run->observer.x2_hat[i];

@@ -292,3 +292,27 @@ def test_the_fmus_physical_values_do_not_depend_on_the_files_units(tmp_path, emp
     other = run_log(scaled, log.t, {"x": 1000.0 * log.q[:, 0]}, {"vir": log.inputs[:, 0]}, names)
     for name, factor in (("M", 1.0), ("Fv", 1e3), ("Fc", 1e3), ("OF", 1e3)):
         assert abs(factor * other[name][-1] - si[name][-1]) <= 1e-3 * abs(si[name][-1]), name
+
+
+def test_the_estimates_do_not_depend_on_the_communication_step(tmp_path):
+    """The same inputs (held over 10 internal steps) at a communication step of h and of
+    10 h: every output at the common communication points is the same number (the
+    statistics follow the internal steps, not the importer's communication points)."""
+    fmu = export(TWO_MASS, tmp_path)
+    t, x1, x2, F = two_mass_log(seconds=6.0)
+    held = (np.arange(len(t)) // 10) * 10  # each input held over 10 internal steps
+    signals = np.zeros(len(t), dtype=[("time", float), ("x1", float), ("x2", float),
+                                      ("F", float)])
+    signals["time"], signals["x1"], signals["x2"], signals["F"] = t, x1[held], x2[held], F[held]
+    h = float(t[1] - t[0])
+    names = list(TRUTH)
+    outputs = names + [f"{n}_std" for n in names]
+    runs = [fmpy.simulate_fmu(str(fmu), stop_time=float(t[-1]) - 10 * h, input=signals,
+                              output_interval=interval, start_values={"observer.h": h},
+                              output=outputs) for interval in (h, 10 * h)]
+    fine, coarse = runs
+    assert len(coarse) > 500 and np.any(coarse[names[0]] != TRUTH[names[0]])
+    row = {round(time / h): k for k, time in enumerate(fine["time"])}
+    common = [row[round(time / h)] for time in coarse["time"]]  # the same instants
+    for name in outputs:
+        assert np.array_equal(fine[name][common], coarse[name]), name
