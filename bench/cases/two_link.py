@@ -49,16 +49,16 @@ equations = [
 ]
 
 [parameters]   # nominal values: the maker's URDF
-ZZ1R = {{ nominal = {ZZ1R:.6g}, unit = "kg.m^2" }}   # ZZ1 + m2 l^2
-MY1  = {{ nominal = {MY1:.6g}, unit = "kg.m" }}
-MZ1R = {{ nominal = {MZ1R:.6g}, unit = "kg.m" }}     # MZ1 + m2 l
-ZZ2  = {{ nominal = {ZZ2:.6g}, unit = "kg.m^2" }}
-MY2  = {{ nominal = {MY2:.6g}, unit = "kg.m" }}
-MZ2  = {{ nominal = {MZ2:.6g}, unit = "kg.m" }}
-fv1  = {{ nominal = {fv1:.6g}, unit = "N.m.s/rad" }}
-fc1  = {{ nominal = {fc1:.6g}, unit = "N.m" }}
-fv2  = {{ nominal = {fv2:.6g}, unit = "N.m.s/rad" }}
-fc2  = {{ nominal = {fc2:.6g}, unit = "N.m" }}
+ZZ1R = {{ nominal = {ZZ1R}, unit = "kg.m^2" }}   # ZZ1 + m2 l^2
+MY1  = {{ nominal = {MY1}, unit = "kg.m" }}
+MZ1R = {{ nominal = {MZ1R}, unit = "kg.m" }}     # MZ1 + m2 l
+ZZ2  = {{ nominal = {ZZ2}, unit = "kg.m^2" }}
+MY2  = {{ nominal = {MY2}, unit = "kg.m" }}
+MZ2  = {{ nominal = {MZ2}, unit = "kg.m" }}
+fv1  = {{ nominal = {fv1}, unit = "N.m.s/rad" }}
+fc1  = {{ nominal = {fc1}, unit = "N.m" }}
+fv2  = {{ nominal = {fv2}, unit = "N.m.s/rad" }}
+fc2  = {{ nominal = {fc2}, unit = "N.m" }}
 
 [constants]
 l = {{ value = 0.1, unit = "m" }}
@@ -93,11 +93,16 @@ def truth() -> tuple[np.ndarray, np.ndarray]:
     return link, friction
 
 
-def model_toml() -> str:
-    """The model file, its nominal values from the maker's URDF."""
-    arm, _ = robot()
-    values = base_values(arm.arrays()["link"], arm.arrays()["friction"])
-    return MODEL_TOML.format(**dict(zip(NAMES, values)))
+def model_toml(values: np.ndarray | None = None) -> str:
+    """The model file, its nominal values from the maker's URDF (6 digits), or `values`
+    (in full)."""
+    if values is None:
+        arm, _ = robot()
+        urdf = base_values(arm.arrays()["link"], arm.arrays()["friction"])
+        text = [f"{v:.6g}" for v in urdf]
+    else:
+        text = [f"{float(v):.17g}" for v in values]
+    return MODEL_TOML.format(**dict(zip(NAMES, text)))
 
 
 def regressor(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
