@@ -53,6 +53,9 @@ from bench.reports import REPORTS, commit
 from bench.reports.robot_real_logs import _regressor, least_squares_baseline, resample
 from harness.model import read_model
 from harness.model.log import read_log as read_model_log
+from harness.model.scores import PieceSimulator, parts_for
+from harness.model.selection import CrossValidation
+from harness.model.simulation import Dynamics
 from harness.model.zero_phase import ZeroPhase, regression
 from harness.robot.base_parameters import base_parameters
 from harness.robot.least_squares import torque_least_squares
@@ -77,7 +80,8 @@ def run(*arguments: str) -> dict:
     done = subprocess.run(command, cwd=REPO, capture_output=True, text=True)
     return {"rc": done.returncode, "seconds": time.perf_counter() - started,
             "stdout": done.stdout, "stderr": done.stderr.strip(),
-            "command": shlex.join(["python", *command[3:]])}
+            "command": shlex.join(["python", "-m", "harness", *arguments]).replace(
+                f"{REPO}/", "")}
 
 
 def _checked(ran: dict) -> dict:
@@ -113,6 +117,14 @@ def with_values(theta: np.ndarray, path: Path) -> Path:
 
 
 # --- the scores -----------------------------------------------------------------------------
+
+def positive_definite(theta: np.ndarray) -> bool:
+    """Whether the inertia matrix M(q) of `theta` is positive definite at every q: ZZ2 > 0
+    and det M = ZZ1R ZZ2 - l^2 (MZ2 cos q2 + MY2 sin q2)^2 > 0 for every q2."""
+    t = dict(zip(two_link.NAMES, theta))
+    return bool(t["ZZ2"] > 0 and t["ZZ1R"] * t["ZZ2"]
+                > two_link.LENGTH ** 2 * (t["MZ2"] ** 2 + t["MY2"] ** 2))
+
 
 def true_state_scores(theta: np.ndarray, check: two_link.Run) -> dict:
     """The independent scorer: torques at the validation run's true states."""
@@ -194,9 +206,29 @@ def diagnosis(train: Path, model_out: Path, robot_out: Path, check: two_link.Run
                     theta = np.linalg.lstsq(A, (r * m).ravel(), rcond=None)[0]
                 rows.append({"pipeline": label, "friction rows": masked, "weighted": weighted,
                              "kept": mask.mean(axis=0).tolist() if masked else [1.0, 1.0],
-                             "theta": theta.tolist(),
+                             "theta": theta.tolist(), "definite": positive_definite(theta),
                              "joint1": true_state_scores(theta, check)["joint1"]})
+    for row, error in zip(rows, run_errors(model, log, [np.array(r["theta"]) for r in rows])):
+        row["runs"] = error
     return rows
+
+
+def run_errors(model, log, thetas: list[np.ndarray]) -> list[float]:  # noqa: ANN001
+    """The model path's own selection score for each parameter vector, on the whole
+    training log (not held out): its cross-validation's short simulation runs from the
+    measured state (initial state fitted), RMS position error relative to the motion,
+    pooled over the coordinates."""
+    cv, dynamics = CrossValidation(model, log), Dynamics(model)
+    out = []
+    for theta in thetas:
+        try:
+            parts = parts_for(dynamics, log, theta)
+        except (FloatingPointError, ValueError):
+            parts = 1
+        with np.errstate(all="ignore"):
+            error = PieceSimulator(dynamics, log, cv.runs, parts).error(theta)
+        out.append(error if np.isfinite(error) else float("inf"))
+    return out
 
 
 # --- one run ----------------------------------------------------------------------------------
@@ -300,15 +332,17 @@ def document(run_: dict) -> str:
         "identified.urdf only.",
         "",
         "| method | true states: joint 1 | joint 2 [N.m] | pooled | validate --model: eq. 1 "
-        "(pipeline) | eq. 1 (full rate) | validate --robot: joint 1 | pooled |",
-        "|---|---|---|---|---|---|---|---|",
+        "(pipeline) | eq. 1 (full rate) | validate --robot: joint 1 | pooled | M(q) positive "
+        "definite |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for key, label in LABELS.items():
         s, v = p[key]["true_states"], p[key]["validate_model"]
         vr = p[key].get("validate_robot")
         lines.append(f"| {label} | {_pct(s['joint1'])} | {s['joint2_Nm']:.4f} | "
                      f"{_pct(s['pooled'])} | {_pct(v['pipeline'])} | {_pct(v['full_rate'])} | "
-                     + (f"{_pct(vr['joint1'])} | {_pct(vr['pooled'])} |" if vr else "- | - |"))
+                     + (f"{_pct(vr['joint1'])} | {_pct(vr['pooled'])} | " if vr else "- | - | ")
+                     + ("yes" if positive_definite(np.array(p[key]["theta"])) else "no") + " |")
     a, b = p["robot"], p["model"]
     lines += [
         "", "## Do the robot path and the model path agree within 1 %?", "",
@@ -334,16 +368,23 @@ def document(run_: dict) -> str:
               "friction rows (a joint's equation left out within the pipeline's window of a "
               "reversal of its velocity and below the core's min_speed), by plain least "
               "squares or with each equation weighted by 1 / its residual RMS after an "
-              "unweighted pass (what both paths do); joint 1's error on the true states of "
+              "unweighted pass (what both paths do). M(q) positive definite: at every q2. "
+              "The selection score: the model path's cross-validation scorer (0.2 s "
+              "simulation runs from the measured state, relative position error) applied to "
+              "the fit on the whole training log (in-sample; the model path scores each "
+              "candidate out of sample, on held-out blocks). True states: joint 1's error on "
               "the validation run.", "",
               "| pipeline | friction rows | equations weighted | rows kept (joint 1, 2) | "
-              "ZZ1R | MZ1R | ZZ2 | MZ2 | true states: joint 1 |", "|---|---|---|---|---|---|---|---|---|"]
+              "ZZ1R | MZ1R | ZZ2 | MZ2 | M(q) positive definite | the model path's selection "
+              "score (training log) | true states: joint 1 |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for d in r["diagnosis"]:
         t = dict(zip(two_link.NAMES, d["theta"]))
         lines.append(f"| {d['pipeline']} | {'robot path' if d['friction rows'] else 'all'} | "
                      f"{'yes' if d['weighted'] else 'no'} | "
                      f"{100 * d['kept'][0]:.0f} %, {100 * d['kept'][1]:.0f} % | "
                      f"{t['ZZ1R']:.4g} | {t['MZ1R']:.4g} | {t['ZZ2']:.4g} | {t['MZ2']:.4g} | "
+                     f"{'yes' if d['definite'] else 'no'} | {_pct(d['runs'])} | "
                      f"{_pct(d['joint1'])} |")
     lines += ["", "Commands (the logs written by the bench):", "",
               f"- `{cmd['robot']['command']}`", f"- `{cmd['model']['command']}`", ""]
