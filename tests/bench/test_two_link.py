@@ -46,3 +46,11 @@ def test_logs_have_the_case_properties(tmp_path):
     two_link.write(run, tmp_path / "log.csv", tmp_path / "arm.toml")
     header = (tmp_path / "log.csv").read_text().splitlines()[0]
     assert header == "t,q1,q2,u1,u2"
+
+
+def test_robot_base_parameters_are_the_model_files():
+    from bench.reports.two_link_paths import positive_definite, robot_mapping
+    robot, _ = two_link.robot()
+    order, names = robot_mapping(robot)  # raises unless the regressors agree
+    assert [names[k] for k in order][:3] == ["joint1.Ixx", "joint1.my", "joint1.mz"]
+    assert positive_definite(two_link.base_values(*two_link.truth()))
