@@ -58,7 +58,6 @@ from harness.model.selection import CrossValidation
 from harness.model.simulation import Dynamics
 from harness.model.zero_phase import ZeroPhase, regression
 from harness.robot.base_parameters import base_parameters
-from harness.robot.least_squares import torque_least_squares
 from harness.robot.native import core_defaults
 from harness.robot.pipeline import JointLog, joint_friction_rows, savitzky_golay
 from harness.robot.urdf import read_urdf
@@ -198,12 +197,8 @@ def diagnosis(train: Path, model_out: Path, robot_out: Path, check: two_link.Run
                                                     at=used) for i in range(2)])
         for masked in (False, True):
             for weighted in (False, True):
-                m = mask if masked else np.ones_like(mask)
-                if weighted:
-                    theta = torque_least_squares(Y, r, mask=m).beta
-                else:
-                    A = (Y * m[:, :, None]).reshape(-1, Y.shape[2])
-                    theta = np.linalg.lstsq(A, (r * m).ravel(), rcond=None)[0]
+                theta = weighted_least_squares(Y, r, mask if masked else np.ones_like(mask),
+                                               weighted)
                 rows.append({"pipeline": label, "friction rows": masked, "weighted": weighted,
                              "kept": mask.mean(axis=0).tolist() if masked else [1.0, 1.0],
                              "theta": theta.tolist(), "definite": positive_definite(theta),
@@ -211,6 +206,21 @@ def diagnosis(train: Path, model_out: Path, robot_out: Path, check: two_link.Run
     for row, error in zip(rows, run_errors(model, log, [np.array(r["theta"]) for r in rows])):
         row["runs"] = error
     return rows
+
+
+def weighted_least_squares(Y: np.ndarray, r: np.ndarray, mask: np.ndarray,
+                           weighted: bool) -> np.ndarray:
+    """Least squares over the rows `mask` keeps (rows, equations); `weighted`: a second
+    pass with each equation divided by its residual RMS from the first (both paths'
+    weighting)."""
+    scale = np.ones(Y.shape[1])
+    for _ in range(2 if weighted else 1):
+        A = (Y * (mask / scale)[:, :, None]).reshape(-1, Y.shape[2])
+        theta = np.linalg.lstsq(A, (r * mask / scale).ravel(), rcond=None)[0]
+        residual = (r - Y @ theta) * mask
+        rms = np.sqrt(np.sum(residual ** 2, axis=0) / np.maximum(mask.sum(axis=0), 1))
+        scale = np.maximum(rms, 1e-9 * rms.max())
+    return theta
 
 
 def run_errors(model, log, thetas: list[np.ndarray]) -> list[float]:  # noqa: ANN001
