@@ -183,10 +183,11 @@ def _print_scores(scores: dict[str, dict[str, Any]]) -> bool:
         print(f"  input reconstruction, raw central differences at the full rate: "
               f"{100 * float(reconstruction['pooled']):.3f} %")
     simulation = scores["simulation_error"]
-    for name, e in simulation["per_coordinate"].items():
-        print(f"  free-run simulation error of {name}: {e['rms']:.4g} {e['unit']} RMS, "
-              f"{100 * e['relative']:.3f} % of its motion")
-    if simulation["diverged_at_s"] is not None:
+    if simulation["diverged_at_s"] is None:
+        for name, e in simulation["per_coordinate"].items():
+            print(f"  free-run simulation error of {name}: {e['rms']:.4g} {e['unit']} RMS, "
+                  f"{100 * e['relative']:.3f} % of its motion")
+    else:
         note(f"the model's simulation driven by the measured input diverges after "
              f"{simulation['diverged_at_s']:.4g} s: the model is unstable on this log (or "
              "the machine runs in closed loop, which the model file does not describe)")

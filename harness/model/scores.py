@@ -161,22 +161,25 @@ def simulation_error(model: Model, log: ModelLog, theta: np.ndarray) -> dict[str
     parts = parts_for(dynamics, log, theta)
     whole = PieceSimulator(dynamics, log, Pieces(np.array([0]), log.samples), parts)
     sim = whole.run(theta)
-    error = sim.q[0] - log.q
     diverged = int(sim.diverged[0])
-    if diverged >= 0:
-        error = error[:diverged]
-    rms = np.sqrt(np.mean(error ** 2, axis=0)) if len(error) else np.full(len(model.coordinates),
-                                                                           math.inf)
-    relative = rms / np.where(motion_rms(log) > 0, motion_rms(log), math.inf)
+    if diverged >= 0:  # a run that leaves the log has no error to speak of: none is given
+        rms = relative = np.full(len(model.coordinates), math.nan)
+    else:
+        rms = np.sqrt(np.mean((sim.q[0] - log.q) ** 2, axis=0))
+        relative = rms / np.where(motion_rms(log) > 0, motion_rms(log), math.inf)
+
+    def number(x: float) -> float | None:
+        return None if math.isnan(x) else float(x)
     return {
-        "per_coordinate": {c: {"rms": float(rms[i]), "unit": model.units.get(c, ""),
-                               "relative": float(relative[i])}
+        "per_coordinate": {c: {"rms": number(rms[i]), "unit": model.units.get(c, ""),
+                               "relative": number(relative[i])}
                            for i, c in enumerate(model.coordinates)},
-        "pooled": float(np.sqrt(np.mean(relative ** 2))),
+        "pooled": number(float(np.sqrt(np.mean(relative ** 2)))),
         "diverged_at_s": None if diverged < 0 else float(log.t[diverged] - log.t[0]),
         "substeps": parts,
         "definition": "free run from the measured initial state driven by the measured "
                       "input (band-limited interpolation between samples, Runge-Kutta); RMS "
                       "of each coordinate's error, relative: over the RMS of its motion about its "
-                      "mean; pooled: root mean square of the relative errors",
+                      "mean; pooled: root mean square of the relative errors; null when the run "
+                      "diverges (diverged_at_s)",
     }

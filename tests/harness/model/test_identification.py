@@ -88,10 +88,14 @@ def test_an_unstable_model_says_so_and_exits_1(files, tmp_path, capsys):
                         .replace("k  = { nominal = 0 }", "k  = { nominal = 182600 }"))
     code = main(["validate", str(folder / "osc.csv"), "--model", str(unstable), "--out",
                  str(tmp_path / "val")])
-    err = capsys.readouterr().err
-    assert code == 1 and "diverges after" in err
+    printed = capsys.readouterr()
+    assert code == 1 and "diverges after" in printed.err
     result = json.loads((tmp_path / "val" / "validation.json").read_text())
     assert result["simulation_error"]["diverged_at_s"] > 0
+    # no error figure for a run that left the log (not the RMS of its first samples)
+    assert result["simulation_error"]["pooled"] is None
+    assert result["simulation_error"]["per_coordinate"]["y"]["rms"] is None
+    assert "free-run simulation error of y" not in printed.out
 
 
 def test_refine_none_keeps_least_squares_and_refine_needs_model(files, tmp_path, capsys):
