@@ -28,12 +28,14 @@ joint, term, value, std_error, unit), which validate reads back (`read_sidecar`,
 from __future__ import annotations
 
 import csv
+import io
 import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ..inputs import InputError, read_text
 from .filtered_regression import first_order, lfilter_zi_at
 
 # the terms' names in joint_terms.csv and parameters.csv, in the regressor's order per joint
@@ -292,17 +294,19 @@ def read_sidecar(path: Path, joint_names: list[str]) -> Sidecar:
     """The joint terms of joint_terms.csv for a robot with these joints; JointTermsError
     names a bad row (an unknown joint or term, a value that is not a number, a term
     given to some joints only)."""
+    try:  # read with a cap, never trusting st_size: a device (/dev/zero) says 0
+        text = read_text(path, SIDECAR_NAME, limit=SIDECAR_MAX_BYTES)
+    except InputError as error:
+        if "larger than" in str(error):
+            raise JointTermsError(f"{path}: more than {SIDECAR_MAX_BYTES} bytes; a "
+                                  f"{SIDECAR_NAME} is a few hundred ({error})") from None
+        if "UTF-8" in str(error):
+            raise JointTermsError(f"{path}: not a CSV file in UTF-8 ({error})") from None
+        raise JointTermsError(str(error)) from None
     try:
-        size = Path(path).stat().st_size
-        if size > SIDECAR_MAX_BYTES:
-            raise JointTermsError(f"{path}: {size} bytes; a {SIDECAR_NAME} is a few hundred "
-                                  f"(at most {SIDECAR_MAX_BYTES} are read)")
-        with Path(path).open(newline="", encoding="utf-8") as handle:
-            rows = list(csv.DictReader(handle))
-            header = rows[0].keys() if rows else None
-    except OSError as error:
-        raise JointTermsError(f"{path}: {error.strerror or error}") from None
-    except (UnicodeDecodeError, csv.Error) as error:
+        rows = list(csv.DictReader(io.StringIO(text, newline="")))
+        header = rows[0].keys() if rows else None
+    except csv.Error as error:
         raise JointTermsError(f"{path}: not a CSV file in UTF-8 ({error})") from None
     if header is not None and not set(SIDECAR_COLUMNS) <= set(header):
         raise JointTermsError(f"{path}: the columns must be {', '.join(SIDECAR_COLUMNS)}")
