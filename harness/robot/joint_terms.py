@@ -37,6 +37,7 @@ import numpy as np
 
 from ..inputs import InputError, read_text
 from .filtered_regression import first_order, lfilter_zi_at
+from .urdf import LARGEST
 
 # the terms' names in joint_terms.csv and parameters.csv, in the regressor's order per joint
 OFFSET, ARMATURE, COULOMB_POSITIVE, COULOMB_NEGATIVE = (
@@ -311,6 +312,7 @@ def read_sidecar(path: Path, joint_names: list[str]) -> Sidecar:
     if header is not None and not set(SIDECAR_COLUMNS) <= set(header):
         raise JointTermsError(f"{path}: the columns must be {', '.join(SIDECAR_COLUMNS)}")
     found: dict[tuple[str, str], float] = {}
+    seen: dict[tuple[str, str], int] = {}  # the line of each joint's term
     smooth: set[float] = set()
     for line, row in enumerate(rows, start=2):
         joint, kind = row["joint"], row["term"]
@@ -327,6 +329,13 @@ def read_sidecar(path: Path, joint_names: list[str]) -> Sidecar:
         if not math.isfinite(value):
             raise JointTermsError(f"{path} line {line}: value {row['value']!r} is not a "
                                   f"finite number")
+        if abs(value) > LARGEST:  # as for a URDF: products of such values overflow
+            raise JointTermsError(f"{path} line {line}: value {row['value']!r} of {kind} is "
+                                  f"beyond {LARGEST:g} (SI units): not a joint's")
+        if (joint, kind) in seen:
+            raise JointTermsError(f"{path} line {line}: joint {joint!r} has a second {kind} "
+                                  f"(line {seen[(joint, kind)]}); give each once")
+        seen[(joint, kind)] = line
         if kind == SMOOTH_VELOCITY:
             smooth.add(value)
         else:
