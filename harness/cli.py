@@ -423,6 +423,14 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Runs the command line; returns the exit status (see the module documentation)."""
+    try:
+        return _main(argv)
+    except KeyboardInterrupt as interrupt:  # Ctrl-C outside a command (parsing, the console)
+        print("\nharness: interrupted", file=sys.stderr)
+        return 143 if isinstance(interrupt, Terminated) else 130
+
+
+def _main(argv: list[str] | None) -> int:
     args = build_parser().parse_args(argv)
     args.fmu_dir = getattr(args, "fmu_dir", None)
     args.quiet = getattr(args, "quiet", False)

@@ -20,6 +20,11 @@ from .csv_columns import uneven_step
 #: A step this many times the median step is a gap (refused); shorter uneven steps are a
 #: jittering clock (the log is resampled).
 GAP_STEPS = 2.5
+#: The mean sample step [s] of a log a machine's motion is identified from: from 1 ns
+#: (no logger samples faster) to 10^4 s (nearly three hours between samples).  Outside,
+#: the derivatives, which divide by powers of the step, leave float64 (a step of 1e302 s
+#: overflows), and the stamps' span must be a finite number of seconds.
+STEP_RANGE = (1e-9, 1e4)
 
 
 class ClockError(ValueError):
@@ -39,7 +44,9 @@ class EvenLog:
 
 def even_steps(t: np.ndarray, q: np.ndarray, u: np.ndarray, tolerance: float,
                place: Callable[[int], str], role: str = "t") -> EvenLog:
-    """The log on even steps (see the module); ClockError names a gap's place."""
+    """The log on even steps (see the module); ClockError names a gap's place, or the
+    mean step when it is outside STEP_RANGE."""
+    _check_span(t, place, role)
     uneven = uneven_step(t, tolerance, role)
     if uneven is None:
         return EvenLog(t, q, u)
@@ -53,6 +60,22 @@ def even_steps(t: np.ndarray, q: np.ndarray, u: np.ndarray, tolerance: float,
             f"the log is not continuous there; cut it into continuous pieces")
         raise ClockError(f"{place(where)}: {why}")
     return _resampled(t, q, u)
+
+
+def _check_span(t: np.ndarray, place: Callable[[int], str], role: str) -> None:
+    """ClockError unless the stamps span a finite time whose mean step is in STEP_RANGE."""
+    if len(t) < 2:
+        return  # the callers say how many samples they need
+    with np.errstate(over="ignore", invalid="ignore"):
+        span = float(t[-1]) - float(t[0])
+    if not np.isfinite(span):
+        raise ClockError(f"{place(len(t) - 1)}: {role} spans {t[0]:.6g} to {t[-1]:.6g} s, "
+                         f"beyond what float64 holds as a duration")
+    mean = span / (len(t) - 1)
+    low, high = STEP_RANGE
+    if span > 0 and not low <= mean <= high:
+        raise ClockError(f"{place(1)}: {role} steps by {mean:.6g} s on average; a log's "
+                         f"step is from {low:g} to {high:g} s (is the time unit right?)")
 
 
 def _resampled(t: np.ndarray, q: np.ndarray, u: np.ndarray) -> EvenLog:

@@ -74,7 +74,8 @@ def read_columns(path: Path, header: Header, columns: list[str],
                  roles: list[str]) -> np.ndarray:
     """The named columns as floats, (N, len(columns)); `roles` names each in messages.
     A value that is not a number is named with its line; NaN, infinite or empty values
-    are left as NaN for the caller to judge."""
+    are left as NaN for the caller to judge; a file of its header row only has no rows
+    (the caller says how many samples it needs, as for any short log)."""
     import pandas as pd
 
     indices = [header.index(column) for column in columns]
@@ -91,6 +92,8 @@ def read_columns(path: Path, header: Header, columns: list[str],
                                                               len(indices)))])
             data[rows:rows + len(chunk), order] = chunk.to_numpy()
             rows += len(chunk)
+    except pd.errors.EmptyDataError:  # a header row only (or blank lines after it):
+        return np.empty((0, len(indices)))  # no samples, said as for any empty log
     except (ValueError, pd.errors.ParserError) as error:
         line, role = _first_bad_value(path, indices, roles, header.present)
         raise CsvColumnError(f"{path} line {line}: {role} is not a number ({error})") from None

@@ -11,7 +11,9 @@ bound by a file.  XML (URDF, SSP files) is parsed with :func:`xml_parser`.
 from __future__ import annotations
 
 import json
+import os
 import re
+import stat
 from pathlib import Path
 from typing import Any
 
@@ -32,15 +34,21 @@ class _BigInteger(str):
 
 def read_text(path: str | Path, what: str = "file", limit: int = MAX_BYTES) -> str:
     """The file's UTF-8 text (a BOM dropped); InputError if it cannot be read, is
-    larger than ``limit`` bytes or is not UTF-8 (naming the line and byte)."""
+    larger than ``limit`` bytes or is not UTF-8 (naming the line and byte).  At most
+    ``limit`` + 1 bytes are read whatever the file claims: a device such as /dev/zero
+    has a size of 0 and no end."""
     path = Path(path)
     try:
         with path.open("rb") as handle:
+            mode = os.fstat(handle.fileno()).st_mode
+            if stat.S_ISDIR(mode):
+                raise InputError(f"{path}: the {what} is a folder, not a file")
             data = handle.read(limit + 1)
     except OSError as error:
         raise InputError(f"{path}: cannot read the {what} ({error.strerror or error})") from None
     if len(data) > limit:
-        raise InputError(f"{path}: the {what} is larger than {limit} bytes")
+        kind = "" if stat.S_ISREG(mode) else " (it is not a regular file: a device or a pipe)"
+        raise InputError(f"{path}: the {what} is larger than {limit} bytes{kind}")
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as error:
@@ -55,6 +63,38 @@ def xml_parser(**options: Any):
     from lxml import etree
     return etree.XMLParser(resolve_entities=False, load_dtd=False, no_network=True,
                            huge_tree=False, **options)
+
+
+# A TOML string ("...", '...', and their triple-quoted forms) or comment, for the scan below.
+_TOML_SKIPPED = re.compile(r'"""(?:[^\\]|\\.)*?"""|\'\'\'.*?\'\'\'|"(?:[^"\\\n]|\\.)*"'
+                           r"|'[^'\n]*'|#[^\n]*", re.DOTALL)
+# A dotted key of more than MAX_DEPTH parts (a.b.c..., a part bare or a string: "s").
+# (MAX_DEPTH dots in a row, each pair apart by one part; tried only where a dot is)
+_TOML_DOTTED = re.compile(r"\.(?:[ \t]*[\w-]+[ \t]*\.){" + str(MAX_DEPTH - 1) + ",}")
+
+
+def check_toml_nesting(text: str) -> str | None:
+    """What makes TOML ``text`` nest deeper than MAX_DEPTH, or None: arrays and inline
+    tables inside each other, or a dotted key of many parts.  Checked on the text, before
+    a TOML parser recurses once per level (RecursionError) or builds a key of n parts n
+    times (memory of n^2)."""
+    bare = _TOML_SKIPPED.sub(lambda m: "" if m.group(0)[0] == "#" else "s", text)
+    depth = deepest = 0
+    for char in re.sub(r"[^\[\]{}]+", "", bare):
+        if char in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+            if deepest > MAX_DEPTH:
+                break
+        elif char in "]}":
+            depth = max(0, depth - 1)
+    if deepest > MAX_DEPTH:
+        return f"arrays or tables nested more than {MAX_DEPTH} deep"
+    dotted = _TOML_DOTTED.search(bare)
+    if dotted:
+        line = bare.count("\n", 0, dotted.start()) + 1
+        return f"a dotted key of more than {MAX_DEPTH} parts (line {line})"
+    return None
 
 
 def _object(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
@@ -95,6 +135,8 @@ def read_structured(path: str | Path, what: str = "file") -> Any:
     the module describes."""
     path = Path(path)
     text = read_text(path, what)
+    if path.suffix == ".toml" and (problem := check_toml_nesting(text)) is not None:
+        raise InputError(f"{path}: {problem}")
     try:
         if path.suffix == ".toml":
             import tomllib  # Python >= 3.11

@@ -18,7 +18,10 @@ Refused with :class:`OutputError` (exit status 2), before anything is written wh
 the names are known in advance, and again before any rename: an output folder that
 is a file; a name that resolves to one of the command's inputs (also through a link,
 hard or symbolic); a name that leads out of the output folder through a symbolic
-link; another harness command writing to the same folder (a lock file,
+link; a name that is a device, a FIFO or a socket, directly or through a link (a
+rename would replace the node itself, for every program on the machine, and writing
+through it is no file of the command's: such an output is refused, never written
+through); another harness command writing to the same folder (a lock file,
 ``.sto-harness.lock``, held while the block runs; a single-file output, ``lock=False``,
 needs none: its rename is atomic).
 """
@@ -28,6 +31,7 @@ import errno
 import os
 import shutil
 import signal
+import stat
 import threading
 from collections.abc import Callable, Iterable
 from pathlib import Path
@@ -48,15 +52,46 @@ class Terminated(KeyboardInterrupt):
     """SIGTERM, raised in the main thread so that cleanup runs as for Ctrl-C."""
 
 
+def special_file(path: str | os.PathLike) -> str | None:
+    """What ``path`` is when it is neither a regular file, a folder nor nothing: "a
+    character device", "a block device", "a FIFO" or "a socket" (a link is followed,
+    and said); None otherwise (also for a dangling link, which a rename may replace)."""
+    path = Path(path)
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):  # nothing there, a dangling link or a name the OS refuses
+        return None
+    kinds = ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+             (stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISSOCK, "a socket"))
+    for test, kind in kinds:
+        if test(mode):
+            return kind + (" (through a link)" if path.is_symlink() else "")
+    if not stat.S_ISREG(mode) and not stat.S_ISDIR(mode):
+        return "a special file"
+    return None
+
+
+def refuse_special(path: str | os.PathLike, what: str = "output") -> None:
+    """OutputError when the output ``path`` names a device, FIFO or socket, which a
+    rename would replace (the node would be gone for every program on the machine)."""
+    kind = special_file(path)
+    if kind is not None:
+        raise OutputError(f"{what} {path} is {kind}, not a file: it is never replaced or "
+                          f"written through; choose a file name")
+
+
 def write_atomically(path: str | os.PathLike, write: Callable[[str], object]) -> Path:
     """``write(name)`` writes the file under a temporary name beside ``path``, renamed
-    to ``path`` once it returns (a link at ``path`` is replaced, never followed); on
-    an exception nothing is left.  For files written one at a time into a folder that
-    a lock already guards (the sweep's)."""
+    to ``path`` once it returns (a link at ``path`` is replaced, never followed; a
+    device, FIFO or socket at ``path`` is refused with OutputError, before and after
+    writing); on an exception nothing is left.  For files written one at a time into
+    a folder that a lock already guards (the sweep's)."""
     path = Path(path)
+    refuse_special(path)
     partial = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
         write(str(partial))
+        refuse_special(path)  # made while writing: the rename would still replace it
         os.replace(partial, path)
     finally:
         partial.unlink(missing_ok=True)
@@ -121,13 +156,19 @@ class Outputs:
                                   f"overwrite the input; choose another --out")
         if target.is_dir() and not target.is_symlink():
             raise self._error(f"{target} is a folder; move it away or choose another --out")
+        kind = special_file(target)
+        if kind is not None:  # a rename would replace the node itself, for every program
+            raise self._error(f"{target} is {kind}, not a file: it is never replaced or "
+                              f"written through; choose another --out")
         return target
 
     # ---- the block --------------------------------------------------------------------
 
     def __enter__(self) -> Outputs:
         if self.folder.exists() and not self.folder.is_dir():
-            raise self._error(f"--out {self.folder} exists and is not a folder")
+            kind = special_file(self.folder)
+            raise self._error(f"--out {self.folder} exists and is not a folder"
+                              + (f" (it is {kind})" if kind else ""))
         for name in self.names:
             self.check(name)  # before the folder is even created
         self._created = not self.folder.exists()

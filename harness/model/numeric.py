@@ -10,8 +10,11 @@ import sympy
 def compile_regressor(arguments: Sequence[sympy.Symbol],
                       entries: Sequence[sympy.Expr]) -> Callable[..., list]:
     """A numpy function of ``arguments`` (arrays of one shape) returning ``entries``."""
-    # cse shares subexpressions (sign(der(x)), sin(q), ...) between the entries.
-    return sympy.lambdify(list(arguments), list(entries), modules="numpy", cse=True)
+    # cse shares subexpressions (sign(der(x)), sin(q), ...) between the entries.  dummify:
+    # the generated code names the arguments _Dummy_N, never as the model does, so that a
+    # coordinate named e or arctan cannot shadow numpy's e or arctan in that code.
+    return sympy.lambdify(list(arguments), list(entries), modules="numpy", cse=True,
+                          dummify=True)
 
 
 def as_samples(values: object, count: int, what: str) -> np.ndarray:

@@ -16,6 +16,7 @@ else:  # Python 3.10
 
 import sympy
 
+from ..inputs import InputError, check_toml_nesting, read_text
 from ..units import factor
 from .errors import ModelFileError
 from .expressions import RESERVED, ExpressionError, Symbols, free_names, parse_equation
@@ -25,6 +26,12 @@ from .units import check_equation, quantity
 
 #: Most coordinates a model may have (the FMUs' fixed sizes).
 MAX_COORDINATES = 7
+#: Bytes of a model file: one is a few kilobytes; every byte becomes sympy work.
+MAX_MODEL_BYTES = 1 << 20
+#: Parameters, and constants, a model may declare: the model FMU holds 32 parameters and
+#: 512 constants; each name is a sympy symbol in every equation's namespace.
+MAX_PARAMETERS = 256
+MAX_CONSTANTS = 1024
 SECTIONS = {"model": True, "parameters": True, "constants": False, "units": False,
             "columns": False, "log": False}
 _MODEL_KEYS = {"coordinates", "inputs", "equations"}
@@ -37,12 +44,12 @@ Fail = Callable[[str], ModelFileError]
 def read_model(path: str | Path) -> Model:
     """Read and check the model file at ``path``; raises :class:`ModelFileError`."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ModelFileError(path, f"cannot be read ({exc.strerror or exc})") from None
-    except UnicodeDecodeError:
-        raise ModelFileError(path, "is not UTF-8 text") from None
+    try:  # read with a cap: a device (/dev/zero) claims a size of 0 and has no end
+        text = read_text(path, "model file", limit=MAX_MODEL_BYTES)
+    except InputError as exc:
+        problem = str(exc).removeprefix(f"{path}: ").removeprefix(f"{path} ")
+        raise ModelFileError(path, problem.replace("cannot read the model file",
+                                                   "cannot be read")) from None
     return parse_model(text, source=path)
 
 
@@ -51,10 +58,18 @@ def parse_model(text: str, source: str | Path | None = None) -> Model:
     def fail(problem: str) -> ModelFileError:
         return ModelFileError(source, problem)
 
+    if len(text) > MAX_MODEL_BYTES:
+        raise fail(f"is {len(text)} characters long; a model file has at most "
+                   f"{MAX_MODEL_BYTES}")
+    nesting = check_toml_nesting(text)  # before the TOML parser recurses into it
+    if nesting is not None:
+        raise fail(f"is not a model file: {nesting}")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise fail(f"is not valid TOML: {exc}") from None
+    except (RecursionError, MemoryError):  # beyond what the scan above lets through
+        raise fail("is not a model file: nested too deeply") from None
     for section in data:
         if section not in SECTIONS:
             raise fail(f"has an unknown section [{section}] (known: "
@@ -75,6 +90,9 @@ def parse_model(text: str, source: str | Path | None = None) -> Model:
     if not 1 <= len(coordinates) <= MAX_COORDINATES:
         raise fail(f"declares {len(coordinates)} coordinates; a model has 1 to "
                    f"{MAX_COORDINATES}")
+    for section, most in (("parameters", MAX_PARAMETERS), ("constants", MAX_CONSTANTS)):
+        if len(data.get(section, {})) > most:
+            raise fail(f"[{section}] declares {len(data[section])} names; at most {most}")
     parameters = [_parameter(name, spec, fail) for name, spec in data["parameters"].items()]
     if not parameters:
         raise fail("[parameters] is empty: declare at least one unknown to identify")
@@ -112,6 +130,8 @@ def _names(model: Mapping[str, Any], key: str, fail: Fail, required: bool) -> li
     names = model[key]
     if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
         raise fail(f"[model] {key} must be a list of names")
+    if len(names) > MAX_PARAMETERS:
+        raise fail(f"[model] {key} has {len(names)} names; at most {MAX_PARAMETERS}")
     return names
 
 
@@ -168,7 +188,7 @@ def _check_names(coordinates: list[str], inputs: list[str], parameters: list[str
     for kind, names in (("coordinate", coordinates), ("input", inputs),
                         ("parameter", parameters), ("constant", constants)):
         for name in names:
-            if not _NAME.match(name) or keyword.iskeyword(name):
+            if not _NAME.fullmatch(name) or keyword.iskeyword(name):
                 raise fail(f"{kind} name '{name}' is not a name (a letter, then letters, "
                            "digits or _)")
             if name in RESERVED:
@@ -257,7 +277,9 @@ def _equations(model: Mapping[str, Any], coordinates: list[str], symbols: Symbol
     accelerations = list(symbols.acceleration.values())
     equations = []
     for i, (text, coordinate) in enumerate(zip(texts, coordinates), start=1):
-        where = f"equation {i} ('{text}')"
+        shown = text if not isinstance(text, str) or len(text) <= 200 else text[:197] + "..."
+        where = f"equation {i} ({shown!r})" if isinstance(text, str) and not text.isprintable() \
+            else f"equation {i} ('{shown}')"
         try:
             lhs, rhs = parse_equation(text, symbols)
             residual = lhs - rhs
@@ -271,6 +293,8 @@ def _equations(model: Mapping[str, Any], coordinates: list[str], symbols: Symbol
                 check_equation(lhs, rhs, unit_of)
         except ExpressionError as exc:
             raise fail(f"{where} {exc}") from None
+        except (RecursionError, MemoryError):  # a bound of expressions.py let it through
+            raise fail(f"{where} is too large to be worked with") from None
         equations.append(Equation(text, lhs, rhs, split.terms, split.known))
     return equations
 

@@ -39,7 +39,7 @@ from lxml import etree
 
 from .base_parameters import BaseParameters
 from .joint_terms import JointTerms
-from .urdf import Robot, body_inertial, check_inertia, inertia_matrix, parse_urdf
+from .urdf import Robot, UrdfError, body_inertial, check_inertia, inertia_matrix, parse_urdf
 
 # the default relative tolerance of the URDF's values (--urdf-tolerance):
 # docs/design/robots.md explains the choice
@@ -318,6 +318,10 @@ def write_identified_urdf(robot: Robot, pi: np.ndarray, path: Path, comment: str
     n = robot.n
     for i, joint in enumerate(robot.joints):
         mass, com, inertia = body_inertial(pi[10 * i:10 * i + 10])
+        if not (np.isfinite(mass) and np.all(np.isfinite(com))
+                and np.all(np.isfinite(inertia))):
+            raise UrdfError(f"the identified link {joint.child_link!r} has a mass, centre of "
+                            f"mass or inertia that is not finite: no URDF is written")
         check_inertia(inertia, f"identified link {joint.child_link!r}")
         for name in joint.merged_links:
             for element in links[name].findall("inertial"):
@@ -325,16 +329,22 @@ def write_identified_urdf(robot: Robot, pi: np.ndarray, path: Path, comment: str
         link = links[joint.child_link]
         for element in link.findall("inertial"):
             link.remove(element)
-        inertial = etree.SubElement(link, "inertial")
-        etree.SubElement(inertial, "origin", xyz=" ".join(f"{x:.12g}" for x in com), rpy="0 0 0")
-        etree.SubElement(inertial, "mass", value=f"{mass:.12g}")
-        etree.SubElement(inertial, "inertia", **{
-            key: f"{inertia[r, c]:.12g}" for key, (r, c) in
-            {"ixx": (0, 0), "ixy": (0, 1), "ixz": (0, 2), "iyy": (1, 1), "iyz": (1, 2),
-             "izz": (2, 2)}.items()})
+        if mass != 0.0 or np.any(inertia):  # a massless body stays without <inertial>
+            _add_inertial(link, mass, com, inertia)
         element = joints[joint.name]
         for dynamics in element.findall("dynamics"):
             element.remove(dynamics)
         etree.SubElement(element, "dynamics", damping=f"{pi[10 * n + 2 * i]:.12g}",
                          friction=f"{pi[10 * n + 2 * i + 1]:.12g}")
     tree.write(str(path), xml_declaration=True, encoding="utf-8", pretty_print=True)
+
+
+def _add_inertial(link, mass: float, com: np.ndarray, inertia: np.ndarray) -> None:
+    """An <inertial> child of ``link``: the centre of mass, mass and inertia about it."""
+    inertial = etree.SubElement(link, "inertial")
+    etree.SubElement(inertial, "origin", xyz=" ".join(f"{x:.12g}" for x in com), rpy="0 0 0")
+    etree.SubElement(inertial, "mass", value=f"{mass:.12g}")
+    etree.SubElement(inertial, "inertia", **{
+        key: f"{inertia[r, c]:.12g}" for key, (r, c) in
+        {"ixx": (0, 0), "ixy": (0, 1), "ixz": (0, 2), "iyy": (1, 1), "iyz": (1, 2),
+         "izz": (2, 2)}.items()})

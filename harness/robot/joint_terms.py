@@ -28,13 +28,16 @@ joint, term, value, std_error, unit), which validate reads back (`read_sidecar`,
 from __future__ import annotations
 
 import csv
+import io
 import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ..inputs import InputError, read_text
 from .filtered_regression import first_order, lfilter_zi_at
+from .urdf import LARGEST
 
 # the terms' names in joint_terms.csv and parameters.csv, in the regressor's order per joint
 OFFSET, ARMATURE, COULOMB_POSITIVE, COULOMB_NEGATIVE = (
@@ -292,21 +295,24 @@ def read_sidecar(path: Path, joint_names: list[str]) -> Sidecar:
     """The joint terms of joint_terms.csv for a robot with these joints; JointTermsError
     names a bad row (an unknown joint or term, a value that is not a number, a term
     given to some joints only)."""
+    try:  # read with a cap, never trusting st_size: a device (/dev/zero) says 0
+        text = read_text(path, SIDECAR_NAME, limit=SIDECAR_MAX_BYTES)
+    except InputError as error:
+        if "larger than" in str(error):
+            raise JointTermsError(f"{path}: more than {SIDECAR_MAX_BYTES} bytes; a "
+                                  f"{SIDECAR_NAME} is a few hundred ({error})") from None
+        if "UTF-8" in str(error):
+            raise JointTermsError(f"{path}: not a CSV file in UTF-8 ({error})") from None
+        raise JointTermsError(str(error)) from None
     try:
-        size = Path(path).stat().st_size
-        if size > SIDECAR_MAX_BYTES:
-            raise JointTermsError(f"{path}: {size} bytes; a {SIDECAR_NAME} is a few hundred "
-                                  f"(at most {SIDECAR_MAX_BYTES} are read)")
-        with Path(path).open(newline="", encoding="utf-8") as handle:
-            rows = list(csv.DictReader(handle))
-            header = rows[0].keys() if rows else None
-    except OSError as error:
-        raise JointTermsError(f"{path}: {error.strerror or error}") from None
-    except (UnicodeDecodeError, csv.Error) as error:
+        rows = list(csv.DictReader(io.StringIO(text, newline="")))
+        header = rows[0].keys() if rows else None
+    except csv.Error as error:
         raise JointTermsError(f"{path}: not a CSV file in UTF-8 ({error})") from None
     if header is not None and not set(SIDECAR_COLUMNS) <= set(header):
         raise JointTermsError(f"{path}: the columns must be {', '.join(SIDECAR_COLUMNS)}")
     found: dict[tuple[str, str], float] = {}
+    seen: dict[tuple[str, str], int] = {}  # the line of each joint's term
     smooth: set[float] = set()
     for line, row in enumerate(rows, start=2):
         joint, kind = row["joint"], row["term"]
@@ -323,6 +329,13 @@ def read_sidecar(path: Path, joint_names: list[str]) -> Sidecar:
         if not math.isfinite(value):
             raise JointTermsError(f"{path} line {line}: value {row['value']!r} is not a "
                                   f"finite number")
+        if abs(value) > LARGEST:  # as for a URDF: products of such values overflow
+            raise JointTermsError(f"{path} line {line}: value {row['value']!r} of {kind} is "
+                                  f"beyond {LARGEST:g} (SI units): not a joint's")
+        if (joint, kind) in seen:
+            raise JointTermsError(f"{path} line {line}: joint {joint!r} has a second {kind} "
+                                  f"(line {seen[(joint, kind)]}); give each once")
+        seen[(joint, kind)] = line
         if kind == SMOOTH_VELOCITY:
             smooth.add(value)
         else:

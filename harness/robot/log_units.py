@@ -14,6 +14,11 @@ import numpy as np
 
 from ..units import ANGLE_UNITS, LENGTH_UNITS, TIME_UNITS, factor
 
+#: The range of a drive gain [N.m/A or N/A]: far beyond any drive's (0.01 to 100 with a
+#: gearbox), and such that the torques and their squares in the regression stay far
+#: inside float64 (a gain of 1e300 overflows them) and the joints' scales within 1e12.
+GAIN_RANGE = (1e-6, 1e6)
+
 
 class UnitError(ValueError):
     """A unit or a gain that cannot be used; the message names the option."""
@@ -44,6 +49,10 @@ def parse_gains(text: str) -> tuple[float, ...]:
         if not (math.isfinite(value) and value > 0.0):
             raise UnitError(f"--torque-gains {text!r}: gain {k} ({item!r}) is not a finite "
                             "number > 0 (N.m/A of the joint's drive)")
+        if not GAIN_RANGE[0] <= value <= GAIN_RANGE[1]:
+            raise UnitError(f"--torque-gains {text!r}: gain {k} ({item!r}) is outside "
+                            f"{GAIN_RANGE[0]:g} to {GAIN_RANGE[1]:g} (N.m/A of the joint's "
+                            "drive)")
         gains.append(value)
     return tuple(gains)
 
@@ -77,8 +86,8 @@ def log_units(kinds: Sequence[str], time: str | None = None, angle: str | None =
             raise UnitError(f"--torque-gains: {len(gains)} gain(s) for a robot of {len(kinds)} "
                             f"joints; give one per joint, in the order of u1..u{len(kinds)}")
         torque = np.asarray(gains, dtype=float)
-        bad = np.flatnonzero(~(np.isfinite(torque) & (torque > 0)))
+        bad = np.flatnonzero(~((torque >= GAIN_RANGE[0]) & (torque <= GAIN_RANGE[1])))
         if bad.size:
             raise UnitError(f"--torque-gains: gain {bad[0] + 1} ({torque[bad[0]]!r}) is not "
-                            "a finite number > 0")
+                            f"a number from {GAIN_RANGE[0]:g} to {GAIN_RANGE[1]:g}")
     return LogUnits(seconds, position, torque, time)

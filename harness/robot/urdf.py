@@ -25,6 +25,11 @@ from .native import core_defaults
 MOVING_TYPES = {"revolute": 0, "continuous": 0, "prismatic": 1}  # -> RbJointType
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
 LARGEST = 1e6  # [m, kg, kg m^2, rad, N m s/rad, N m]: a larger URDF number is refused
+# [kg]: a link's mass is 0 (a massless link: legal URDF) or at least this.  The centre of
+# mass is a quotient by the mass and the link's size sqrt(tr I / 2m): with every number
+# within LARGEST, both stay far inside float64 above it (1e6 / 1e-20 = 1e26), while a
+# mass at float64's edge (5e-324) turns them into infinities.  No robot part is lighter.
+SMALLEST_MASS = 1e-20
 
 
 class UrdfError(ValueError):
@@ -131,8 +136,12 @@ def inertia_matrix(six) -> np.ndarray:
 
 
 def body_inertial(link: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
-    """(mass, centre of mass, 3x3 inertia about it) from 10 standard parameters (m > 0)."""
+    """(mass, centre of mass, 3x3 inertia about it) from 10 standard parameters; a
+    massless body (m = 0, a URDF link without <inertial>) has its centre of mass at the
+    origin and the inertia about it (zero for a link without inertial)."""
     mass = float(link[0])
+    if mass == 0.0:
+        return 0.0, np.zeros(3), inertia_matrix(link[4:])
     com = link[1:4] / mass
     return mass, com, inertia_matrix(link[4:]) + mass * _skew(com) @ _skew(com)
 
@@ -147,10 +156,14 @@ def _floats(element, attribute: str, count: int, default: str, where: str) -> np
         raise UrdfError(f"{where}: {attribute}={text!r} is not {count} numbers") from None
     if values.size != count or not np.all(np.isfinite(values)):
         raise UrdfError(f"{where}: {attribute}={text!r} is not {count} finite numbers")
+    tag = f"<{element.tag} {attribute}={text!r}>" if element is not None else attribute
     if np.any(np.abs(values) > LARGEST):
-        tag = f"<{element.tag} {attribute}={text!r}>" if element is not None else attribute
         raise UrdfError(f"{where}: {tag} holds a number beyond {LARGEST:g} (SI units): "
                         f"not a robot's")
+    if np.any((values != 0) & (np.abs(values) < np.finfo(float).tiny)):
+        # subnormal: at float64's edge, with few significant bits; 0 is written 0
+        raise UrdfError(f"{where}: {tag} holds a number below {np.finfo(float).tiny:.3g} "
+                        f"(subnormal in float64): write 0 or a meaningful value")
     return values
 
 
@@ -171,6 +184,9 @@ def _link_inertial(link, source: Path) -> tuple[float, np.ndarray, np.ndarray] |
     mass = _floats(mass_element, "value", 1, "", where)[0] if mass_element is not None else 0.0
     if mass < 0:
         raise UrdfError(f"{where}: negative mass {mass}")
+    if 0 < mass < SMALLEST_MASS:
+        raise UrdfError(f"{where}: mass {mass:g} kg is below {SMALLEST_MASS:g} kg: write 0 "
+                        f"for a massless link (or leave out <inertial>)")
     R, com = _origin(inertial, where)
     element = inertial.find("inertia")
     six = [_floats(element, key, 1, "0", where)[0]
