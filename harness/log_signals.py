@@ -114,7 +114,9 @@ def read_signals(path: str | Path, time: Column | None, positions: list[Column],
         raise LogSignalsError(f"{path} {place(row)}: {', '.join(which)} is NaN, infinite or "
                               f"missing ({int(bad.sum())} such value(s) in the log)")
     if len(data) < FEWEST_SAMPLES:
-        raise LogSignalsError(f"{path}: {len(data)} samples; identification needs many more")
+        what = ("the log has no samples (0 samples: a header row only, or nothing)"
+                if len(data) == 0 else f"{len(data)} samples")
+        raise LogSignalsError(f"{path}: {what}; identification needs many more")
     if time is None:
         assert sample_rate is not None
         t = np.arange(len(data)) / sample_rate
