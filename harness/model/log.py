@@ -27,7 +27,8 @@ def read_log(path: str | Path, model: Model, sample_rate: float | None = None) -
     rate = sample_rate if sample_rate is not None else model.sample_rate
     hint = "; the model's [columns] maps a name to a column"
     return read_signals(
-        path, None if rate is not None else Column(TIME, model.column(TIME)),
+        path, None if rate is not None else Column(f"time column {model.column(TIME)!r}",
+                                                    model.column(TIME)),
         [Column(c, model.column(c)) for c in model.coordinates],
         [Column(u, model.column(u)) for u in model.inputs], sample_rate=rate,
         time_factor=factor(model.time_unit or "s", "s"), missing_hint=hint,
