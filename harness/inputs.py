@@ -93,7 +93,7 @@ def check_toml_nesting(text: str) -> str | None:
     dotted = _TOML_DOTTED.search(bare)
     if dotted:
         line = bare.count("\n", 0, dotted.start()) + 1
-        return f"a dotted key of more than {MAX_DEPTH} parts (line {line})"
+        return f"a dotted key nested more than {MAX_DEPTH} parts deep (line {line})"
     return None
 
 
