@@ -80,7 +80,8 @@ def fit(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float = RIDGE,
         Y, r = Y * mask[:, :, None], r * mask
     rows, equations, p = Y.shape
     used = _used(Y, mask)
-    scales, weights, theta, H, Z, rw, rms = _weighted_solve(Y, r, nominal, ridge, used)
+    scales, weights, theta, H, information, Z, rw, rms = _weighted_solve(Y, r, nominal, ridge,
+                                                                       used)
     residual_w = rw - Z @ (theta * scales)  # (rows, equations)
     H_inv = np.linalg.inv(H)
     scores = np.einsum("sek,se->sk", Z, residual_w)
@@ -91,7 +92,6 @@ def fit(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float = RIDGE,
     covariance = 0.5 * (covariance + covariance.T)
     sandwich = np.sqrt(np.maximum(np.diag(covariance), 0.0))
     variance = float(np.sum(residual_w ** 2)) / max(float(used.sum()) - p, 1.0)
-    information = np.einsum("sek,sel->kl", Z, Z)
     classical = np.sqrt(np.maximum(variance * np.diag(H_inv @ information @ H_inv), 0.0)) \
         / scales
     return Fit(theta, sandwich, classical, _excitation(information), rms, rows, covariance,
@@ -124,7 +124,7 @@ def _weighted_solve(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: fl
                     used: np.ndarray) -> tuple[np.ndarray, ...]:
     """:func:`_solve` with the equations weighted by their residual RMS over their ``used``
     rows (two passes when there are several equations); also returns the scales, weights
-    and residual RMS."""
+    and residual RMS (the plain normal matrix is the fit's information: built once)."""
     rows, equations, p = Y.shape
     if used.sum() <= p:
         raise ValueError(f"{int(used.sum())} equations ({rows} rows of {equations}) cannot "
@@ -133,18 +133,19 @@ def _weighted_solve(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: fl
     scales = np.where(scales > 0, scales, 1.0)
     weights = np.ones(equations)
     for _ in range(2 if equations > 1 else 1):
-        theta, H, Z, rw = _solve(Y, r, nominal, scales, weights, ridge)
+        theta, H, information, Z, rw = _solve(Y, r, nominal, scales, weights, ridge)
         residual = r - Y @ theta
         rms = np.sqrt(np.sum(residual ** 2, axis=0) / used)
         if equations > 1 and rms.max() > 0:
             weights = np.maximum(rms, 1e-9 * rms.max())
-    return scales, weights, theta, H, Z, rw, rms
+    return scales, weights, theta, H, information, Z, rw, rms
 
 
 def _solve(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, scales: np.ndarray,
            weights: np.ndarray, ridge: float
-           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The regularized normal equations in the normalized unknowns phi = scales * theta."""
+           ) -> tuple[np.ndarray, ...]:
+    """The regularized normal equations in the normalized unknowns phi = scales * theta:
+    theta, the regularized and the plain normal matrix, the normalized rows and sides."""
     Z = _weighted(Y, weights) / scales[None, None, :]
     rw = r / weights[None, :]
     A = np.einsum("sek,sel->kl", Z, Z)
@@ -152,7 +153,7 @@ def _solve(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, scales: np.ndarray
     lam = ridge * float(np.mean(np.diag(A)))
     H = A + lam * np.eye(len(scales))
     phi = np.linalg.solve(H, b + lam * scales * nominal)
-    return phi / scales, H, Z, rw
+    return phi / scales, H, A, Z, rw
 
 
 def relative_errors(Y: np.ndarray, r: np.ndarray, theta: np.ndarray

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..log_signals import LogSignalsError
 from ..model.fit import estimate
 from ..model.selection import as_good
 from .base_parameters import BaseParameters
@@ -73,7 +74,8 @@ def choose_joint_terms(rows: Rows, base_for: Callable[[JointTerms], BaseParamete
     means = {key: float(np.mean(errors)) for key, errors in blocks.items()}
     finite = {key: value for key, value in means.items() if math.isfinite(value)}
     if not finite:
-        raise ValueError("no model class can be fitted on this log's blocks")
+        raise LogSignalsError("--joint-terms auto: no model class can be fitted on this "
+                              "log's blocks (too few joint equations in each); name the terms")
     best = min(finite, key=lambda key: finite[key])
     by_label = {label(terms): terms for terms in CANDIDATES}
     good = [key for key in finite if as_good(blocks[key], blocks[best])]

@@ -281,12 +281,16 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
         bound = 1.5 * np.array([np.abs(smooth_column(log, log.q[:, i], max(window, 0.05), deriv=2)
                                        ).max() for i in range(robot.n)]) + 1e-3
         velocity = observer_velocities(log, bound)
-    rows = regression_rows(robot, log, method, window, tau, used, velocity,
+    rows = regression_rows(robot, body, log, method, window, tau, used, velocity,
                            core_defaults().min_speed if min_speed is None else min_speed)
     types = robot.arrays()["types"]
 
+    bases: dict[JointTerms, BaseParameters] = {}  # the chosen class's: computed once
+
     def base_for(model: JointTerms) -> BaseParameters:
-        return base_parameters(body, types, robot.joint_names, unknown, terms=model)
+        if model not in bases:
+            bases[model] = base_parameters(body, types, robot.joint_names, unknown, terms=model)
+        return bases[model]
     choice = None
     if choose_terms:
         choice = choose_joint_terms(rows, base_for, robot.parameters(), robot.joint_names)
@@ -303,13 +307,13 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
                           window, result[3], result[4], passive, terms, choice)
 
 
-def regression_rows(robot: Robot, log: JointLog, method: str, window: float, tau: float,
-                    used: np.ndarray, velocity: np.ndarray, min_speed: float) -> Rows:
+def regression_rows(robot: Robot, body, log: JointLog, method: str, window: float,
+                    tau: float, used: np.ndarray, velocity: np.ndarray, min_speed: float
+                    ) -> Rows:
     """The Rows of `method` ("sg": the Savitzky-Golay signals of `window` s; "observer":
     the momentum form through the causal filter of time constant tau, from the observer's
     `velocity`) at the samples `used`, each joint's equation left out near its reversals
-    and below min_speed (friction_rows)."""
-    body = robot.rigid_body()
+    and below min_speed (friction_rows); body: the robot's C model (robot.rigid_body())."""
     # each joint's velocity over the whole log is needed only for its friction rows
     # (friction_rows): one column at a time, the regression's signals at `used` only
     if method == "sg":
