@@ -52,6 +52,7 @@ from bench.cases import two_link
 from bench.reports import REPORTS, commit
 from bench.reports.robot_real_logs import _regressor, least_squares_baseline, resample
 from harness.model import read_model
+from harness.model.friction_rows import joint_friction_rows
 from harness.model.log import read_log as read_model_log
 from harness.model.scores import PieceSimulator, parts_for
 from harness.model.selection import CrossValidation
@@ -59,7 +60,7 @@ from harness.model.simulation import Dynamics
 from harness.model.zero_phase import ZeroPhase, regression
 from harness.robot.base_parameters import base_parameters
 from harness.robot.native import core_defaults
-from harness.robot.pipeline import JointLog, joint_friction_rows, savitzky_golay
+from harness.robot.pipeline import JointLog, savitzky_golay
 from harness.robot.urdf import read_urdf
 
 REPO = Path(__file__).resolve().parents[2]

@@ -61,7 +61,7 @@ def identify_model(model: Model, log: ModelLog, refine_mode: str = "auto") -> Id
     choice = choose_pipeline(model, log)
     rows = regression(model, log, choice.settings)
     batch = max(1, round(BATCH_SAMPLES / choice.settings.decimation))
-    least = fit(rows.Y, rows.r, model.nominal, batch=batch)
+    least = fit(rows.Y, rows.r, model.nominal, batch=batch, mask=rows.mask)
     low = [(p.name, e) for p, e in zip(model.parameters, least.excitation)
            if e < NOT_EXCITED and not p.optional]
     if low:
@@ -80,7 +80,7 @@ def identify_model(model: Model, log: ModelLog, refine_mode: str = "auto") -> Id
         free = model_class.free
         if not free.all():
             least = _expanded(fit(rows.Y[:, :, free], rows.r, model.nominal[free],
-                                  batch=batch), free, least.excitation)
+                                  batch=batch, mask=rows.mask), free, least.excitation)
     theta, std, method, info = _refined(model, log, rows, least, refine_mode, free)
     per, pooled = relative_errors(rows.Y, rows.r, theta)
     return Identification(model, log, rows, least, theta, std, method, per, pooled, choice,
@@ -113,8 +113,7 @@ def _refined(model: Model, log: ModelLog, rows: Regression, least: Fit, mode: st
     start = least.theta
     try:
         if mode == "auto":
-            check = check_on_halves(model, log, rows.t, rows.Y, rows.r, least.theta, dynamics,
-                                    free)
+            check = check_on_halves(model, log, rows, least.theta, dynamics, free)
             info["held_out_simulation_error"] = check.as_dict()
             if not check.improves:
                 return (*kept, {**info, "applied": False,

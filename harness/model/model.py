@@ -89,6 +89,18 @@ class Model:
         return np.array([p.nominal for p in self.parameters], dtype=float)
 
     @cached_property
+    def coulomb_coordinates(self) -> tuple[tuple[int, ...], ...]:
+        """Per equation, the coordinates whose velocity enters it inside ``sign()``
+        (Coulomb friction): the equation holds only where they move
+        (:mod:`harness.model.friction_rows`)."""
+        velocity = list(self.symbols.velocity.values())
+        out = []
+        for eq in self.equations:
+            inside = set().union(*(f.free_symbols for f in eq.residual.atoms(sympy.sign)))
+            out.append(tuple(k for k, v in enumerate(velocity) if v in inside))
+        return tuple(out)
+
+    @cached_property
     def _scales(self) -> tuple[dict[sympy.Symbol, float], np.ndarray]:
         """SI factors of the measured names and constants, and of the parameter columns."""
         if not self.units:

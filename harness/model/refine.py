@@ -23,6 +23,7 @@ from .log import ModelLog
 from .model import Model
 from .scores import PieceSimulator, linearized_over, pieces
 from .simulation import Dynamics, simulate, substeps, time_constant
+from .zero_phase import Regression
 
 #: Runs last this many of the model's slowest time constants (long enough for the
 #: damping and friction to act, short enough that a drift cannot build up), within
@@ -224,10 +225,10 @@ class RefinementCheck:
         return np.mean(self.refined_halves, axis=0)
 
 
-def check_on_halves(model: Model, log: ModelLog, rows_t: np.ndarray, rows_Y: np.ndarray,
-                    rows_r: np.ndarray, theta: np.ndarray, dynamics: Dynamics | None = None,
-                    free: np.ndarray | None = None) -> RefinementCheck:
-    """Fit least squares on the regressor rows of one half of the log, refine it on that
+def check_on_halves(model: Model, log: ModelLog, rows: Regression, theta: np.ndarray,
+                    dynamics: Dynamics | None = None, free: np.ndarray | None = None
+                    ) -> RefinementCheck:
+    """Fit least squares on the regressor ``rows`` of one half of the log, refine it on that
     half, and score both on the other half; the scores averaged over the two halves. Only
     the unknowns ``free`` (None: all) are fitted; the others stay 0."""
     from .fit import estimate
@@ -241,9 +242,10 @@ def check_on_halves(model: Model, log: ModelLog, rows_t: np.ndarray, rows_Y: np.
     refined_halves = []
     free = np.ones(len(theta), dtype=bool) if free is None else free
     for k, (first, last) in enumerate(halves):
-        mine = (rows_t >= log.t[first]) & (rows_t < log.t[last - 1])
+        mine = (rows.t >= log.t[first]) & (rows.t < log.t[last - 1])
         start = np.zeros(len(theta))
-        start[free] = estimate(rows_Y[mine][:, :, free], rows_r[mine], model.nominal[free])
+        start[free] = estimate(rows.Y[mine][:, :, free], rows.r[mine], model.nominal[free],
+                               mask=None if rows.mask is None else rows.mask[mine])
         refined = refine(model, log, start, first, last, dynamics, MOST_RUNS // 2,
                          free).theta
         refined_halves.append(refined)

@@ -3,7 +3,8 @@
 Each candidate is a zero-phase pipeline (:class:`harness.model.zero_phase.ZeroPhase`): a
 Butterworth cut-off from a hundredth of the sample rate up to 0.8 of the Nyquist
 frequency, with or without the benchmark's decimation by 10, and the cut-off that the
-positions' noise floor suggests (:func:`harness.model.zero_phase.cutoff_for`). The log is
+positions' noise floor suggests (:func:`harness.model.zero_phase.cutoff_for`); for a
+model with Coulomb terms, each also with its friction rows. The log is
 cut into FOLDS contiguous blocks; for each block, a candidate's least squares are fitted
 on the rows outside it (a guard of the filter's border on either side), and scored on it
 by simulation: short runs of the model, each from the measured state, driven by the
@@ -13,6 +14,7 @@ explain. The candidate of the lowest mean score is chosen; all scores are report
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -83,8 +85,9 @@ class Choice:
                 "power_above_cutoff": self.power_above}
 
 
-def candidates(log: ModelLog) -> list[tuple[str, ZeroPhase]]:
-    """The pipelines tried on a log (labels and settings)."""
+def candidates(model: Model, log: ModelLog) -> list[tuple[str, ZeroPhase]]:
+    """The pipelines tried on a log (labels and settings); for a model with Coulomb terms
+    each also with its friction rows (:func:`harness.model.zero_phase.friction_mask`)."""
     rate = 1.0 / log.step
     out = [(f"spectral, {f * rate:.4g} Hz", ZeroPhase.for_step(log.step, f * rate, 1, "spectral"))
            for f in SPECTRAL_FRACTIONS]
@@ -96,6 +99,9 @@ def candidates(log: ModelLog) -> list[tuple[str, ZeroPhase]]:
     if not math.isclose(noise, 0.1 * rate, rel_tol=1e-6):
         out.append((f"central differences, {noise:.4g} Hz (noise floor), decimated by "
                     f"{DECIMATION}", ZeroPhase.for_step(log.step, noise, DECIMATION)))
+    if any(model.coulomb_coordinates):
+        out += [(f"{label}, friction rows", dataclasses.replace(settings, friction_rows=True))
+                for label, settings in out]
     return out
 
 
@@ -170,7 +176,9 @@ class CrossValidation:
 def _estimate(model: Model, rows: Regression, free: np.ndarray, take) -> np.ndarray:
     """Least squares over the rows ``take`` with the unknowns outside ``free`` at 0."""
     theta = np.zeros(len(model.parameters))
-    theta[free] = estimate(rows.Y[take][:, :, free], rows.r[take], model.nominal[free])
+    mask = None if rows.mask is None else rows.mask[take]
+    theta[free] = estimate(rows.Y[take][:, :, free], rows.r[take], model.nominal[free],
+                           mask=mask)
     return theta
 
 
@@ -181,7 +189,7 @@ def choose_pipeline(model: Model, log: ModelLog) -> Choice:
     ``method``."""
     fallback = ZeroPhase.for_log(log)
     check_length(model, log, fallback)
-    tried = [(label, settings) for label, settings in candidates(log)
+    tried = [(label, settings) for label, settings in candidates(model, log)
              if log.samples >= minimum_samples(settings, len(model.parameters))
              and log.samples // FOLDS > 4 * settings.border]
     every = np.ones(len(model.parameters), dtype=bool)

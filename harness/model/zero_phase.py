@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.signal
 
+from .friction_rows import friction_rows
 from .log import LogFileError, ModelLog
 from .model import Model
 
@@ -41,6 +42,13 @@ SIGNAL_TO_FLOOR = 100.0
 #: cut the motion), between a 500th and a tenth of the sample rate.
 CUTOFF_MARGIN = 2.0
 LOWEST_CUTOFF_FRACTION = 0.002
+#: Friction rows: an equation with a coordinate's Coulomb term is left out within this
+#: many periods of the cut-off of the coordinate's reversals (the filtered step of
+#: sign(q') is then within 1 % of the step: 14 % after half a period, 4 % after one) ...
+REVERSAL_PERIODS = 1.5
+#: ... and where the coordinate moves slower than this share of its RMS speed (the robot
+#: path's 0.05 rad/s, relative: a model file's coordinate has any unit).
+SLOW_FRACTION = 0.05
 
 
 @dataclass(frozen=True)
@@ -53,10 +61,14 @@ class ZeroPhase:
     decimation: int
     border: int          # samples dropped at each end before decimation
     differentiator: str = "central"   # or "spectral"
+    #: leave out each equation's rows near the reversals of the coordinates in its sign()
+    #: terms (:func:`friction_mask`)
+    friction_rows: bool = False
 
     @classmethod
     def for_step(cls, step: float, cutoff: float | None = None,
-                 decimation: int = DECIMATION, differentiator: str = "central") -> ZeroPhase:
+                 decimation: int = DECIMATION, differentiator: str = "central",
+                 friction_rows: bool = False) -> ZeroPhase:
         """The settings at sampling step ``step`` [s] with the Butterworth cut-off
         ``cutoff`` [Hz] (default: a tenth of the sample rate), the decimation and the
         differentiator: "central" (central differences of the filtered positions) or
@@ -68,7 +80,7 @@ class ZeroPhase:
                              f"{', '.join(DIFFERENTIATORS)}")
         cutoff = CUTOFF_FRACTION / step if cutoff is None else cutoff
         border = math.ceil(BORDER_PERIODS / (cutoff * step))
-        return cls(step, cutoff, ORDER, decimation, border, differentiator)
+        return cls(step, cutoff, ORDER, decimation, border, differentiator, friction_rows)
 
     @classmethod
     def for_log(cls, log: ModelLog) -> ZeroPhase:
@@ -79,7 +91,7 @@ class ZeroPhase:
     def as_dict(self) -> dict[str, float | int | str]:
         return {"step_s": self.step, "cutoff_hz": self.cutoff, "butterworth_order": self.order,
                 "decimation": self.decimation, "border_samples": self.border,
-                "differentiator": self.differentiator}
+                "differentiator": self.differentiator, "friction_rows": self.friction_rows}
 
     def gain(self, frequency: np.ndarray) -> np.ndarray:
         """The forward-backward Butterworth's gain at ``frequency`` [Hz] (|H|^2 of the
@@ -186,6 +198,9 @@ class Regression:
     Y: np.ndarray    # (rows, equations, unknowns)
     r: np.ndarray    # (rows, equations)
     settings: ZeroPhase
+    #: (rows, equations) the equations used (None: all): the rows left out are zero in
+    #: Y and r; pass it to the fit so that each equation's residual counts its own rows
+    mask: np.ndarray | None = None
 
 
 def minimum_samples(settings: ZeroPhase, unknowns: int) -> int:
@@ -216,8 +231,31 @@ def regression(model: Model, log: ModelLog, settings: ZeroPhase | None = None) -
     if not (np.all(np.isfinite(Y)) and np.all(np.isfinite(r))):
         raise LogFileError(f"{log.source}: the model's equations are not finite on this log "
                            "(a division by zero or a log of a non-positive value)")
+    mask = friction_mask(model, d.qd[keep], settings) if settings.friction_rows else None
+    if mask is not None:
+        # zeroed before the decimation's filter: a decimated row is then a combination of
+        # kept equations only, exact as they are
+        Y, r = Y * mask[:, :, None], r * mask
+        mask = mask[::settings.decimation].copy()
     return Regression(log.t[keep][::settings.decimation].copy(), decimate(Y, settings),
-                      decimate(r, settings), settings)
+                      decimate(r, settings), settings, mask)
+
+
+def friction_mask(model: Model, qd: np.ndarray, settings: ZeroPhase) -> np.ndarray:
+    """(samples, equations) True where each equation's Coulomb terms hold: every coordinate
+    in its sign() terms (Model.coulomb_coordinates) is further than the filter's memory
+    (REVERSAL_PERIODS of the cut-off) from a reversal of its filtered velocity ``qd``
+    and faster than SLOW_FRACTION of that velocity's RMS."""
+    margin = REVERSAL_PERIODS / settings.cutoff
+    speed_rms = np.sqrt(np.mean(qd ** 2, axis=0))
+    moving = friction_rows(qd, settings.step, margin, 0.0)
+    for k in range(qd.shape[1]):
+        moving[:, k] &= np.abs(qd[:, k]) >= SLOW_FRACTION * speed_rms[k]
+    mask = np.ones((len(qd), len(model.equations)), dtype=bool)
+    for i, coordinates in enumerate(model.coulomb_coordinates):
+        for k in coordinates:
+            mask[:, i] &= moving[:, k]
+    return mask
 
 
 def decimate(x: np.ndarray, settings: ZeroPhase) -> np.ndarray:

@@ -37,6 +37,7 @@ from scipy.signal import savgol_filter
 from ..log_signals import Column, LogSignalsError, header_of, read_signals
 from ..model.fit import Fit
 from ..model.fit import fit as least_squares
+from ..model.friction_rows import joint_friction_rows
 from .assessment import Choice, choose_model, prediction_error
 from .base_parameters import BaseParameters, base_parameters
 from .consistency import (
@@ -391,40 +392,6 @@ def _identified(robot: Robot, rows: Rows, base: BaseParameters, Y: np.ndarray,
     return base, fit, choice.pi, projection, choice
 
 
-def friction_rows(velocity: np.ndarray, h: float, margin: float,
-                  min_speed: float | None = None, slow_margin: float = 0.0,
-                  at: np.ndarray | None = None) -> np.ndarray:
-    """(N, n) True for the joint equations whose friction is f_v q' + f_c sign(q'):
-    away from the joint's reversals (away_from_reversals) and at |q'| >= min_speed,
-    also over the slow_margin s on both sides; at the samples `at` only (increasing
-    indices; None: every sample), (len(at), n).
-
-    At low speed a joint's Coulomb friction is not f_c sign(q') (stiction, the
-    Stribeck effect, a simulator's smoothing), also where the joint slows down
-    without reversing, which the reversal margin does not catch.  A filtered
-    regression (filtered_regression) carries the friction of the filter's memory:
-    its rows need the speed over that memory, slow_margin.  min_speed None: the core's
-    default (core_defaults)."""
-    rows = [joint_friction_rows(velocity[:, i], h, margin, min_speed, slow_margin, at)
-            for i in range(velocity.shape[1])]
-    return (np.column_stack(rows) if rows else
-            np.zeros((len(velocity) if at is None else len(at), 0), dtype=bool))
-
-
-def joint_friction_rows(velocity: np.ndarray, h: float, margin: float,
-                        min_speed: float | None = None, slow_margin: float = 0.0,
-                        at: np.ndarray | None = None) -> np.ndarray:
-    """friction_rows of one joint: velocity (N,), the result (N,) or (len(at),)."""
-    if min_speed is None:
-        min_speed = core_defaults().min_speed
-    if not min_speed >= 0.0:
-        raise ValueError(f"min_speed must be >= 0, not {min_speed!r}")
-    at = np.arange(len(velocity)) if at is None else np.asarray(at)
-    flips = np.flatnonzero(np.signbit(velocity[1:]) != np.signbit(velocity[:-1])) + 1
-    slow = np.flatnonzero(np.abs(velocity) < min_speed)
-    return ~_near(flips, at, h, max(margin, h)) & ~_near(slow, at, h, slow_margin)
-
-
 def check_friction_rows(mask: np.ndarray, velocity: np.ndarray, names: list[str],
                         min_speed: float) -> None:
     """LogError naming each joint that keeps fewer than TOO_FEW_ROWS of its equations
@@ -446,23 +413,6 @@ def check_friction_rows(mask: np.ndarray, velocity: np.ndarray, names: list[str]
                        "; ".join(messages))
     for message in messages:
         warnings.warn(message, stacklevel=3)
-
-
-def away_from_reversals(velocity: np.ndarray, h: float, margin: float) -> np.ndarray:
-    """(N, n) True where joint i's velocity keeps its sign for `margin` s on both sides.
-
-    Filtering does not commute with the Coulomb term f_c sign(q'): near a reversal
-    the filtered torque and the friction of the filtered velocity differ, so those
-    joint equations are left out (the other joints' equations of the sample stay)."""
-    return friction_rows(velocity, h, margin, min_speed=0.0)
-
-
-def _near(events: np.ndarray, at: np.ndarray, h: float, margin: float) -> np.ndarray:
-    """True for each sample of `at` within +-margin s of one of the `events` (sample
-    indices, increasing; margin 0: the sample itself is one)."""
-    half = int(round(margin / h))
-    return (np.searchsorted(events, at + half, side="right")
-            > np.searchsorted(events, at - half, side="left"))
 
 
 def _assessment_json(result: Identification) -> dict:

@@ -88,8 +88,10 @@ def test_time_in_ms_and_parquet_give_the_same_parameters(tmp_path, capsys, emps)
     code = main(["identify", str(tmp_path / "ms.csv"), "--model", str(EMPS), "--out", str(out)])
     assert code == 1
     assert "samples 1 s apart" in capsys.readouterr().err
-    # (the refinement's solver stops within 1e-3 of the same point on the stretched clock)
-    assert _values(out)[0] == pytest.approx(1e6 * reference[0], rel=1e-3)
+    # on the stretched clock the cross-validation's runs are shorter in samples (at most
+    # 40 of 1 s, not 200 of 1 ms), so it may choose another pipeline: measured, spectral
+    # 0.02 Hz with the friction rows, M 1.4 % from the reference (its standard error 1.7 %)
+    assert _values(out)[0] == pytest.approx(1e6 * reference[0], rel=0.03)
 
 
 def test_a_coordinate_in_deg_gives_the_values_of_one_in_rad(tmp_path, emps):

@@ -16,7 +16,7 @@ from harness import csv_columns
 from harness.cli import main
 from harness.robot import pipeline, smoothing
 from harness.robot.examples import example_urdf
-from harness.robot.pipeline import JointLog, friction_rows, plot_samples, read_log, savitzky_golay
+from harness.robot.pipeline import JointLog, plot_samples, read_log, savitzky_golay
 from harness.robot.urdf import read_urdf
 
 
@@ -90,30 +90,6 @@ def test_the_log_read_in_tiny_chunks_is_the_log(tmp_path, arm, monkeypatch):
     lone.write_bytes(path.read_bytes().replace(b"\n", b"\r"))
     log = read_log(lone, 2)
     assert np.array_equal(np.column_stack([log.t, log.q, log.u]), whole)
-
-
-def _near_whole(events: np.ndarray, h: float, margin: float) -> np.ndarray:
-    """(N, n) True within +-margin s of an event, by counting (the whole-log rule)."""
-    half = int(round(margin / h))
-    counts = np.cumsum(np.vstack([np.zeros((1, events.shape[1])), events]), axis=0)
-    index = np.arange(len(events))
-    return (counts[np.minimum(index + half + 1, len(events))]
-            - counts[np.maximum(index - half, 0)]) > 0
-
-
-def test_friction_rows_at_the_used_samples_are_the_whole_logs():
-    h = 1e-3
-    rng = np.random.default_rng(5)
-    t = np.arange(5000) * h
-    velocity = np.column_stack([np.sin(3.0 * t), 0.04 + 0.1 * np.sin(1.1 * t)])
-    velocity[rng.integers(0, 5000, 20), 0] = 0.0  # isolated slow samples
-    flips = np.zeros(velocity.shape, dtype=bool)
-    flips[1:] = np.signbit(velocity[1:]) != np.signbit(velocity[:-1])
-    whole = ~_near_whole(flips, h, 0.05) & ~_near_whole(np.abs(velocity) < 0.05, h, 0.02)
-    assert np.array_equal(friction_rows(velocity, h, 0.05, 0.05, 0.02), whole)
-    used = np.arange(3, 4990, 7)
-    assert np.array_equal(friction_rows(velocity, h, 0.05, 0.05, 0.02, at=used), whole[used])
-    assert 0.2 < whole.mean() < 0.9  # both kinds of rows
 
 
 def test_savitzky_golay_at_the_used_samples_is_the_whole_logs():

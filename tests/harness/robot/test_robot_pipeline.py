@@ -11,7 +11,6 @@ from robot_helpers import FRICTION, PAYLOAD, multisine_log, payload_link
 
 from harness.cli import main
 from harness.robot.examples import example_urdf
-from harness.robot.pipeline import away_from_reversals, friction_rows
 from harness.robot.urdf import read_urdf
 
 
@@ -98,21 +97,6 @@ def test_bad_urdf(tmp_path, arm, capsys):
     bad.write_text("<robot><link name='a'>")
     assert main(["identify", str(data), "--robot", str(bad), "--out", str(tmp_path / "o")]) == 2
     assert "does not parse as XML" in capsys.readouterr().err
-
-
-def test_friction_rows_leave_out_reversals_and_slow_stretches():
-    h = 1e-3
-    t = np.arange(0.0, 2.0, h)
-    # joint 1 reverses at t = 0.5; joint 2 slows to 0.01 rad/s at t = 1.5 without reversing
-    velocity = np.column_stack([t - 0.5, 0.01 + (t - 1.5) ** 2])
-    rows = friction_rows(velocity, h, margin=0.05, min_speed=0.05)
-    assert not rows[int(0.53 / h), 0] and rows[int(0.6 / h), 0]        # reversal margin 0.05 s
-    assert not rows[int(1.5 / h), 1] and not rows[int(1.69 / h), 1]    # |q'| < 0.05
-    assert rows[int(1.71 / h), 1] and rows[int(0.5 / h), 1]
-    assert np.array_equal(friction_rows(velocity, h, 0.05, 0.0),
-                          away_from_reversals(velocity, h, 0.05))
-    with pytest.raises(ValueError, match="min_speed"):
-        friction_rows(velocity, h, 0.05, -1.0)
 
 
 def test_a_negative_min_speed_is_refused(tmp_path, arm, capsys):

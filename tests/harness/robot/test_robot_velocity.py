@@ -14,7 +14,7 @@ from scipy.signal import lfilter, ss2tf
 
 from harness.robot.examples import example_urdf
 from harness.robot.filtered_regression import filtered_regression
-from harness.robot.pipeline import JointLog, friction_rows, observer_velocities
+from harness.robot.pipeline import JointLog, observer_velocities
 from harness.robot.smoothing import adaptive_velocities, noise_std
 from harness.robot.urdf import read_urdf
 
@@ -124,13 +124,3 @@ def test_the_filtered_regression_is_exact(arm_log, time_constant):
     assert np.all(relative < 2e-5), relative
 
 
-def test_slow_margin_leaves_out_the_rows_after_a_slow_stretch():
-    """A filtered row carries the friction of the filter's memory: with slow_margin a
-    joint's rows within that time of a sample slower than min_speed are left out."""
-    h = 1e-3
-    speed = np.full((400, 1), 0.5)
-    speed[100:110] = 0.01  # slow, without reversing
-    plain = friction_rows(speed, h, margin=0.05, min_speed=0.05)
-    assert plain[:100].all() and not plain[100:110].any() and plain[110:].all()
-    rows = friction_rows(speed, h, margin=0.05, min_speed=0.05, slow_margin=0.08)
-    assert rows[:20].all() and not rows[20:190].any() and rows[190:].all()
