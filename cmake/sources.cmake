@@ -6,15 +6,17 @@
 # model's FMU ships in sources/ (the core library holds their union).
 set(STO_CORE_OBSERVER
     core/observer_pipeline.c core/observer_scheme.c core/super_twisting.c core/implicit_twisting.c core/noise_adaptive.c core/identifier.c
-    core/information_identifier.c core/block_scores.c core/gains.c core/tuning.c)
+    core/information_identifier.c core/block_scores.c core/input_cadence.c core/gains.c
+    core/tuning.c)
 set(STO_CORE_ROBOT
     core/robot_pipeline.c core/robot_observer.c core/rigid_body.c core/regressor_identifier.c
-    core/statistics_job.c core/gains.c core/tuning.c)
+    core/statistics_job.c core/input_cadence.c core/gains.c core/tuning.c)
 # A model file's regressor as data (harness/model/program.py writes it).
 set(STO_CORE_MODEL core/model_pipeline.c core/term_program.c core/small_solve.c
     core/observer_scheme.c
     core/super_twisting.c core/implicit_twisting.c core/noise_adaptive.c
-    core/regressor_identifier.c core/statistics_job.c core/gains.c core/tuning.c)
+    core/regressor_identifier.c core/statistics_job.c core/input_cadence.c core/gains.c
+    core/tuning.c)
 # A model file's equations simulated (identify's scores and refinement; in no FMU).
 set(STO_CORE_SIMULATION core/model_simulation.c core/term_program.c core/small_solve.c)
 set(STO_CORE_SOURCES ${STO_CORE_OBSERVER} ${STO_CORE_ROBOT} ${STO_CORE_MODEL}
@@ -24,7 +26,8 @@ list(REMOVE_DUPLICATES STO_CORE_SOURCES)
 # The model-independent instance core under every FMI version.
 set(STO_INSTANCE_SOURCES instance/instance.c)
 # Headers every FMU ships beside its sources (fmpy compile rebuilds from them).
-set(STO_SHIPPED_HEADERS instance/instance.h instance/model_interface.h models/state_fields.h)
+set(STO_SHIPPED_HEADERS instance/instance.h instance/model_interface.h models/state_fields.h
+    models/input_cadence_outputs.h)
 
 # The FMUs: model identifier, its model file, its core group, the folder of its
 # committed modelDescription.xml (FMI 2; FMI 3 in <folder>/fmi3/) and the files of

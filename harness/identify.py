@@ -70,8 +70,10 @@ class _Run:
         self.observer = FMUInstance(observer_fmu, "observer")
         self.sim = CoSimulation({"observer": self.observer},
                                 [Link("signal:y", "observer.y[1]"), Link("signal:u", "observer.u")])
+        # a sample period longer than the observer's largest step: several internal steps
+        # per sample, which the FMU is told so that it does not report them as a staircase
         self.parameters = {"h": default_internal_step(step, self.observer.variable("h").max),
-                           **parameters}
+                           "input_period": step, **parameters}
         self.step, self.input_hold = step, input_hold
         self.k = 0  # index of the next sample to step from
         self.carry: tuple[float, float] | None = None  # (y, u) of the last sample so far

@@ -13,7 +13,7 @@ carry the model's names and units, the others left out:
 - outputs: ``der(c)`` the velocity estimate of coordinate c and ``c_hat`` its position
   estimate, each unknown parameter by its name (in its unit) and ``<name>_std`` its
   standard error; ``observer.converged``, ``observer.identifier_active``,
-  ``observer.excitation``;
+  ``observer.excitation``, ``observer.input_hold``, ``observer.coarse_inputs``;
 - parameters: the observer's settings under ``observer.`` (``observer.h`` the internal
   step, ``observer.f_plus_<c>`` the gains' bound of coordinate c, ...).
 

@@ -78,6 +78,12 @@
 #define MP_TAU_IDENTIFIER 0.02      /* [s] default of the regression's filter G */
 #define MP_RHO 1e-9                 /* default regularization, SI parameters */
 
+/* ---- the inputs' cadence (input_cadence.h) ----------------------------------------- */
+#define CADENCE_WINDOW 2.0          /* [s] over which the shortest hold of the inputs counts
+                                     * (holds up to half of it are seen) */
+#define CADENCE_COARSE_STEPS 2      /* inputs held this many internal steps at least over a
+                                     * whole window: a staircase coarser than the step */
+
 /* ---- statistics of an identifier (information_statistics.h, statistics_job.h) ------ */
 #define STATS_EIGEN_ITERATIONS 30   /* inverse iterations at most */
 #define STATS_EIGEN_TOLERANCE 1e-13 /* stop at this relative change of the eigenvalue */

@@ -14,6 +14,7 @@
 #include "../core/model_pipeline.h"
 #include "../core/term_program.h"
 #include "../instance/model_interface.h"
+#include "input_cadence_outputs.h"
 #include "state_fields.h"
 
 #define MAX_N MP_MAX_COORDINATES
@@ -29,16 +30,20 @@ typedef struct {
     int max_internal_steps;
     double max_work;
     double work_per_step;
+    double input_period;
     double alpha1[MAX_N], alpha2[MAX_N]; /* from f_plus by Theorem 3.1 */
     /* inputs */
     double y[MAX_N], u[MAX_U];
     int identifier_reset;
     int reset_seen;
+    InputCadence cadence; /* of the positions and inputs */
+    int coarse_logged;    /* the staircase warning stands */
     /* outputs */
     double position[MAX_N], velocity[MAX_N], theta[MAX_P], theta_std[MAX_P];
-    double excitation;
-    int converged, identifier_active;
+    double excitation, input_hold;
+    int converged, identifier_active, coarse_inputs;
 } ModelData;
+_Static_assert(MAX_N + MAX_U <= IC_MAX_VALUES, "the cadence watches every position and input");
 
 #define OFF(field) offsetof(ModelData, field)
 
@@ -136,6 +141,7 @@ static const ModelVariable VARIABLES[] = {
      OUTPUT(.offset = OFF(excitation),
      .description = "Smallest eigenvalue of the identifier's information per unit time (SI "
                     "parameters); near 0: some parameter is not being learned")},
+    INPUT_CADENCE_VARIABLES(364, OFF(input_hold), OFF(coarse_inputs), OFF(input_period)),
 };
 
 static ModelStatus parse_resource(void *region, const char *text, size_t length,
@@ -168,6 +174,16 @@ static void publish(ModelData *d)
     d->excitation = d->pipe.identifying ? d->pipe.statistics.excitation : 0.0;
     d->identifier_active = d->pipe.identifying;
     d->converged = mp_converged(&d->pipe, n);
+    d->input_hold = ic_shortest(&d->cadence) * d->pipe.h;
+    d->coarse_inputs = ic_coarse(&d->cadence);
+}
+
+/* The positions then the inputs: what the cadence watches. */
+static int measured(const ModelData *d, double values[])
+{
+    memcpy(values, d->y, (size_t)d->program.n * sizeof values[0]);
+    memcpy(values + d->program.n, d->u, (size_t)d->program.m * sizeof values[0]);
+    return d->program.n + d->program.m;
 }
 
 /* Work units (about ns, model_interface.h) of one internal step: the observer
@@ -204,6 +220,10 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
         return MODEL_ERROR;
     }
     d->reset_seen = d->identifier_reset;
+    double values[IC_MAX_VALUES];
+    const int count = measured(d, values);
+    ic_init(&d->cadence, count, values, d->pipe.h, d->input_period);
+    d->coarse_logged = 0;
     d->work_per_step = step_work(d);
     publish(d);
     return MODEL_OK;
@@ -227,6 +247,9 @@ static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
         d->reset_seen = d->identifier_reset;
         if (d->identifier_reset) mp_restart_identifier(&d->pipe);
     }
+    double values[IC_MAX_VALUES];
+    measured(d, values);
+    ic_advance(&d->cadence, values, k_end - k);
     mp_run(&d->pipe, &d->program, d->y, d->u, start_time, k, k_end);
 }
 
@@ -235,6 +258,7 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
     ModelData *d = data;
     mp_communicate(&d->pipe);
     publish(d);
+    log_cadence(&d->coarse_logged, d->coarse_inputs, d->input_hold, d->pipe.h, t, log);
     for (int i = 0; i < d->program.n; ++i) {
         if (!isfinite(d->position[i]) || !isfinite(d->velocity[i])) {
             log->log(log->context, MODEL_ERROR,
@@ -261,7 +285,8 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
 #define I(field, lo, hi) STATE_FIELD(ModelData, field, FIELD_INT, lo, hi)
 #define R(field, lo, hi) STATE_FIELD(ModelData, field, FIELD_REAL, lo, hi)
 static const StateField STATE_FIELDS[] = {
-    D(alpha1), D(alpha2), I(reset_seen, 0, 1), D(pipe.gain), D(pipe.warm_up),
+    D(alpha1), D(alpha2), I(reset_seen, 0, 1), IC_STATE_FIELDS(ModelData, cadence),
+    I(coarse_logged, 0, 1), D(pipe.gain), D(pipe.warm_up),
     I(pipe.identifying, 0, 1), I(pipe.started, 0, 1), I(pipe.warm_samples, 0, 1000000000),
     R(pipe.singular_steps, 0.0, NAN), STO_STATE_FIELDS(ModelData, pipe.obs[0]),
     STO_STATE_FIELDS(ModelData, pipe.obs[1]), BANK_STATE_FIELDS(ModelData, pipe.bank[0]),
@@ -290,6 +315,7 @@ static ModelStatus check_restored(const void *data, const void *initialized,
                      d->pipe.bank[g].count);
             return MODEL_ERROR;
         }
+    if (check_cadence(&d->cadence, log) != MODEL_OK) return MODEL_ERROR;
     if (d->pipe.warm_samples > d->pipe.warm_up) {
         log->log(log->context, MODEL_ERROR, "deserialized FMU state: pipe.warm_samples = %d "
                  "exceeds pipe.warm_up = %d; state refused", d->pipe.warm_samples,

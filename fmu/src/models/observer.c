@@ -9,6 +9,7 @@
 #include "../core/gains.h"
 #include "../core/observer_pipeline.h"
 #include "../instance/model_interface.h"
+#include "input_cadence_outputs.h"
 #include "state_fields.h"
 
 #define MAX_N OP_MAX_N
@@ -21,7 +22,7 @@ typedef struct {
     int start_from_measurement;
     double x1_hat_start[MAX_N], x2_hat_start[MAX_N];
     int max_internal_steps;
-    double max_work;
+    double max_work, input_period;
     /* calculated parameters */
     double alpha1_used[MAX_N], alpha2_used[MAX_N];
     double work_per_step;
@@ -30,8 +31,17 @@ typedef struct {
     int identifier_reset;
     /* outputs not read straight from the algorithm state */
     ObserverEstimates out;
+    double input_hold;
+    int coarse_inputs;
     int reset_seen; /* identifier_reset value at the last step */
+    InputCadence cadence; /* of every input (the unused ones do not change) */
+    int coarse_logged;    /* the staircase warning stands */
 } ObserverData;
+
+/* The inputs as the cadence watches them: the struct's doubles. */
+#define INPUT_VALUES (sizeof(ObserverInputs) / sizeof(double))
+_Static_assert(sizeof(ObserverInputs) % sizeof(double) == 0 && INPUT_VALUES <= IC_MAX_VALUES,
+               "the cadence watches the inputs' doubles");
 
 #define OFF(field) offsetof(ObserverData, field)
 
@@ -210,6 +220,7 @@ static const ModelVariable VARIABLES[] = {
                     "observer)")},
     MAX_INTERNAL_STEPS_VARIABLE(OFF(max_internal_steps)),
     WORK_VARIABLES(OFF(max_work), OFF(work_per_step)),
+    INPUT_CADENCE_VARIABLES(420, OFF(input_hold), OFF(coarse_inputs), OFF(input_period)),
 };
 
 static ModelStatus complete_gains(ObserverData *d, const ModelLogger *log)
@@ -315,6 +326,10 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     }
     d->work_per_step = step_work(p);
     d->reset_seen = d->identifier_reset;
+    ic_init(&d->cadence, (int)INPUT_VALUES, (const double *)&d->in, p->h, d->input_period);
+    d->coarse_logged = 0;
+    d->input_hold = 0.0;
+    d->coarse_inputs = 0;
     return status;
 }
 
@@ -337,6 +352,7 @@ static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
     ObserverData *d = data;
     const int edge = d->identifier_reset != d->reset_seen;
     if (d->pipe.identifier != IDENTIFIER_OFF && edge) d->reset_seen = d->identifier_reset;
+    ic_advance(&d->cadence, (const double *)&d->in, k_end - k);
     op_run(&d->pipe, &d->in, start_time, k, k_end,
            d->pipe.identifier != IDENTIFIER_OFF && edge && d->identifier_reset);
 }
@@ -377,6 +393,9 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
 {
     ObserverData *d = data;
     op_communicate(&d->pipe, &d->out);
+    d->input_hold = ic_shortest(&d->cadence) * d->pipe.h;
+    d->coarse_inputs = ic_coarse(&d->cadence);
+    log_cadence(&d->coarse_logged, d->coarse_inputs, d->input_hold, d->pipe.h, t, log);
     for (int i = 0; i < d->pipe.n; ++i) {
         if (!isfinite(d->pipe.obs.x1_hat[i]) || !isfinite(d->pipe.obs.x2_hat[i])) {
             explain_divergence(d, t, i, log);
@@ -402,7 +421,8 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
 static const StateField STATE_FIELDS[] = {
     D(pipe.m), D(pipe.selected), D(pipe.slot_velocity), D(pipe.slot_velocity_sign),
     D(pipe.slot_input), D(pipe.identifier_gain), D(pipe.feedback), I(pipe.identifier_active, 0, 1),
-    I(reset_seen, 0, 1), STO_STATE_FIELDS(ObserverData, pipe.obs),
+    I(reset_seen, 0, 1), IC_STATE_FIELDS(ObserverData, cadence), I(coarse_logged, 0, 1),
+    STO_STATE_FIELDS(ObserverData, pipe.obs),
     BANK_STATE_FIELDS(ObserverData, pipe.bank), D(pipe.id.kind),
     D(pipe.id.rows), D(pipe.id.m), D(pipe.id.h), D(pipe.id.h_log_r), D(pipe.info.rows),
     D(pipe.info.m), D(pipe.info.drift), D(pipe.info.h), D(pipe.info.rho), D(pipe.info.tuning),
@@ -429,6 +449,7 @@ static ModelStatus check_restored(const void *data, const void *initialized,
 {
     const ObserverData *d = data;
     (void)initialized;
+    if (check_cadence(&d->cadence, log) != MODEL_OK) return MODEL_ERROR;
     if (!adaptive_valid(&d->pipe.bank, d->pipe.n)) {
         log->log(log->context, MODEL_ERROR, "deserialized FMU state: an index of bank (center, "
                  "zoom_index, selected, published, perturbation or follow) is not one of its %d "

@@ -26,6 +26,7 @@
 #include "../core/robot_pipeline.h"
 #include "../core/statistics_job.h"
 #include "../instance/model_interface.h"
+#include "input_cadence_outputs.h"
 #include "state_fields.h"
 
 #define MAX_N RB_MAX_JOINTS
@@ -45,7 +46,7 @@ typedef struct {
     int base_columns[MAX_P];
     double base_nominal[MAX_P];
     int max_internal_steps;
-    double max_work;
+    double max_work, input_period;
     /* calculated parameters */
     double alpha1_used[MAX_N], alpha2_used[MAX_N];
     double work_per_step;
@@ -54,8 +55,8 @@ typedef struct {
     int identifier_reset;
     /* outputs */
     double q_hat[MAX_N], qd_hat[MAX_N], qd_sample[MAX_N], base_estimate[MAX_P], base_std[MAX_P];
-    double gamma_trace, excitation;
-    int identifier_active, converged;
+    double gamma_trace, excitation, input_hold;
+    int identifier_active, converged, coarse_inputs;
     /* state */
     RigidBodyModel model;
     RobotObserver obs;
@@ -65,7 +66,10 @@ typedef struct {
     int reset_seen;
     double failures_seen;   /* obs.model_failures at the last communication point */
     double statistics_seen; /* statistics.completed at the last communication point */
+    InputCadence cadence;   /* of the positions and torques */
+    int coarse_logged;      /* the staircase warning stands */
 } RobotData;
+_Static_assert(2 * MAX_N <= IC_MAX_VALUES, "the cadence watches every position and torque");
 
 #define OFF(field) offsetof(RobotData, field)
 
@@ -225,6 +229,7 @@ static const ModelVariable VARIABLES[] = {
      .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
      .offset = OFF(converged),
      .description = "Every joint's observer is in its sliding mode by the switching-rate test"},
+    INPUT_CADENCE_VARIABLES(1004, OFF(input_hold), OFF(coarse_inputs), OFF(input_period)),
 };
 
 /* Mass >= 0 and, with mass, a positive definite inertia about the centre of
@@ -347,6 +352,16 @@ static void publish_estimates(RobotData *d)
         d->qd_sample[i] = d->obs.primed ? ro_velocity(&d->obs, i) : d->obs.x2_hat[i];
     }
     d->converged = d->obs.steps > 0.0 && ro_converged(&d->obs);
+    d->input_hold = ic_shortest(&d->cadence) * d->h;
+    d->coarse_inputs = ic_coarse(&d->cadence);
+}
+
+/* The positions then the torques: what the cadence watches. */
+static int measured(const RobotData *d, double values[])
+{
+    memcpy(values, d->q, (size_t)d->n * sizeof values[0]);
+    memcpy(values + d->n, d->u, (size_t)d->n * sizeof values[0]);
+    return 2 * d->n;
 }
 
 /* Work units (about ns, model_interface.h) of one internal step: upper bounds
@@ -392,6 +407,10 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     sj_init(&d->statistics, d->identifier ? d->base_count : 1,
             sj_interval_steps(d->statistics_interval, d->h), SJ_BUDGET);
     d->statistics_seen = 0.0;
+    double values[IC_MAX_VALUES];
+    const int count = measured(d, values);
+    ic_init(&d->cadence, count, values, d->h, d->input_period);
+    d->coarse_logged = 0;
     d->work_per_step = step_work(d);
     publish_estimates(d);
     return MODEL_OK;
@@ -422,6 +441,9 @@ static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
             d->identifier_active = 0;
         }
     }
+    double values[IC_MAX_VALUES];
+    measured(d, values);
+    ic_advance(&d->cadence, values, k_end - k);
     /* the identifier joins at the first internal step at or after t_id */
     long join = d->identifier_active ? RP_ALREADY : RP_NEVER;
     for (uint64_t j = k; d->identifier && join == RP_NEVER && j < k_end; ++j)
@@ -438,6 +460,7 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
     const RobotPipeline pipeline = {&d->obs, NULL, &d->id, &d->statistics};
     rp_communicate(&pipeline);
     publish_estimates(d);
+    log_cadence(&d->coarse_logged, d->coarse_inputs, d->input_hold, d->h, t, log);
     if (d->obs.model_failures > d->failures_seen) {
         d->failures_seen = d->obs.model_failures;
         log->log(log->context, MODEL_ERROR,
@@ -468,6 +491,7 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
 #define R(field, lo, hi) STATE_FIELD(RobotData, field, FIELD_REAL, lo, hi)
 static const StateField STATE_FIELDS[] = {
     D(model), I(reset_seen, 0, 1), R(failures_seen, 0.0, NAN), R(statistics_seen, 0.0, NAN),
+    IC_STATE_FIELDS(RobotData, cadence), I(coarse_logged, 0, 1),
     D(obs.n), D(obs.h), D(obs.h_squared), D(obs.inverse_h_squared), D(obs.filter_gain),
     D(obs.rate_gain), D(obs.alpha1), D(obs.alpha2), I(obs.primed, 0, 1),
     R(obs.steps, 0.0, NAN), R(obs.model_failures, 0.0, NAN),
@@ -490,6 +514,7 @@ static ModelStatus check_restored(const void *data, const void *initialized,
 {
     const RobotData *d = data;
     (void)initialized;
+    if (check_cadence(&d->cadence, log) != MODEL_OK) return MODEL_ERROR;
     const StatisticsJob *job = &d->statistics;
     const int index_limit = job->stage == SJ_EIGEN ? STATS_EIGEN_ITERATIONS : job->p;
     if (d->id.anchor_unit > d->id.p + 2 ||

@@ -316,3 +316,36 @@ def test_the_estimates_do_not_depend_on_the_communication_step(tmp_path):
     common = [row[round(time / h)] for time in coarse["time"]]  # the same instants
     for name in outputs:
         assert np.array_equal(fine[name][common], coarse[name]), name
+
+
+def test_a_communication_step_coarser_than_the_log_is_reported(emps_fmus):
+    """fmpy without --output-interval feeds the EMPS log every 40th sample (its default
+    interval, the stop time / 500): the FMU says so in ``observer.coarse_inputs``, with the
+    hold in ``observer.input_hold`` and a warning through the FMI logger; fed every sample
+    it says nothing."""
+    model = read_model(EMPS / "emps.toml")
+    log = read_log(EMPS / "data" / "DATA_EMPS.mat", model)
+    seconds = 6.0
+    keep = log.t - log.t[0] <= seconds
+    step = float(log.t[1] - log.t[0])
+    signals = np.zeros(int(keep.sum()), dtype=[("time", float), ("x", float), ("vir", float)])
+    signals["time"], signals["x"] = log.t[keep] - log.t[0], log.q[keep, 0]
+    signals["vir"] = log.inputs[keep, 0]
+    outputs = ["observer.coarse_inputs", "observer.input_hold"]
+    for interval, coarse in ((step, False), (40 * step, True)):
+        messages: list[str] = []
+
+        def logger(env, instance, status, category, message, into=messages):  # noqa: ARG001
+            into.append(message.decode())
+        result = fmpy.simulate_fmu(str(emps_fmus[2]), stop_time=seconds, step_size=step,
+                                   output_interval=interval, input=signals,
+                                   start_values={"observer.h": step}, output=outputs,
+                                   logger=logger)
+        assert bool(result["observer.coarse_inputs"][-1]) == coarse, interval
+        held = result["observer.input_hold"][-1]
+        assert held == pytest.approx(interval, rel=1e-6), (interval, held)
+        warned = [m for m in messages if "staircase" in m]
+        assert (len(warned) == 1) == coarse, messages
+        if coarse:
+            assert f"--output-interval {step:g}" in warned[0]
+            assert "40 internal steps" in warned[0]
