@@ -135,6 +135,7 @@ def robot_and_log(args, mapping: dict[str, str]):
 
 def identify_command(args) -> int:
     from ..outputs import Outputs
+    from .consistency import ProjectionError
     from .joint_terms import JointTermsError, parse_terms
     from .log_units import UnitError
     from .pipeline import OUTPUT_NAMES, LogError, identify_robot, write_results
@@ -163,7 +164,7 @@ def identify_command(args) -> int:
                                     window=args.window, terms=terms, choose_terms=auto,
                                     **speed)
             written = write_results(outputs.staging, robot, log, result, Path(args.data).name)
-    except (UrdfError, LogError, UnitError) as error:
+    except (UrdfError, LogError, UnitError, ProjectionError) as error:
         print(f"harness identify: {error}", file=sys.stderr)
         return 2
     print("wrote " + ", ".join(str(outputs.final(path)) for path in written))
