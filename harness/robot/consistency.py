@@ -25,11 +25,11 @@ The program minimizes D + B + Q:
   extra joint terms (the URDF's friction, 0 for the terms it has none of; prior_scales:
   the URDF's value or the data's scale): costs 1 at a deviation of `tolerance`, too.
 One weight w = 1 / tolerance^2 multiplies the whole prior, so a tighter tolerance never
-moves the model further from the URDF: for w1 < w2 the optima x1, x2 satisfy
-D1 + w1 R1 <= D2 + w1 R2 and D2 + w2 R2 <= D1 + w2 R1, hence (w2 - w1)(R2 - R1) <= 0 for
-R = tolerance^2 (B + Q), the divergence of all links plus the joint terms' squared
-relative deviations (per link it holds where the links do not trade against each
-other through the data; the tests check a sweep).
+moves the model further from the URDF as a whole: with R = tolerance^2 (B + Q) (twice the
+links' divergences plus the joint terms' squared relative deviations), the optima x1, x2
+at w1 < w2 satisfy D1 + w1 R1 <= D2 + w1 R2 and D2 + w2 R2 <= D1 + w2 R1, hence
+(w2 - w1)(R2 - R1) <= 0.  Link by link it holds unless links trade against each other
+through the data (no scalar weight can promise more); the tests check a sweep.
 
 A URDF link whose J0 is singular (no mass, a point mass, no inertia) or not positive
 semidefinite has J0's eigenvalues lifted, in the metric of a reference body (a solid ball
@@ -276,9 +276,9 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
     problem = cp.Problem(cp.Minimize(data + links_prior + terms_prior), constraints)
     try:
         # through the solver's own solution, which reports the dual objective
-        data_, chain, inverse = problem.get_problem_data(cp.CLARABEL,
+        conic, chain, inverse = problem.get_problem_data(cp.CLARABEL,
                                                          solver_opts=dict(SOLVER_SETTINGS))
-        solution = chain.solve_via_data(problem, data_, solver_opts=dict(SOLVER_SETTINGS))
+        solution = chain.solve_via_data(problem, conic, solver_opts=dict(SOLVER_SETTINGS))
         with warnings.catch_warnings():  # an inaccurate solution is our error, below
             warnings.filterwarnings("ignore", "Solution may be inaccurate", UserWarning)
             problem.unpack_results(solution, chain, inverse)
@@ -288,8 +288,8 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
     if problem.status != cp.OPTIMAL or z.value is None:
         raise ProjectionError(
             f"the consistent parameters: the solver Clarabel ended with status "
-            f"{problem.status!r}, not optimal (a covariance or URDF with values far "
-            f"outside 1e-12..1e12 of each other, or an ill-posed prior): no model is written")
+            f"{problem.status!r}, not optimal (the estimate's covariance or the URDF's "
+            f"values may span too many orders of magnitude): no model is written")
     pi = fixed + A @ z.value
     distance = float(np.sum((whiten @ (projector @ pi - beta)) ** 2))
     per_link = np.zeros(n)
