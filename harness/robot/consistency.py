@@ -29,7 +29,8 @@ moves the model further from the URDF as a whole: with R = tolerance^2 (B + Q) (
 links' divergences plus the joint terms' squared relative deviations), the optima x1, x2
 at w1 < w2 satisfy D1 + w1 R1 <= D2 + w1 R2 and D2 + w2 R2 <= D1 + w2 R1, hence
 (w2 - w1)(R2 - R1) <= 0.  Link by link it holds unless links trade against each other
-through the data (no scalar weight can promise more); the tests check a sweep.
+through the data (no scalar weight can promise more): a sweep on the UR5 and the two-link
+arm finds no link moving away, on the Panda two links by at most 1e-4 in divergence.
 
 A URDF link whose J0 is singular (no mass, a point mass, no inertia) or not positive
 semidefinite has J0's eigenvalues lifted, in the metric of a reference body (a solid ball

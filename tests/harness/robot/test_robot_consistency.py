@@ -323,10 +323,10 @@ def test_an_implausible_mass_is_named_in_a_warning():
 
 # ---- the convex program's properties, on the base parameters directly ----------------
 
-def _ur5(scale: float = 1.0, tmp_path=None):
-    """The UR5 (its URDF's links times `scale`: a wrong prior), its base parameters and a
-    truth: the URDF's links times 0.8..1.2, friction added."""
-    path, locked = example_urdf("ur5")
+def _example(name: str, scale: float = 1.0, tmp_path=None):
+    """An example robot (its URDF's links times `scale`: a wrong prior), its base
+    parameters and a truth: the URDF's links times 0.8..1.2, friction added."""
+    path, locked = example_urdf(name)
     robot = read_urdf(path, locked=locked)
     base = base_parameters(robot.rigid_body(), robot.arrays()["types"], robot.joint_names)
     n = robot.n
@@ -343,6 +343,10 @@ def _ur5(scale: float = 1.0, tmp_path=None):
     return robot, prior, base, truth
 
 
+def _ur5(scale: float = 1.0, tmp_path=None):
+    return _example("ur5", scale, tmp_path)
+
+
 def _assert_psd(robot, projection):
     """Every link's pseudo-inertia positive semidefinite to the solver's tolerance."""
     for i in range(robot.n):
@@ -350,26 +354,33 @@ def _assert_psd(robot, projection):
         assert np.linalg.eigvalsh(J)[0] >= -1e-8 * np.abs(J).max(), (i, np.linalg.eigvalsh(J))
 
 
-def test_a_tighter_tolerance_never_moves_a_link_further_from_the_urdf():
-    """The UR5, an estimate 5 % (relative) uncertain of a truth 0.8..1.2 times the URDF's
-    links: over tolerances 3..0.01 each link's divergence from the URDF, and the prior's
-    total (tolerance^2 (B + Q)), never grow; the distance from the estimate never shrinks."""
-    robot, _, base, truth = _ur5()
+@pytest.mark.parametrize("name", ["ur5", "double_pendulum", "panda"])
+def test_a_tighter_tolerance_never_moves_a_link_further_from_the_urdf(name):
+    """An estimate 5 % (relative) uncertain of a truth 0.8..1.2 times the URDF's links:
+    over tolerances 3..0.001 the prior's total (tolerance^2 (B + Q), guaranteed) and each
+    link's divergence from the URDF never grow; the distance from the estimate never
+    shrinks.  Link by link it is not guaranteed, and the Panda shows it: from 0.3 to 0.1
+    its link 1 (only its Izz in the base parameters, lumped with the others') goes from
+    1e-5 to 1e-4 and its link 6 from 6.5e-4 to 6.9e-4, trading through the data with the
+    links the prior pulls in, then back toward 0; there each link may grow by 1e-4 at
+    most."""
+    robot, _, base, truth = _example(name)
     beta = base.project(truth)
     covariance = np.diag((0.05 * np.abs(beta) + 1e-3) ** 2)
     previous = None
-    for tolerance in (3.0, 1.0, 0.3, 0.1, 0.03, 0.01):
+    for tolerance in (3.0, 1.0, 0.3, 0.1, 0.03, 0.01, 0.003, 0.001):
         p = consistent_parameters(robot, base, beta, covariance, None, tolerance)
         assert p.status == "optimal" and p.gap < 1e-6
         _assert_psd(robot, p)
         total = tolerance ** 2 * (p.divergence + p.terms_prior)
         if previous is not None:
             divergence, prior, distance = previous
-            assert np.all(p.link_divergence <= divergence + 1e-6), (tolerance, p.link_divergence,
-                                                                     divergence)
+            slack = 1e-4 if name == "panda" else 1e-6
+            assert np.all(p.link_divergence <= divergence + slack), (
+                tolerance, p.link_divergence, divergence)
             assert total <= prior + 1e-6 and p.distance >= distance - 1e-6
         previous = p.link_divergence, total, p.distance
-    assert previous[0].max() < 0.01  # at 0.01 every link is close to the URDF
+    assert previous[0].max() < 1e-3  # at 0.001 every link is at the URDF
 
 
 def test_the_projection_is_a_no_op_on_a_consistent_estimate_equal_to_the_urdf():
