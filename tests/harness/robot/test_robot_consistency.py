@@ -1,8 +1,9 @@
 """`identify --robot`: the physically consistent model written to identified.urdf (a convex
 program: the estimate's Mahalanobis distance plus the URDF's log-det divergence at
 --urdf-tolerance, the pseudo-inertias positive semidefinite), its properties (a tighter
-tolerance never moves a link further from the URDF, a no-op on a consistent estimate equal
-to the URDF, a wrong URDF overruled by rich data), the fallback to the URDF when it
+tolerance never moves the model further from the URDF, a no-op on a consistent estimate
+equal to the URDF, a wrong URDF overruled by rich data, a solver failure an error), the
+fallback to the URDF when it
 predicts worse, and a passive joint.  Simulated robots, analytic trajectories (no
 integration error) unless a passive joint needs the closed loop."""
 from __future__ import annotations
@@ -374,10 +375,10 @@ def test_a_tighter_tolerance_never_moves_a_link_further_from_the_urdf(name):
         _assert_psd(robot, p)
         total = tolerance ** 2 * (p.divergence + p.terms_prior)
         if previous is not None:
-            divergence, prior, distance = previous
+            before, prior, distance = previous
             slack = 1e-4 if name == "panda" else 1e-6
-            assert np.all(p.link_divergence <= divergence + slack), (
-                tolerance, p.link_divergence, divergence)
+            assert np.all(p.link_divergence <= before + slack), (
+                tolerance, p.link_divergence, before)
             assert total <= prior + 1e-6 and p.distance >= distance - 1e-6
         previous = p.link_divergence, total, p.distance
     assert previous[0].max() < 1e-3  # at 0.001 every link is at the URDF
