@@ -113,7 +113,7 @@ class Projection:
                 "objective": self.objective, "mahalanobis_distance2": self.distance,
                 "confidence_bound": self.bound, "urdf_divergence": self.divergence,
                 "joint_terms_prior": self.terms_prior,
-                "link_divergence": self.link_divergence.tolist(),
+                "link_divergence": [_finite(d) for d in self.link_divergence],
                 "training_error": self.error}
 
 
