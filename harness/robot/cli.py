@@ -135,6 +135,7 @@ def robot_and_log(args, mapping: dict[str, str]):
 
 def identify_command(args) -> int:
     from ..outputs import Outputs
+    from .consistency import ProjectionError
     from .joint_terms import JointTermsError, parse_terms
     from .log_units import UnitError
     from .pipeline import OUTPUT_NAMES, LogError, identify_robot, write_results
@@ -163,7 +164,7 @@ def identify_command(args) -> int:
                                     window=args.window, terms=terms, choose_terms=auto,
                                     **speed)
             written = write_results(outputs.staging, robot, log, result, Path(args.data).name)
-    except (UrdfError, LogError, UnitError) as error:
+    except (UrdfError, LogError, UnitError, ProjectionError) as error:
         print(f"harness identify: {error}", file=sys.stderr)
         return 2
     print("wrote " + ", ".join(str(outputs.final(path)) for path in written))
@@ -206,12 +207,18 @@ def _print_terms_choice(choice) -> None:
 
 
 def _print_assessment(result) -> None:
-    """The training-log prediction errors, the passive joints and the warnings."""
+    """The training-log prediction errors, the consistent projection's objective, the
+    passive joints and the warnings."""
     if result.choice is not None:
         scores = ", ".join(f"{name} {100 * p.pooled:.3f} %"
                            for name, p in result.choice.predictions.items())
         print(f"  training-log torque prediction error (pooled): {scores}; identified.urdf "
               f"holds the {result.choice.written} model")
+    if result.projection is not None:
+        p = result.projection
+        print(f"  consistent projection ({p.status}): Mahalanobis distance^2 {p.distance:.4g} "
+              f"(95 % bound {p.bound:.4g}), URDF prior {p.divergence:.4g}, friction and "
+              f"joint terms prior {p.terms_prior:.4g} at --urdf-tolerance {p.tolerance:g}")
     for name in result.passive:
         print(f"  {name}: torque 0 throughout, taken as a passive joint (its equation, "
               f"torque = 0, constrains the parameters)")

@@ -1,39 +1,62 @@
 """Physically consistent link parameters from identified base parameters, and the identified URDF.
 
 Identification determines only the base parameters beta.  Among the standard
-parameters pi that reproduce them, the ones written to the URDF are found by a
-nonlinear least-squares fit over a parametrization that is physically consistent
-by construction (log-Cholesky): per link, the pseudo-inertia
-    J = [[Sigma, h], [h^T, m]] = L L^T,  Sigma = tr(I_o)/2 * 1 - I_o,
-with L lower triangular with positive (exponential) diagonal, is positive definite:
-m > 0 and an inertia about the centre of mass that is positive definite and satisfies
-the triangle inequalities.  Friction is the square of its coordinate: >= 0.
+parameters pi that reproduce them, the ones written to the URDF solve a convex
+program (cvxpy, solved by Clarabel).  Per identified link the variable is its
+pseudo-inertia
+    J = [[Sigma, h], [h^T, m]],  Sigma = tr(I_o)/2 * 1 - I_o,
+and J >> 0 (positive semidefinite) is exactly the condition that some mass density
+has these moments (Wensing, Kim & Slotine 2017): m >= 0, an inertia about the centre
+of mass that is positive semidefinite and satisfies the triangle inequalities.  pi is
+linear in J.  The friction, armature and Coulomb levels are >= 0, the offsets free.
 
-The fit minimizes D + w P:
-- D = (beta(pi) - beta_hat)^T C^-1 (beta(pi) - beta_hat), the estimate's Mahalanobis
-  distance under its full (sandwich) covariance C: correlated base parameters move
-  together as the data allow, not each within its own standard error;
-- P = sum_k ((pi_k - pi_urdf_k) / (tolerance * scale_k))^2, the URDF as a prior: each
-  parameter within +-tolerance of its scale (prior_scales: the URDF's value, the link's
-  mass and size, or what the data make of the parameter, never an absolute floor);
-- w = 1 (the prior at the stated tolerance) unless that takes beta(pi) out of the
-  estimate's 95 % confidence region (D > chi2_r(0.95), widened by the distance of the
-  nearest consistent point when even that lies outside) or makes the training-log
-  prediction more than PREDICTION_MARGIN worse than the estimate's (when the pipeline
-  passes its score: the sandwich covariance of a log whose residual is mostly model
-  error, not noise, is wide): then the largest w < 1 (bisection in log w) that keeps
-  it inside.  The prior decides what the data leave open and never outweighs what they
-  determine.
+The program minimizes D + B + Q:
+- D = ||W (P pi - beta_hat)||^2, the estimate's Mahalanobis distance under its full
+  (sandwich) covariance C = (W^T W)^-1 (P: base.project): correlated base parameters
+  move together as the data allow;
+- B = (2 / tolerance^2) sum_i d(J_i || J0_i), the URDF as a prior: the log-det (Bregman)
+  divergence between pseudo-inertias (Lee & Park 2019)
+      d(J || J0) = -log det(J0^-1 J) + tr(J0^-1 J) - 4,
+  invariant to the link's frame and units.  Near J0 it is half the squared relative
+  deviation along J0's principal directions (d = eps^2 / 2 for one eigenvalue scaled by
+  1 + eps), so the factor 2 / tolerance^2 makes a deviation of `tolerance` cost 1: one
+  standard error of the data, as in D;
+- Q = sum_k ((pi_k - pi_urdf_k) / (tolerance * scale_k))^2 over the friction and the
+  extra joint terms (the URDF's friction, 0 for the terms it has none of; prior_scales:
+  the URDF's value or the data's scale): costs 1 at a deviation of `tolerance`, too.
+One weight w = 1 / tolerance^2 multiplies the whole prior, so a tighter tolerance never
+moves the model further from the URDF as a whole: with R = tolerance^2 (B + Q) (twice the
+links' divergences plus the joint terms' squared relative deviations), the optima x1, x2
+at w1 < w2 satisfy D1 + w1 R1 <= D2 + w1 R2 and D2 + w2 R2 <= D1 + w2 R1, hence
+(w2 - w1)(R2 - R1) <= 0.  Link by link it holds unless links trade against each other
+through the data (no scalar weight can promise more): a sweep on the UR5 and the two-link
+arm finds no link moving away, on the Panda two links by at most 1e-4 in divergence.
+
+A URDF link whose J0 is singular (no mass, a point mass, no inertia) or not positive
+semidefinite has J0's eigenvalues lifted, in the metric of a reference body (a solid ball
+of the robot's median link mass and size about the joint frame): a link without mass to
+SINGULAR_FLOOR = 1, so its prior is the reference body, a typical link of the robot (the
+divergence from a point is infinite, and from a small body it grows steeply: a 1 % body
+held the two-link arm's data-determined base parameters 38 standard errors off); a link
+with mass to CONDITION_FLOOR of its largest eigenvalue (the URDF's body, made regular;
+every real link of the example robots is left as it is).
+
+Scaling: each link's variable is X_i = C_i^-1 J_i C_i^-T with C_i C_i^T = J0_i (the
+divergence is -log det X_i + tr X_i - 4: the URDF at X_i = 1, whatever the link's size
+and units), each joint term's is its deviation relative to scale_k, and D is whitened
+(each base parameter in units of its standard error).
 """
 from __future__ import annotations
 
+import time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+import cvxpy as cp
 import numpy as np
 import scipy.linalg
-import scipy.optimize
 import scipy.stats
 from lxml import etree
 
@@ -44,31 +67,62 @@ from .urdf import Robot, UrdfError, body_inertial, check_inertia, inertia_matrix
 # the default relative tolerance of the URDF's values (--urdf-tolerance):
 # docs/design/robots.md explains the choice
 DEFAULT_URDF_TOLERANCE = 0.3
-CONFIDENCE = 0.95        # of the region the consistent parameters stay in
-MIN_PRIOR_WEIGHT = 1e-8  # the weakest prior tried (it still picks the unidentified values)
-WEIGHT_HALVINGS = 6      # bisection steps in log w (to 1/8 of a decade) when w = 1 leaves
+CONFIDENCE = 0.95        # of the region the summary compares D with
 # relative standard deviation added to each base parameter's: no estimate is taken as
-# more precise than this (a noise-free log's would make the fit needlessly stiff; the
-# training-log bound PREDICTION_MARGIN still holds the result to the estimate's fit)
+# more precise than this (a noise-free log's would make the program needlessly stiff)
 COVARIANCE_FLOOR = 1e-4
-PREDICTION_MARGIN = 0.02  # relative: the training-log error allowed above the estimate's
+# a singular URDF pseudo-inertia's eigenvalues are lifted to this fraction of a reference
+# body's (a link without mass: the reference body itself), or of its own largest (a link
+# with mass; the Panda's go down to 3e-5 of it): module description
+SINGULAR_FLOOR = 1.0
+CONDITION_FLOOR = 1e-8
+# Clarabel's settings beyond its defaults (gap and feasibility tolerances 1e-8): none
+SOLVER_SETTINGS: dict[str, float] = {}
+
+
+class ProjectionError(RuntimeError):
+    """The convex program of the consistent parameters has no accurate solution."""
 
 
 @dataclass
 class Projection:
-    """The consistent parameters and how close they stay to the estimate."""
+    """The consistent parameters, the objective's parts at the optimum and the solver's
+    report."""
 
     pi: np.ndarray          # consistent parameters (12 n standard, then the joint terms)
     distance: float         # D: Mahalanobis distance^2 of beta(pi) from the estimate
-    nearest: float          # D of the nearest consistent point (NaN: not needed)
-    bound: float            # D allowed: chi2_r(CONFIDENCE) (+ nearest, if computed)
-    prior_weight: float     # w: 1 = the URDF at the stated tolerance
+    bound: float            # chi2_r(CONFIDENCE): D beyond it leaves the confidence region
+    divergence: float       # B: the links' prior, 2 / tolerance^2 * sum of divergences
+    terms_prior: float      # Q: the friction's and joint terms' prior
+    link_divergence: np.ndarray  # (n,) d(J_i || J0_i) per link (0: not identified)
     tolerance: float        # the stated relative tolerance of the URDF's values
+    status: str             # the solver's status (cvxpy's: "optimal")
+    gap: float              # |primal - dual objective| / max(1, |primal|) (NaN: unknown)
+    seconds: float          # building and solving the program
     error: float            # score(beta(pi)): the training-log error (0 without a score)
-    error_bound: float      # the training-log error allowed
+
+    @property
+    def objective(self) -> float:
+        """D + B + Q at the optimum."""
+        return self.distance + self.divergence + self.terms_prior
+
+    def as_json(self) -> dict:
+        """summary.json's record of the projection."""
+        return {"urdf_tolerance": self.tolerance, "solver": "clarabel",
+                "solver_status": self.status, "duality_gap": _finite(self.gap),
+                "objective": self.objective, "mahalanobis_distance2": self.distance,
+                "confidence_bound": self.bound, "urdf_divergence": self.divergence,
+                "joint_terms_prior": self.terms_prior,
+                "link_divergence": [_finite(d) for d in self.link_divergence],
+                "training_error": self.error}
+
+
+def _finite(value: float) -> float | None:
+    return float(value) if np.isfinite(value) else None
 
 
 def pseudo_inertia(link: np.ndarray) -> np.ndarray:
+    """The pseudo-inertia J (4 x 4) of a link's 10 parameters (m, m c, I_o)."""
     m, h, I = link[0], link[1:4], inertia_matrix(link[4:])
     J = np.empty((4, 4))
     J[:3, :3] = 0.5 * np.trace(I) * np.eye(3) - I
@@ -87,28 +141,12 @@ def link_of_pseudo_inertia(J: np.ndarray) -> np.ndarray:
                     axis=-1)
 
 
-_LOWER = np.tril_indices(4)
-_DIAGONAL = [k for k, (r, c) in enumerate(zip(*_LOWER)) if r == c]
-
-
-def _log_cholesky(link: np.ndarray) -> np.ndarray:
-    """The 10 log-Cholesky coordinates of a (near-)consistent link, made strictly
-    consistent first (a small multiple of the identity added if needed)."""
-    J = pseudo_inertia(link)
-    scale = max(np.abs(J).max(), 1e-6)
-    shift = max(0.0, 1e-6 * scale - np.linalg.eigvalsh(J)[0])
-    L = np.linalg.cholesky(J + shift * np.eye(4))
-    theta = L[_LOWER].copy()
-    theta[_DIAGONAL] = np.log(theta[_DIAGONAL])
-    return theta
-
-
-def _link(theta: np.ndarray) -> np.ndarray:
-    L = np.zeros((4, 4))
-    values = theta.copy()
-    values[_DIAGONAL] = np.exp(np.clip(values[_DIAGONAL], -50.0, 50.0))
-    L[_LOWER] = values
-    return link_of_pseudo_inertia(L @ L.T)
+def divergence(J: np.ndarray, J0: np.ndarray) -> float:
+    """d(J || J0) = -log det(J0^-1 J) + tr(J0^-1 J) - 4 (J0 positive definite; inf if J is
+    not)."""
+    X = np.linalg.solve(J0, J)
+    sign, logdet = np.linalg.slogdet(X)
+    return float(np.trace(X) - logdet - 4) if sign > 0 else float("inf")
 
 
 def prior_scales(nominal: np.ndarray, n: int, data_scale: np.ndarray) -> np.ndarray:
@@ -123,7 +161,8 @@ def prior_scales(nominal: np.ndarray, n: int, data_scale: np.ndarray) -> np.ndar
     explain the measured torques: |u| / |Y_k| over the regression's equations).  A
     parameter that neither the URDF nor the data give a scale to gets 1 (it moves no
     joint and the URDF leaves it at 0).  The extra joint terms are scaled like the
-    friction."""
+    friction.  (The projection's prior uses the friction's and joint terms' scales; the
+    links' are the divergence's, for reading a link's values.)"""
     nominal = np.asarray(nominal, float)
     data_scale = np.asarray(data_scale, float)
     physical = np.full(len(nominal), np.nan)  # 12 n, and the extra joint terms
@@ -140,28 +179,36 @@ def prior_scales(nominal: np.ndarray, n: int, data_scale: np.ndarray) -> np.ndar
     return np.where(np.isfinite(scale) & (scale > 0), scale, 1.0)
 
 
-def _link_jacobian(theta: np.ndarray) -> np.ndarray:
-    """d _link(theta) / d theta (10 x 10): J = L L^T, dJ = E L^T + L E^T with E the
-    derivative of L along one coordinate, and the link parameters linear in J (all ten
-    coordinates at once)."""
-    L = np.zeros((4, 4))
-    values = theta.copy()
-    values[_DIAGONAL] = np.exp(np.clip(values[_DIAGONAL], -50.0, 50.0))
-    L[_LOWER] = values
-    E = np.zeros((10, 4, 4))
-    E[_COORDINATES, _LOWER[0], _LOWER[1]] = _coordinate_steps(values)
-    dJ = E @ L.T
-    return link_of_pseudo_inertia(dJ + dJ.transpose(0, 2, 1)).T
+def reference_body(nominal: np.ndarray, n: int) -> np.ndarray:
+    """The pseudo-inertia (4 x 4, diagonal) of a solid ball of the robot's median URDF
+    link mass and size (sqrt(tr I_o / 2m) over the links with mass; 1 kg and 0.1 m
+    without any) centred on the joint frame: the metric of regularized_prior."""
+    masses, sizes = [], []
+    for i in range(n):
+        link = nominal[10 * i:10 * i + 10]
+        mass, trace = link[0], link[4] + link[6] + link[9]
+        if mass > 0 and trace > 0:
+            masses.append(mass)
+            sizes.append(np.sqrt(trace / (2 * mass)))
+    mass = float(np.median(masses)) if masses else 1.0
+    size = float(np.median(sizes)) if sizes else 0.1
+    return np.diag([mass * size ** 2 / 5] * 3 + [mass])  # Sigma = m r^2 / 5 of a ball
 
 
-_COORDINATES = np.arange(10)
-
-
-def _coordinate_steps(values: np.ndarray) -> np.ndarray:
-    """dL_rc / d theta_k: the value itself on the diagonal (log coordinates), else 1."""
-    step = np.ones(10)
-    step[_DIAGONAL] = values[_DIAGONAL]
-    return step
+def regularized_prior(J0: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """J0 positive definite: its eigenvalues in the reference body's metric (R^-1/2 J0
+    R^-1/2, R diagonal) lifted to at least SINGULAR_FLOOR for a link without mass in the
+    URDF (the reference body itself for J0 = 0), to CONDITION_FLOOR of the largest for one
+    with mass (a point mass, a rod or rounding: the URDF's body, made regular).
+    Unchanged where it already is that far from singular (every link of the example
+    robots)."""
+    root = np.sqrt(np.diag(reference))
+    values, vectors = np.linalg.eigh(J0 / np.outer(root, root))
+    floor = CONDITION_FLOOR * values[-1] if J0[3, 3] > 0 else SINGULAR_FLOOR
+    if values[0] >= floor:
+        return J0
+    lifted = (vectors * np.maximum(values, floor)) @ vectors.T
+    return 0.5 * (lifted + lifted.T) * np.outer(root, root)
 
 
 def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
@@ -169,22 +216,23 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
                           tolerance: float = DEFAULT_URDF_TOLERANCE,
                           score: Callable[[np.ndarray], float] | None = None,
                           terms: JointTerms | None = None) -> Projection:
-    """Standard parameters pi (12 n) that are physically consistent, keep beta(pi) in
-    the estimate's confidence region (covariance (r, r) of beta) and are as close to
-    the URDF's values as `tolerance` (relative, > 0) says where the data allow (see the
-    module's description).  data_scale (12 n): see prior_scales (None: the URDF's
-    values and link sizes alone).  score(beta), if given, is the training-log prediction
-    error of base parameters beta: the prior is weakened also where it would make it more
-    than PREDICTION_MARGIN (relative) larger than the estimate's (or the nearest
-    consistent point's, if that is larger).  Only the links and friction among the
-    identified (base and dependent) columns move.
+    """Standard parameters pi (12 n, then terms.count(n) joint terms) that are physically
+    consistent and minimize the estimate's Mahalanobis distance (beta: the base
+    estimate, covariance (r, r) its covariance) plus the URDF's prior at the relative
+    `tolerance` (> 0): the convex program of the module's description.  data_scale (as
+    long as pi): see prior_scales (None: the URDF's values alone).  score(beta), if
+    given, is the training-log prediction error of base parameters beta, reported for
+    the result.  Only the links and friction among the identified (base and dependent)
+    columns move; the others keep the URDF's values.
 
     terms (harness.robot.joint_terms): the extra joint terms after the 12 n standard
-    parameters (pi then has 12 n + terms.count(n) entries): kept out of the links, the
-    offsets free, the armature and the Coulomb levels >= 0 (squared coordinates like the
-    friction), their prior 0 (the URDF has none) at the data's scale."""
+    parameters: the offsets free, the armature and the Coulomb levels >= 0, their prior 0
+    (the URDF has none) at the data's scale.
+
+    ProjectionError if the solver does not report an optimal solution."""
     if not (np.isfinite(tolerance) and tolerance > 0):
         raise ValueError(f"the URDF tolerance must be a finite number > 0, not {tolerance!r}")
+    started = time.perf_counter()
     n = robot.n
     terms = terms or JointTerms()
     extra = terms.count(n)
@@ -192,103 +240,77 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
     nominal = np.concatenate([robot.parameters(), np.zeros(extra)])
     free = np.union1d(base.base, base.dependent)
     links = sorted({int(k) // 10 for k in free if k < 10 * n})
-    signed = np.flatnonzero(~terms.nonnegative(n)) + 12 * n  # the offsets
-    friction = np.array([k for k in free if k >= 10 * n and k not in signed], dtype=int)
-    offsets = np.array([k for k in free if k in signed], dtype=int)
-    whiten = _whitening(beta, covariance)
+    joint = np.array([k for k in free if k >= 10 * n], dtype=int)  # friction and terms
+    nonnegative = np.concatenate([np.ones(2 * n, bool), terms.nonnegative(n)])[joint - 10 * n]
     if data_scale is None:
         data_scale = np.full(size, np.nan)
-    scales = prior_scales(nominal, n, data_scale)
-    prior = 1.0 / (tolerance * scales[free])
-    squares = slice(10 * len(links), 10 * len(links) + len(friction))
-    linear = slice(squares.stop, None)
+    scale = prior_scales(nominal, n, data_scale)[joint]
+    reference = reference_body(nominal, n)
+    priors = [regularized_prior(pseudo_inertia(nominal[10 * i:10 * i + 10]), reference)
+              for i in links]
+    factors = [np.linalg.cholesky(J0) for J0 in priors]
 
-    def unpack(x: np.ndarray) -> np.ndarray:
-        pi = nominal.copy()
-        for j, i in enumerate(links):
-            pi[10 * i:10 * i + 10] = _link(x[10 * j:10 * j + 10])
-        pi[friction] = x[squares] ** 2  # >= 0
-        pi[offsets] = x[linear]
-        return pi
+    # pi = fixed + A z, z = (vec X_1, ..., vec X_L, u): X_i = C_i^-1 J_i C_i^-T, u the joint
+    # terms' deviations relative to their scales
+    fixed = nominal.copy()
+    A = np.zeros((size, 16 * len(links) + len(joint)))
+    unit = np.eye(16).reshape(16, 4, 4).transpose(0, 2, 1)  # vec's column-major order
+    for j, (i, C) in enumerate(zip(links, factors)):
+        fixed[10 * i:10 * i + 10] = 0.0
+        A[10 * i:10 * i + 10, 16 * j:16 * j + 16] = link_of_pseudo_inertia(C @ unit @ C.T).T
+    A[joint, 16 * len(links) + np.arange(len(joint))] = scale
+    whiten = _whitening(beta, covariance)
+    projector = base.project(np.eye(size)).T  # (r, size): beta = P pi
+    M = whiten @ projector @ A
+    b = whiten @ (beta - projector @ fixed)
 
-    def derivative(x: np.ndarray) -> np.ndarray:
-        """d pi / d x (size, len(x))."""
-        D = np.zeros((size, len(x)))
-        for j, i in enumerate(links):
-            D[10 * i:10 * i + 10, 10 * j:10 * j + 10] = _link_jacobian(x[10 * j:10 * j + 10])
-        D[friction, 10 * len(links) + np.arange(len(friction))] = 2 * x[squares]
-        D[offsets, squares.stop + np.arange(len(offsets))] = 1.0
-        return D
+    X = [cp.Variable((4, 4), PSD=True) for _ in links]
+    u = cp.Variable(len(joint))
+    z = cp.hstack([*(cp.vec(x, order="F") for x in X), u])
+    weight = 1.0 / tolerance ** 2
+    data = cp.sum_squares(M @ z - b)
+    links_prior = 2 * weight * sum((cp.trace(x) - cp.log_det(x) - 4 for x in X),
+                                   start=cp.Constant(0.0))
+    terms_prior = weight * cp.sum_squares(u)
+    lower = -nominal[joint[nonnegative]] / scale[nonnegative]  # pi_k >= 0
+    constraints = [u[np.flatnonzero(nonnegative)] >= lower] if np.any(nonnegative) else []
+    problem = cp.Problem(cp.Minimize(data + links_prior + terms_prior), constraints)
+    try:
+        # through the solver's own solution, which reports the dual objective
+        conic, chain, inverse = problem.get_problem_data(cp.CLARABEL,
+                                                         solver_opts=dict(SOLVER_SETTINGS))
+        solution = chain.solve_via_data(problem, conic, solver_opts=dict(SOLVER_SETTINGS))
+        with warnings.catch_warnings():  # an inaccurate solution is our error, below
+            warnings.filterwarnings("ignore", "Solution may be inaccurate", UserWarning)
+            problem.unpack_results(solution, chain, inverse)
+    except cp.error.SolverError as error:
+        raise ProjectionError(f"the consistent parameters: the solver Clarabel failed "
+                              f"({error})") from None
+    if problem.status != cp.OPTIMAL or z.value is None:
+        raise ProjectionError(
+            f"the consistent parameters: the solver Clarabel ended with status "
+            f"{problem.status!r}, not optimal (the estimate's covariance or the URDF's "
+            f"values may span too many orders of magnitude): no model is written")
+    pi = fixed + A @ z.value
+    distance = float(np.sum((whiten @ (projector @ pi - beta)) ** 2))
+    per_link = np.zeros(n)
+    for i, J0 in zip(links, priors):
+        per_link[i] = divergence(pseudo_inertia(pi[10 * i:10 * i + 10]), J0)
+    deviation = (pi[joint] - nominal[joint]) / scale
+    return Projection(
+        pi, distance, float(scipy.stats.chi2.ppf(CONFIDENCE, len(beta))),
+        2 * weight * float(per_link.sum()), weight * float(deviation @ deviation), per_link,
+        tolerance, str(problem.status), _gap(solution), time.perf_counter() - started,
+        float(score(projector @ pi)) if score is not None else 0.0)
 
-    projector = whiten @ base.project(np.eye(size)).T  # W P: whitened beta of pi
 
-    def data_residual(x: np.ndarray) -> np.ndarray:
-        return projector @ unpack(x) - whitened_beta
-
-    whitened_beta = whiten @ beta
-
-    def solve(weight: float, start: np.ndarray) -> tuple[np.ndarray, float]:
-        root = np.sqrt(weight)
-
-        def residual(x: np.ndarray) -> np.ndarray:
-            pi = unpack(x)
-            return np.concatenate([projector @ pi - whitened_beta,
-                                   root * prior * (pi - nominal)[free]])
-
-        def jacobian(x: np.ndarray) -> np.ndarray:
-            D = derivative(x)
-            return np.vstack([projector @ D, (root * prior)[:, None] * D[free]])
-
-        # the search may try steps far out (a square of a large friction coordinate
-        # overflows there): such a step is rejected by its residual, not worth a warning
-        with np.errstate(over="ignore", invalid="ignore"):
-            x = scipy.optimize.least_squares(residual, start, jac=jacobian, method="lm",
-                                             x_scale="jac", max_nfev=4000).x
-        return x, float(np.sum(data_residual(x) ** 2))
-
-    # friction from the base estimate directly (its columns are always base columns),
-    # as the square root of a value > 0: a zero would have no gradient
-    value = np.maximum(nominal[friction], 0.0)
-    for k, column in enumerate(friction):
-        if column in base.base:
-            value[k] = max(beta[list(base.base).index(column)], 0.0)
-    value = np.maximum(value, 1e-6 * scales[friction])
-    offset = np.array([beta[list(base.base).index(k)] if k in base.base else 0.0
-                       for k in offsets])
-    start = np.concatenate([*(_log_cholesky(nominal[10 * i:10 * i + 10]) for i in links),
-                            np.sqrt(value), offset])
-    region = float(scipy.stats.chi2.ppf(CONFIDENCE, len(beta)))
-    error = score or (lambda _: 0.0)
-
-    def model_error(x: np.ndarray) -> float:
-        return error(base.project(unpack(x)))
-
-    # w = 1: the prior at the stated tolerance
-    x, distance = solve(1.0, start)
-    error_bound = (1 + PREDICTION_MARGIN) * error(beta)
-    if distance <= region and model_error(x) <= error_bound:
-        return Projection(unpack(x), distance, float("nan"), region, 1.0, tolerance,
-                          model_error(x), error_bound)
-    # it leaves the region: how far is the nearest consistent point (w -> 0), and how much
-    # prior keeps the model within the region around it
-    best, nearest = solve(MIN_PRIOR_WEIGHT, x)
-    bound = nearest + region
-    error_bound = max(error_bound, (1 + PREDICTION_MARGIN) * model_error(best))
-    weight, best_distance = MIN_PRIOR_WEIGHT, nearest
-    if distance <= bound and model_error(x) <= error_bound:
-        weight, best, best_distance = 1.0, x, distance
-    else:
-        low, high = np.log10(MIN_PRIOR_WEIGHT), 0.0
-        for _ in range(WEIGHT_HALVINGS):
-            middle = 0.5 * (low + high)
-            trial, trial_distance = solve(10.0 ** middle, best)
-            if trial_distance <= bound and model_error(trial) <= error_bound:
-                low, best, best_distance = middle, trial, trial_distance
-            else:
-                high = middle
-        weight = 10.0 ** low
-    return Projection(unpack(best), best_distance, nearest, bound, weight, tolerance,
-                      model_error(best), error_bound)
+def _gap(solution) -> float:
+    """The relative duality gap of Clarabel's solution (NaN if it does not report it)."""
+    primal = getattr(solution, "obj_val", None)
+    dual = getattr(solution, "obj_val_dual", None)
+    if primal is None or dual is None:
+        return float("nan")
+    return abs(primal - dual) / max(1.0, abs(primal))
 
 
 def _whitening(beta: np.ndarray, covariance: np.ndarray) -> np.ndarray:

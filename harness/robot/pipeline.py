@@ -428,13 +428,7 @@ def _assessment_json(result: Identification) -> dict:
                           "least squares, consistent: the physically consistent parameters"}
         out["identified_urdf_holds"] = result.choice.written
     if result.projection is not None:
-        p = result.projection
-        out["consistency"] = {
-            "urdf_tolerance": p.tolerance, "mahalanobis_distance2": p.distance,
-            "confidence_bound": p.bound,
-            "nearest_consistent_distance2": None if np.isnan(p.nearest) else p.nearest,
-            "prior_weight": p.prior_weight, "training_error": p.error,
-            "training_error_bound": p.error_bound}
+        out["consistency"] = result.projection.as_json()
     return out
 
 
