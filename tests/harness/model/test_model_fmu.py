@@ -294,11 +294,13 @@ def test_the_fmus_physical_values_do_not_depend_on_the_files_units(tmp_path, emp
         assert abs(factor * other[name][-1] - si[name][-1]) <= 1e-3 * abs(si[name][-1]), name
 
 
-def test_the_estimates_do_not_depend_on_the_communication_step(tmp_path):
-    """The same inputs (held over 10 internal steps) at a communication step of h and of
-    10 h: every output at the common communication points is the same number (the
-    statistics follow the internal steps, not the importer's communication points)."""
-    fmu = export(TWO_MASS, tmp_path)
+@pytest.mark.parametrize("version", [2, 3])
+def test_the_estimates_do_not_depend_on_the_communication_step(tmp_path, version):
+    """The same inputs (held over 10 internal steps) at communication steps of h, 2 h, 5 h
+    and 10 h, FMI 2 and 3: every output at the common communication points is the same
+    number (the statistics and the inputs' cadence follow the internal steps, not the
+    importer's communication points)."""
+    fmu = export(TWO_MASS, tmp_path, "--fmi-version", str(version))
     t, x1, x2, F = two_mass_log(seconds=6.0)
     held = (np.arange(len(t)) // 10) * 10  # each input held over 10 internal steps
     signals = np.zeros(len(t), dtype=[("time", float), ("x1", float), ("x2", float),
@@ -306,16 +308,21 @@ def test_the_estimates_do_not_depend_on_the_communication_step(tmp_path):
     signals["time"], signals["x1"], signals["x2"], signals["F"] = t, x1[held], x2[held], F[held]
     h = float(t[1] - t[0])
     names = list(TRUTH)
-    outputs = names + [f"{n}_std" for n in names]
+    outputs = names + [f"{n}_std" for n in names] + [
+        "observer.input_hold", "observer.coarse_inputs", "observer.excitation"]
     runs = [fmpy.simulate_fmu(str(fmu), stop_time=float(t[-1]) - 10 * h, input=signals,
-                              output_interval=interval, start_values={"observer.h": h},
-                              output=outputs) for interval in (h, 10 * h)]
-    fine, coarse = runs
-    assert len(coarse) > 500 and np.any(coarse[names[0]] != TRUTH[names[0]])
+                              output_interval=ratio * h, start_values={"observer.h": h},
+                              output=outputs) for ratio in (1, 2, 5, 10)]
+    fine, coarsest = runs[0], runs[-1]
+    assert len(coarsest) > 500 and np.any(coarsest[names[0]] != TRUTH[names[0]])
+    # the staircase of 10 steps is seen, whatever the communication step
+    assert coarsest["observer.coarse_inputs"][-1]
+    assert coarsest["observer.input_hold"][-1] == pytest.approx(10 * h)
     row = {round(time / h): k for k, time in enumerate(fine["time"])}
-    common = [row[round(time / h)] for time in coarse["time"]]  # the same instants
-    for name in outputs:
-        assert np.array_equal(fine[name][common], coarse[name]), name
+    for coarse in runs[1:]:
+        common = [row[round(time / h)] for time in coarse["time"]]  # the same instants
+        for name in outputs:
+            assert np.array_equal(fine[name][common], coarse[name]), name
 
 
 def test_a_communication_step_coarser_than_the_log_is_reported(emps_fmus):
