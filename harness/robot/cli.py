@@ -227,7 +227,7 @@ def _print_assessment(result) -> None:
         print(f"  {name}: torque 0 throughout, taken as a passive joint (its equation, "
               f"torque = 0, constrains the parameters)")
     for message in result.warnings:  # counted: the command exits 1 (docs/cli.md)
-        note(f"identify: {message}")
+        note(message)
 
 
 def register_fmu_parameters(sub, parents) -> None:
