@@ -17,7 +17,7 @@ import sympy
 
 #: Random points at which a term is evaluated; a term is zero when it is at all of them
 #: (that it is at least a few).
-POINTS = 8
+POINTS = 12
 LEAST_POINTS = 3
 #: Significant digits of the two evaluations, and the fall of a zero's value between them.
 DIGITS = (60, 120)
@@ -58,9 +58,12 @@ def identically_zero(term: sympy.Expr, symbols: Sequence[sympy.Symbol],
     rng = np.random.default_rng(seed)
     zeros = 0
     for k in range(POINTS):
-        # half the points positive (sqrt, log have values there), half of either sign
-        point = rng.uniform(0.1, 2.0, len(free)) * (1 if k % 2 == 0 else
-                                                    rng.choice([-1, 1], len(free)))
+        # magnitudes from 1e-3 to 10 (a term zero on a band, abs(x - 3) - (x - 3), is
+        # not taken for zero; larger ones, exp(x)^2 beyond 1e60, would cancel beyond the
+        # digits); half the points positive (sqrt, log have values there),
+        # half of either sign
+        point = 10.0 ** rng.uniform(-3.0, 1.0, len(free)) * (
+            1 if k % 2 == 0 else rng.choice([-1, 1], len(free)))
         low, high = (_value(function, [float(v) for v in point], d) for d in DIGITS)
         if low is None or high is None:
             continue
