@@ -22,3 +22,17 @@ foreach(id IN LISTS STO_MODELS)
         endif()
     endforeach()
 endforeach()
+# fuzz_model_resource: ModelObserver's resource file (the term program) and the states of
+# an instance that read it, through the FMI 2 API file.
+if("ModelObserver" IN_LIST STO_MODELS)
+    add_executable(fuzz_model_resource-ModelObserver
+                   "${CMAKE_SOURCE_DIR}/tools/abuse/fuzz_model_resource.c"
+                   "${SRC}/fmi2/fmi2_functions.c" "${SRC}/${STO_ModelObserver_MODEL}")
+    target_include_directories(fuzz_model_resource-ModelObserver SYSTEM PRIVATE
+                               "${STO_FMI_INCLUDE_DIR}")
+    target_link_libraries(fuzz_model_resource-ModelObserver PRIVATE sto_instance sto_core)
+    target_link_options(fuzz_model_resource-ModelObserver PRIVATE -fsanitize=fuzzer)
+    if(NOT STO_FUZZ_FORGED)
+        target_compile_definitions(fuzz_model_resource-ModelObserver PRIVATE FUZZ_NO_FORGED)
+    endif()
+endif()

@@ -24,7 +24,6 @@ interrupted (Ctrl-C), 143 terminated (SIGTERM): nothing of the run is written.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 from collections.abc import Mapping
@@ -32,6 +31,7 @@ from pathlib import Path
 
 from .fmus import FMUError
 from .inputs import InputError
+from .json_files import write_json
 from .messages import Console
 from .outputs import OutputError, Outputs, Terminated
 from .paths import default_fmu_dir
@@ -75,9 +75,10 @@ def cmd_reproduce(args) -> int:
             Records(records.time[::decimation],
                     {k: v[::decimation] for k, v in records.signals.items()}).to_csv(
                 outputs.file(f"{name}/signals.csv"))
-            outputs.file(f"{name}/metrics.json").write_text(json.dumps(
-                {"scenario": name, "title": scenario.title, "noise_std": args.noise,
-                 "metrics": metrics, "choices": all_choices(scenario)}, indent=2) + "\n")
+            # a metric never reached (a settling time) is inf: null in JSON
+            write_json(outputs.file(f"{name}/metrics.json"),
+                       {"scenario": name, "title": scenario.title, "noise_std": args.noise,
+                        "metrics": metrics, "choices": all_choices(scenario)}, warn=False)
             plot_scenario(scenario, records, outputs.staging / name)
             summary[name] = metrics
     for path in outputs.written:
@@ -218,10 +219,10 @@ def cmd_identify(args) -> int:
             plot = outputs.final(plot_identification(
                 summary.figure_rows["t"], summary.figure_rows, outputs.staging,
                 nominal=_nominal(fmu, parameters)))
-            outputs.file("estimates.json").write_text(json.dumps(
-                {**summary.as_json(), "parameters": parameters, "input_hold": args.input_hold,
-                 "columns": options.columns, "time_unit": args.time_unit,
-                 "resample": args.resample}, indent=2) + "\n")
+            write_json(outputs.file("estimates.json"),
+                       {**summary.as_json(), "parameters": parameters,
+                        "input_hold": args.input_hold, "columns": options.columns,
+                        "time_unit": args.time_unit, "resample": args.resample})
     except DataError as error:
         print(f"harness identify: {error}", file=sys.stderr)
         return 2

@@ -5,12 +5,12 @@ side-by-side table) and one figure per scenario.
 """
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from .json_files import write_json
 from .master import Progress, Records
 from .metrics import score
 from .scenarios import SCENARIOS, Scenario, improved_overrides, run_scenario
@@ -121,7 +121,8 @@ def write_tables(rows: list[Row], out: Path) -> None:
         f.write("scenario,noise_std,metric,paper,improved\n")
         for r in rows:
             f.write(f"{r.scenario},{r.noise!r},{r.metric},{r.paper!r},{r.improved!r}\n")
-    (out / "compare.json").write_text(json.dumps([r.__dict__ for r in rows], indent=1) + "\n")
+    # a metric never reached (a settling time) is inf: null in JSON
+    write_json(out / "compare.json", [r.__dict__ for r in rows], indent=1, warn=False)
     (out / "compare.md").write_text(markdown_table(rows) + "\n")
 
 

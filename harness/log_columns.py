@@ -15,7 +15,8 @@ import numpy as np
 from . import csv_columns
 from .csv_columns import CHUNK_ROWS, Header, column_of, uneven_step
 
-__all__ = ["FORMATS", "Header", "LogColumnError", "column_of", "log_format", "note_slow_step",
+__all__ = ["FORMATS", "Header", "LogColumnError", "column_of", "log_format", "mean_step",
+           "note_slow_step",
            "read_columns", "read_header", "uneven_step"]
 
 #: The log formats read, by extension.
@@ -28,6 +29,14 @@ LogColumnError = csv_columns.CsvColumnError
 #: Samples this far apart [s] or more are likely not in seconds (a robot's or a
 #: machine's log is sampled at 10 Hz or faster).
 SLOW_STEP = 0.5
+
+
+def mean_step(t: np.ndarray) -> float:
+    """The mean sample step ``(t[-1] - t[0]) / (samples - 1)`` of a time column of at
+    least two samples, without an overflow on the way (times near 1e308 apart: each end
+    is divided first; the difference is inf only when the step itself is beyond float64)."""
+    intervals = len(t) - 1
+    return float(t[-1]) / intervals - float(t[0]) / intervals  # floats: no numpy warning
 
 
 def note_slow_step(path: Path, step: float, hint: str) -> None:

@@ -21,6 +21,7 @@ from .log_columns import (
     LogColumnError,
     column_of,
     log_format,
+    mean_step,
     note_slow_step,
     read_columns,
     read_header,
@@ -125,7 +126,7 @@ def read_signals(path: str | Path, time: Column | None, positions: list[Column],
     if factors is not None:  # a factor of 1 leaves the numbers as they are
         data = data * factors
     if time is not None and slow_step_hint is not None:
-        note_slow_step(path, (t[-1] - t[0]) / (len(t) - 1), slow_step_hint)
+        note_slow_step(path, mean_step(t), slow_step_hint)
     n = len(positions)
     try:
         even = even_steps(t, data[:, :n], data[:, n:], tolerance, place,

@@ -18,14 +18,15 @@ from __future__ import annotations
 
 import argparse
 import csv
-import json
 import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from ..json_files import write_json
 from ..messages import note
+from ..names import plain
 from ..outputs import Outputs
 from .errors import ModelFileError
 from .estimates import Estimates
@@ -71,6 +72,7 @@ def identify_command(args: argparse.Namespace) -> int:
                      names=IDENTIFY_OUTPUTS) as outputs:
             model, log = _load(args)
             found = identify_model(model, log, args.refine)
+            _check_finite(found)
             acceleration = derivatives(log, found.rows.settings).qdd
             estimates = causal_estimates(log, acceleration)
             scores = {"reconstruction_error": reconstruction_error(model, log, found.theta),
@@ -78,9 +80,9 @@ def identify_command(args: argparse.Namespace) -> int:
             _write_parameters(outputs.file("parameters.csv"), model, found)
             outputs.file("identified.toml").write_text(model_toml(
                 model, found.theta, found.std_error,
-                header=[f"{Path(args.model).name} identified from {Path(args.data).name} by "
-                        f"sto-harness identify ({found.method}); std errors: sandwich, "
-                        "1 sigma"]),
+                header=[f"{plain(Path(args.model).name)} identified from "
+                        f"{plain(Path(args.data).name)} by sto-harness identify "
+                        f"({found.method}); std errors: sandwich, 1 sigma"]),
                 encoding="utf-8")
             columns: dict[str, np.ndarray] = {"t": log.t}
             for i, c in enumerate(model.coordinates):
@@ -88,9 +90,9 @@ def identify_command(args: argparse.Namespace) -> int:
                 columns[f"der({c})"] = estimates.velocity[:, i]
             write_csv(outputs.file("estimates.csv"), columns)
             plot_estimates(log.t, estimates, model, outputs.file("estimates.png"))
-            outputs.file("identification.json").write_text(json.dumps(
-                {**_summary(found, estimates), **scores}, indent=2) + "\n", encoding="utf-8")
-    except (ModelFileError, LogFileError, NotExcitedError) as error:
+            write_json(outputs.file("identification.json"),
+                       {**_summary(found, estimates), **scores})
+    except (ModelFileError, LogFileError, NotExcitedError, NotFiniteError) as error:
         return _fail("identify", error)
     print(f"wrote {', '.join(str(p) for p in outputs.written)}")
     width = max(len(p.name) for p in model.parameters)
@@ -114,6 +116,30 @@ def identify_command(args: argparse.Namespace) -> int:
         note(f"the model reconstructs the log's known side with a relative error of "
              f"{100 * found.pooled:.0f} %: it explains little of this log")
     return 0 if trusted else 1
+
+
+class NotFiniteError(ValueError):
+    """An estimate or standard error of identify is not a finite number."""
+
+
+def _check_finite(found: Identification) -> None:
+    """Every estimate and standard error identify would write is a finite number; else
+    :class:`NotFiniteError` naming the first that is not (nothing is written)."""
+    least = found.least_squares
+    figures = (("estimate", found.theta), ("standard error", found.std_error),
+               ("least-squares estimate", least.theta),
+               ("least-squares standard error", least.std_error),
+               ("least-squares classical standard error", least.classical_error))
+    for what, values in figures:
+        for k, p in enumerate(found.model.parameters):
+            value = float(values[k])
+            if not np.isfinite(value):
+                raise NotFiniteError(
+                    f"{found.log.source}: the {what} of {p.name} is {value}, not a finite "
+                    "number: the log's values are too large (or too small) for double "
+                    "precision in the model's equations; check the columns' units and "
+                    "scaling (a force in N, not 1e200 N), or give [units] so they are "
+                    "converted")
 
 
 def _print_choice(choice: Choice, refined: bool) -> None:
@@ -252,7 +278,7 @@ def validate_command(args: argparse.Namespace) -> int:
             rows, predicted, per, pooled = validate_model(model, log)
             scores = {"reconstruction_error": reconstruction_error(model, log, model.nominal),
                       "simulation_error": simulation_error(model, log, model.nominal)}
-            outputs.file("validation.json").write_text(json.dumps({
+            write_json(outputs.file("validation.json"), {
                 "model": model.source, "log": log.source, "resampled": log.resampled,
                 "relative_error": {"per_equation": per, "pooled": pooled},
                 "definition": "norm of (Y theta - r) over norm of r on the decimated rows of "
@@ -260,7 +286,7 @@ def validate_command(args: argparse.Namespace) -> int:
                 "parameters": {p.name: p.nominal for p in model.parameters},
                 "pipeline": rows.settings.as_dict(), "rows": int(rows.Y.shape[0]),
                 **scores,
-            }, indent=2) + "\n", encoding="utf-8")
+            })
             plot_validation(rows.t, rows.r, predicted, model, outputs.file("validation.png"),
                             f"validate: {Path(args.data).name}, relative error "
                             f"{100 * pooled:.2f} %")

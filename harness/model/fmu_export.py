@@ -30,6 +30,7 @@ from pathlib import Path
 import sympy
 from lxml import etree
 
+from ..names import plain
 from ..paths import default_fmu_dir
 from .model import Model
 from .program import ProgramError, compile_program
@@ -147,10 +148,10 @@ def model_description(model: Model, template: bytes, fmi_version: int,
         if count > limit:
             raise ExportError(f"the model has {count} {what}: the FMU takes at most {limit} "
                               "(identify and validate take the model as it is)")
-    name = Path(model.source).stem
+    name = plain(Path(model.source).stem)  # XML holds no control characters
     root.set("modelName", name)
-    root.set("description", f"Observer and identifier of the model file {Path(model.source).name}"
-             " (super-twisting observer, LSM/MFF identifier)")
+    root.set("description", "Observer and identifier of the model file "
+             f"{plain(Path(model.source).name)} (super-twisting observer, LSM/MFF identifier)")
     root.set("variableNamingConvention", "flat")
     root.set("generationTool", "sto-harness fmu --model")
     variables = root.find("ModelVariables")

@@ -2,19 +2,36 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 import sympy
 
 
+def compile_numpy(arguments: Sequence[sympy.Symbol],
+                  expressions: sympy.Expr | Sequence[sympy.Expr]) -> Callable[..., Any]:
+    """A numpy function of ``arguments`` (arrays of one shape) returning ``expressions``
+    (one, or a list): every numeric function of a model's symbols is made here.
+
+    cse shares subexpressions (sign(der(x)), sin(q), ...) between the entries.  The
+    generated code holds no name of the model's: dummify names the arguments _Dummy_N, and
+    the constants (E, pi), which numpy's printer writes as the bare names e and pi that
+    lambdify also binds to the model's symbols of those names, are written as numbers."""
+    items = [expressions] if isinstance(expressions, sympy.Basic) else list(expressions)
+    constants: set[sympy.Basic] = set()
+    for item in items:
+        constants |= sympy.sympify(item).atoms(sympy.NumberSymbol)
+    values = {c: sympy.Float(float(c)) for c in constants}
+    items = [sympy.sympify(item).xreplace(values) for item in items]
+    return sympy.lambdify(list(arguments),
+                          items[0] if isinstance(expressions, sympy.Basic) else items,
+                          modules="numpy", cse=True, dummify=True)
+
+
 def compile_regressor(arguments: Sequence[sympy.Symbol],
                       entries: Sequence[sympy.Expr]) -> Callable[..., list]:
     """A numpy function of ``arguments`` (arrays of one shape) returning ``entries``."""
-    # cse shares subexpressions (sign(der(x)), sin(q), ...) between the entries.  dummify:
-    # the generated code names the arguments _Dummy_N, never as the model does, so that a
-    # coordinate named e or arctan cannot shadow numpy's e or arctan in that code.
-    return sympy.lambdify(list(arguments), list(entries), modules="numpy", cse=True,
-                          dummify=True)
+    return compile_numpy(arguments, list(entries))
 
 
 def as_samples(values: object, count: int, what: str) -> np.ndarray:

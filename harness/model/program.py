@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import sympy
 
+from ..names import plain
 from .expressions import ExpressionError
 from .model import Model
 from .units import si_factor
@@ -118,7 +119,7 @@ def compile_program(model: Model) -> str:
                            f"core takes at most {MAX_TOKENS}")
     pool = " ".join(repr(value) for value in compiler.constants)
     si = [si_factor(q.unit) if model.units else 1.0 for q in model.parameters]
-    header = ["sto-term-program 1", f"# {Path(model.source).name}", f"sizes {n} {m} {p}",
+    header = ["sto-term-program 1", f"# {plain(Path(model.source).name)}", f"sizes {n} {m} {p}",
               f"constants {len(compiler.constants)} {pool}".rstrip(),
               "nominal " + " ".join(repr(float(q.nominal)) for q in model.parameters),
               "scale " + " ".join(repr(float(f)) for f in si),

@@ -23,6 +23,7 @@ from .expressions import RESERVED, ExpressionError, Symbols, free_names, parse_e
 from .linear import check_accelerations, split_linear
 from .model import Constant, Equation, Model, Parameter
 from .units import check_equation, quantity
+from .zero_terms import cancelled
 
 #: Most coordinates a model may have (the FMUs' fixed sizes).
 MAX_COORDINATES = 7
@@ -117,6 +118,13 @@ def parse_model(text: str, source: str | Path | None = None) -> Model:
     unused = [p.name for p in parameters if p.name not in used]
     if unused:
         raise fail(f"parameter(s) {', '.join(unused)} appear in no equation")
+    values = {symbols.constants[k.name]: sympy.Float(k.value) for k in constants}
+    zero = cancelled(((p.name, [e.terms[k].xreplace(values) for e in equations])
+                      for k, p in enumerate(parameters)), symbols.measured())
+    if zero:
+        raise fail(f"parameter(s) {', '.join(zero)} cancel out: the term of each is "
+                   "identically zero (e.g. sin(x)^2 + cos(x)^2 - 1), so no log could "
+                   "identify it; remove it or write the term it stands for")
     return Model(str(source) if source is not None else "<model>", tuple(coordinates),
                  tuple(inputs), tuple(parameters), tuple(constants), units, columns,
                  tuple(equations), symbols, time_unit, sample_rate)

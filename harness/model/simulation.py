@@ -23,6 +23,7 @@ import scipy.signal
 import sympy
 
 from .model import Model
+from .numeric import compile_numpy
 from .program import ProgramError, compile_program, simulate_program
 
 #: A sub-step is at most this fraction of the fastest linearized period's radian
@@ -55,7 +56,9 @@ class Dynamics:
         self._qd = list(s.velocity.values())
         self._qdd = list(s.acceleration.values())
         self._u = list(s.inputs.values())
-        self._theta = [sympy.Symbol(f"theta_{k}", real=True) for k in range(len(model.parameters))]
+        # Dummy: a symbol no name of the file can equal (a coordinate named theta_0 would
+        # be the same sympy symbol as a Symbol("theta_0"))
+        self._theta = [sympy.Dummy(f"theta_{k}", real=True) for k in range(len(model.parameters))]
 
     @cached_property
     def _symbolic(self) -> tuple[list[list[sympy.Expr]], list[sympy.Expr], list[sympy.Symbol]]:
@@ -73,9 +76,8 @@ class Dynamics:
         """numpy: q'' itself for one coordinate, else M's entries then h."""
         mass, bias, arguments = self._symbolic
         if len(self._q) == 1:
-            return sympy.lambdify(arguments, -bias[0] / mass[0][0], modules="numpy", cse=True)
-        return sympy.lambdify(arguments, [*(m for row in mass for m in row), *bias],
-                              modules="numpy", cse=True)
+            return compile_numpy(arguments, -bias[0] / mass[0][0])
+        return compile_numpy(arguments, [*(m for row in mass for m in row), *bias])
 
     @cached_property
     def program(self) -> str | None:

@@ -6,12 +6,19 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..names import plain
 from .model import Model
 
 
 def _string(text: str) -> str:
-    """A TOML basic string (JSON's escapes are TOML's)."""
-    return json.dumps(text, ensure_ascii=False)
+    """A TOML basic string (JSON's escapes are TOML's); the characters JSON leaves as
+    they are but TOML does not take raw (DEL, line separators) escaped too."""
+    quoted = json.dumps(text, ensure_ascii=False)
+    if quoted.isprintable():
+        return quoted
+    return "".join(c if c.isprintable() else
+                   f"\\u{ord(c):04x}" if ord(c) <= 0xFFFF else f"\\U{ord(c):08x}"
+                   for c in quoted)
 
 
 def _number(value: float) -> str:
@@ -24,7 +31,7 @@ def model_toml(model: Model, values: Sequence[float] | np.ndarray,
     """The TOML text of ``model`` with ``values`` (in the order of its parameters) as the
     nominal values; the standard errors, if given, as comments. ``read_model`` reads it
     back to the same model."""
-    lines = [f"# {line}" for line in header]
+    lines = [f"# {plain(line)}" for line in header]  # a comment is one line
     lines += ["[model]", f"coordinates = [{', '.join(_string(c) for c in model.coordinates)}]",
               f"inputs = [{', '.join(_string(u) for u in model.inputs)}]",
               "equations = [", *(f"    {_string(e.text)}," for e in model.equations), "]", "",

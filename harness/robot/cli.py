@@ -8,6 +8,9 @@ import math
 import sys
 from pathlib import Path
 
+from ..json_files import make_strict
+from ..messages import note
+from ..names import plain
 from ..units import ANGLE_UNITS, LENGTH_UNITS, TIME_UNITS
 from ..values import argparse_type, real
 
@@ -129,6 +132,13 @@ def robot_and_log(args, mapping: dict[str, str]):
         raise LogError("--sample-rate and --time-unit: with a sample rate no time column is "
                        "read; give one of the two")
     robot = read_urdf(args.robot, locked=tuple(args.lock))
+    roles = ["t", *(f"q{i}" for i in range(1, robot.n + 1)),
+             *(f"u{i}" for i in range(1, robot.n + 1))]
+    unknown = [role for role in mapping if role not in roles]
+    if unknown:  # a role of another robot would be left unread, silently
+        raise LogError(f"--columns names {', '.join(map(repr, unknown))}, which "
+                       f"{'is' if len(unknown) == 1 else 'are'} not a role of this "
+                       f"{robot.n}-joint robot (roles: {', '.join(roles)})")
     return robot, read_log(args.data, robot.n, mapping, units=units_of(args, robot),
                            sample_rate=args.sample_rate)
 
@@ -163,7 +173,10 @@ def identify_command(args) -> int:
             result = identify_robot(robot, log, unknown=args.unknown, method=args.velocity,
                                     window=args.window, terms=terms, choose_terms=auto,
                                     **speed)
-            written = write_results(outputs.staging, robot, log, result, Path(args.data).name)
+            # the name goes into identified.urdf's comment: one line of printable text
+            written = write_results(outputs.staging, robot, log, result,
+                                    plain(Path(args.data).name))
+            make_strict(outputs.staging / "summary.json")
     except (UrdfError, LogError, UnitError, ProjectionError) as error:
         print(f"harness identify: {error}", file=sys.stderr)
         return 2
@@ -222,8 +235,8 @@ def _print_assessment(result) -> None:
     for name in result.passive:
         print(f"  {name}: torque 0 throughout, taken as a passive joint (its equation, "
               f"torque = 0, constrains the parameters)")
-    for message in result.warnings:
-        print(f"harness identify: warning: {message}", file=sys.stderr)
+    for message in result.warnings:  # counted: the command exits 1 (docs/cli.md)
+        note(message)
 
 
 def register_fmu_parameters(sub, parents) -> None:

@@ -18,6 +18,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from ..names import plain
 from .base_parameters import base_parameters
 from .native import core_defaults
 from .pipeline import JointLog
@@ -98,7 +99,8 @@ def start_values(parameters: dict[str, Any]) -> dict[str, Any]:
 def write_ssv(parameters: dict[str, object], path: str | Path, name: str = "robot") -> Path:
     """An SSP parameter set (SSV 1.0) of the parameters, FMI 2 names."""
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
-             f'<ssv:ParameterSet xmlns:ssv="{SSV}" version="1.0" name={quoteattr(name)}>',
+             f'<ssv:ParameterSet xmlns:ssv="{SSV}" version="1.0" '
+             f'name={quoteattr(plain(name))}>',
              "  <ssv:Parameters>"]
     for key, value in start_values(parameters).items():
         kind = "Integer" if key.split("[")[0] in INTEGERS else "Real"

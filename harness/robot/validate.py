@@ -17,11 +17,11 @@ join the prediction when that file sits next to the URDF or --joint-terms-file n
 it; without it, the URDF's model alone."""
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
+from ..json_files import write_json
 from .joint_terms import (
     COULOMB_NEGATIVE,
     COULOMB_POSITIVE,
@@ -118,7 +118,7 @@ def write_validation(out: Path, urdf: str, data: str, window: float, t: np.ndarr
                      pooled: float, joint_terms: str | None = None) -> None:
     """validation.json and validation.png (measured and predicted torques per joint);
     joint_terms: the joint_terms.csv whose terms the prediction includes (None: none)."""
-    (out / "validation.json").write_text(json.dumps({
+    write_json(out / "validation.json", {
         "urdf": urdf, "joint_terms": joint_terms, "log": data,
         "relative_error": {"per_joint": per_joint, "pooled": pooled},
         "definition": "RMS of (predicted - measured torque) over RMS of the measured torque, "
@@ -127,7 +127,7 @@ def write_validation(out: Path, urdf: str, data: str, window: float, t: np.ndarr
                       "the model's Coulomb friction (steps at the reversals), the window's "
                       "edges left out",
         "window": window, "samples": int(len(t)),
-    }, indent=2) + "\n", encoding="utf-8")
+    })
     from matplotlib.figure import Figure
 
     n = measured.shape[1]

@@ -2,7 +2,6 @@
 per headline metric) and one figure per swept parameter."""
 from __future__ import annotations
 
-import json
 import math
 import sys
 from functools import partial
@@ -11,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from ..json_files import strict_json
 from ..outputs import write_atomically
 from .plan import SweepSpec
 
@@ -62,7 +62,7 @@ def write_summary(spec: SweepSpec, rows: list[dict[str, Any]], out: Path, *, res
                "resumed": resumed, "executed": executed, "wall_time": wall,
                "runs_per_second": executed / wall if wall > 0 else None, "workers": workers,
                "swept": spec.swept, "best": best}
-    text = json.dumps(summary, indent=2, default=str) + "\n"
+    text, _ = strict_json(summary, default=str)  # a metric never reached: null
     write_atomically(out / "summary.json", lambda path: Path(path).write_text(text))
 
 

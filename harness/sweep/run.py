@@ -3,7 +3,6 @@ cluster and tabled, the summary and figures written (the format: harness.sweep).
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 import uuid
@@ -11,6 +10,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..json_files import strict_json
 from ..outputs import OutputError, Outputs, write_atomically
 from ..paths import default_fmu_dir
 from ..tempdirs import remove_stale
@@ -79,7 +79,7 @@ def _run_sweep(spec: SweepSpec, out: Path, fmu_dir: Path, *, scheduler, client, 
                retry_failed, plots, progress, stream, connect_timeout) -> SweepResult:
     stream = stream or sys.stderr
     table = ResultsTable(out)
-    text = json.dumps(spec.source, indent=2, default=str) + "\n"
+    text, _ = strict_json(spec.source, default=str)
     write_atomically(out / "spec.json", lambda path: Path(path).write_text(text))
     runs = spec.runs()
     done = table.status()

@@ -8,8 +8,10 @@
 #   FUZZ_FORGED=0 ...                    leave out the forged-checksum states
 #
 # Targets: fuzz_deserialize (fmi2DeSerializeFMUstate of arbitrary bytes),
-# fuzz_calls (random FMI 2 call sequences) and fuzz_fmi3_calls (random FMI 3 call
-# sequences, states serialized, damaged and forged); each is linked statically with
+# fuzz_calls (random FMI 2 call sequences), fuzz_fmi3_calls (random FMI 3 call
+# sequences, states serialized, damaged and forged) and fuzz_model_resource
+# (ModelObserver's resources/model.txt, then inputs of any value, doSteps and states
+# of the instance that read it); each is linked statically with
 # its FMI API file, the model and the same core objects as the FMUs (CMake preset
 # `fuzz`).
 # A crash leaves its input in build/fuzz/artifacts/ and fails the script.
@@ -19,7 +21,7 @@ REPO=$PWD
 PY=$REPO/.venv/bin/python
 OUT=$REPO/build/fuzz
 SECONDS_EACH=${FUZZ_SECONDS:-30}
-TARGETS=(${1:-fuzz_deserialize fuzz_calls fuzz_fmi3_calls})
+TARGETS=(${1:-fuzz_deserialize fuzz_calls fuzz_fmi3_calls fuzz_model_resource})
 MODELS=(${2:-$("$PY" -m tools.fmu_models)})
 die() { echo "fuzz.sh: $*" >&2; exit 1; }
 log() { printf '\033[1m== %s\033[0m\n' "$*"; }
@@ -59,6 +61,8 @@ summary=()
 failed=0
 for target in "${TARGETS[@]}"; do
     for id in "${MODELS[@]}"; do
+        # the resource file's target is ModelObserver's alone
+        [ "$target" != fuzz_model_resource ] || [ "$id" = ModelObserver ] || continue
         binary=$REPO/build/cmake-fuzz/bin/$target-$id
         [ -x "$binary" ] || die "$binary was not built"
         corpus=$OUT/corpus/$target/$id

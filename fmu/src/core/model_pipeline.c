@@ -61,6 +61,9 @@ int mp_init(ModelPipeline *p, const TermProgram *program, const double alpha1[],
     memset(&p->Y, 0, sizeof p->Y);
     memset(p->z, 0, sizeof p->z);
     memset(&p->id, 0, sizeof p->id);
+    p->nonfinite = MP_FINITE;
+    p->nonfinite_equation = p->nonfinite_entry = 0;
+    p->nonfinite_time = 0.0;
     if (p->identifier &&
         rri_init_dense(&p->id, (RriKind)p->identifier, n, program->p, NULL, p->h, p->rho, p->R,
                        NULL))
@@ -119,9 +122,31 @@ static int nominal_acceleration(const TermProgram *program, const AffineEntries 
     return 0;
 }
 
+/* Records the first non-finite value (model_pipeline.h); later ones keep it. */
+static void flag_nonfinite(ModelPipeline *p, MpNonfinite what, int equation, int entry, double t)
+{
+    if (p->nonfinite != MP_FINITE) return;
+    p->nonfinite = what;
+    p->nonfinite_equation = equation;
+    p->nonfinite_entry = entry;
+    p->nonfinite_time = isfinite(t) ? t : 0.0;
+}
+
+/* The identifier's sums are finite: its diagonal and right-hand side (the
+ * information is positive semidefinite plus rho I, so a finite diagonal bounds
+ * every entry). */
+static int identifier_finite(const RegressorIdentifier *id)
+{
+    double sum = 0.0;
+    for (int k = 0; k < id->p; ++k) sum += id->P[k][k] + fabs(id->b[k]);
+    return isfinite(sum);
+}
+
 /* One sample of the regression: the equations at the velocity estimates through
- * G (model_pipeline.h), in SI parameters, into the identifier. */
-static void regression_step(ModelPipeline *p, const TermProgram *program, const AffineEntries *e)
+ * G (model_pipeline.h), in SI parameters, into the identifier; a non-finite row is
+ * flagged and kept out of it. */
+static void regression_step(ModelPipeline *p, const TermProgram *program, const AffineEntries *e,
+                            double t)
 {
     const int n = program->n, np = program->p;
     const double g = p->started ? p->gain : 1.0; /* the first sample: no transient */
@@ -141,6 +166,7 @@ static void regression_step(ModelPipeline *p, const TermProgram *program, const 
             double v = 0.5 * (before + p->Y0[i][k]);
             for (int j = 0; j < n; ++j) v += e->A[j][i][k] * acceleration[j];
             entry[k] = v;
+            if (!isfinite(v)) flag_nonfinite(p, MP_NONFINITE_ENTRY, i, k < np ? k : -1, t);
         }
         double z = entry[np];
         for (int k = 0; k < np; ++k) {
@@ -148,8 +174,10 @@ static void regression_step(ModelPipeline *p, const TermProgram *program, const 
             p->Y.row[i][k] = entry[k] / program->scale[k];
         }
         p->z[i] = z;
+        if (!isfinite(z)) flag_nonfinite(p, MP_NONFINITE_ENTRY, i, -1, t);
     }
     p->started = 1;
+    if (p->nonfinite != MP_FINITE) return; /* the identifier keeps its last finite sums */
     /* G q'' starts at 0 where the other entries start at their values: the rows
      * enter once that transient has decayed (MP_WARM_UP time constants) */
     if (p->warm_samples < p->warm_up) {
@@ -157,6 +185,7 @@ static void regression_step(ModelPipeline *p, const TermProgram *program, const 
         return;
     }
     rri_step(&p->id, p->z, &p->Y);
+    if (!identifier_finite(&p->id)) flag_nonfinite(p, MP_NONFINITE_IDENTIFIER, 0, 0, t);
     sj_step(&p->statistics);
     sj_schedule(&p->statistics, &p->id); /* on the internal steps, whatever the importer's */
 }
@@ -205,8 +234,10 @@ void mp_run(ModelPipeline *p, const TermProgram *program, const double y[], cons
             }
         }
         current = 0;
-        if (!p->identifier) continue;
         const double t = start_time + (double)k * p->h;
+        for (int i = 0; i < n; ++i)
+            if (!isfinite(p->velocity[i])) flag_nonfinite(p, MP_NONFINITE_VELOCITY, i, 0, t);
+        if (!p->identifier) continue;
         /* the observer slides, or the bank's members have settled (they track where the
          * super-twisting observer's gains are too small to slide) */
         const int ready = mp_converged(p, n) || (p->scheme == STO_SCHEME_ADAPTIVE && settled(p, n));
@@ -218,7 +249,7 @@ void mp_run(ModelPipeline *p, const TermProgram *program, const double y[], cons
         memcpy(s.qd, p->velocity, (size_t)n * sizeof s.qd[0]);
         affine_entries(program, &s, &e);
         current = 1;
-        regression_step(p, program, &e);
+        regression_step(p, program, &e, t);
     }
 }
 
@@ -264,6 +295,40 @@ void mp_estimates(const ModelPipeline *p, const TermProgram *program, double the
         theta[k] = program->nominal[k] + (delta ? delta[k] / program->scale[k] : 0.0);
         std_error[k] = published ? p->statistics.std_error[k] / program->scale[k] : 0.0;
     }
+}
+
+#define OUT_OF_RANGE                                                                          \
+    "an input or measurement out of the range of the model's functions (sqrt or log of a "    \
+    "negative number, a value near 1e308?); the estimates stop there"
+
+int mp_nonfinite(const ModelPipeline *p, char *message, size_t size)
+{
+    const double t = p->nonfinite_time;
+    const int i = p->nonfinite_equation + 1, k = p->nonfinite_entry + 1;
+    switch (p->nonfinite) {
+    case MP_NONFINITE_VELOCITY:
+        snprintf(message, size, "the velocity estimate of coordinate %d turned non-finite at "
+                 "t = %g: an input or measurement beyond the range of the model's functions, "
+                 "or the model's nominal values or the step h do not fit the log", i, t);
+        break;
+    case MP_NONFINITE_ENTRY:
+        if (p->nonfinite_entry < 0)
+            snprintf(message, size, "the known side of equation %d turned non-finite at t = %g: "
+                     "%s", i, t, OUT_OF_RANGE);
+        else
+            snprintf(message, size, "the term of unknown %d (in the model file's order) in "
+                     "equation %d turned non-finite at t = %g: %s", k, i, t, OUT_OF_RANGE);
+        break;
+    case MP_NONFINITE_IDENTIFIER:
+        snprintf(message, size, "the identifier's sums overflowed at t = %g: the equations' "
+                 "entries are too large for double precision (inputs or measurements near "
+                 "1e154 or beyond: check their units and scaling)", t);
+        break;
+    default:
+        if (size) message[0] = '\0';
+        return MP_FINITE;
+    }
+    return p->nonfinite;
 }
 
 void mp_restart_identifier(ModelPipeline *p)

@@ -61,7 +61,23 @@ typedef struct {
     double z[MP_MAX_COORDINATES]; /* ... and their residual at the nominal parameters */
     RegressorIdentifier id;
     StatisticsJob statistics;
+    /* The first internal step at which a velocity, an entry of the equations or the
+     * identifier's sums turned non-finite (an input beyond the range of the model's
+     * functions, sqrt of a negative number, products past 1e308): flagged on the
+     * internal step, which must not log, and reported at the communication point
+     * (mp_nonfinite) instead of publishing estimates that no longer follow the log. */
+    int nonfinite;              /* MP_FINITE, or one of MpNonfinite */
+    int nonfinite_equation;     /* 0-based equation, and its entry (-1: the known side) */
+    int nonfinite_entry;
+    double nonfinite_time;      /* [s] the internal step's time */
 } ModelPipeline;
+
+typedef enum {
+    MP_FINITE = 0,
+    MP_NONFINITE_VELOCITY = 1,   /* a velocity estimate (nonfinite_equation: coordinate) */
+    MP_NONFINITE_ENTRY = 2,      /* an entry of the equations at the estimates */
+    MP_NONFINITE_IDENTIFIER = 3  /* the identifier's information or its right-hand side */
+} MpNonfinite;
 
 /* Checks the configuration against the program (sizes, ranges) and starts the
  * observer at the positions y with gains alpha1, alpha2 (per coordinate).
@@ -83,6 +99,9 @@ void mp_communicate(ModelPipeline *p);
 void mp_estimates(const ModelPipeline *p, const TermProgram *program, double theta[],
                   double std_error[]);
 
+/* What turned non-finite first (MP_FINITE: nothing), said in message[size]
+ * (at a communication point: formats, so never on the internal step). */
+int mp_nonfinite(const ModelPipeline *p, char *message, size_t size);
 /* Restarts identification from the nominal parameters. */
 void mp_restart_identifier(ModelPipeline *p);
 

@@ -256,6 +256,11 @@ static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
 static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
 {
     ModelData *d = data;
+    char message[512];
+    if (mp_nonfinite(&d->pipe, message, sizeof message) != MP_FINITE) {
+        log->log(log->context, MODEL_ERROR, "%s (reported at t = %g)", message, t);
+        return MODEL_ERROR;
+    }
     mp_communicate(&d->pipe);
     publish(d);
     log_cadence(&d->coarse_logged, d->coarse_inputs, d->input_hold, d->pipe.h, t, log);
@@ -288,7 +293,9 @@ static const StateField STATE_FIELDS[] = {
     D(alpha1), D(alpha2), I(reset_seen, 0, 1), IC_STATE_FIELDS(ModelData, cadence),
     I(coarse_logged, 0, 1), D(pipe.gain), D(pipe.warm_up),
     I(pipe.identifying, 0, 1), I(pipe.started, 0, 1), I(pipe.warm_samples, 0, 1000000000),
-    R(pipe.singular_steps, 0.0, NAN), STO_STATE_FIELDS(ModelData, pipe.obs[0]),
+    R(pipe.singular_steps, 0.0, NAN), I(pipe.nonfinite, MP_FINITE, MP_NONFINITE_IDENTIFIER),
+    I(pipe.nonfinite_equation, 0, MAX_N - 1), I(pipe.nonfinite_entry, -1, MAX_P - 1),
+    STO_STATE_FIELDS(ModelData, pipe.obs[0]),
     STO_STATE_FIELDS(ModelData, pipe.obs[1]), BANK_STATE_FIELDS(ModelData, pipe.bank[0]),
     BANK_STATE_FIELDS(ModelData, pipe.bank[1]), RRI_STATE_FIELDS(ModelData, pipe.id),
     SJ_STATE_FIELDS(ModelData, pipe.statistics),

@@ -53,11 +53,12 @@ def write_log(path, t, q, tau):
     return path
 
 
-def identify(data, urdf, out, *options, locked=()) -> dict:
+def identify(data, urdf, out, *options, locked=(), status: int = 0) -> dict:
+    """identify --robot; ``status`` 1: a result with warnings (docs/cli.md)."""
     arguments = ["identify", str(data), "--robot", str(urdf), "--out", str(out), *options]
     for joint in locked:
         arguments += ["--lock", joint]
-    assert main(arguments) == 0
+    assert main(arguments) == status
     return json.loads((out / "summary.json").read_text())
 
 
@@ -189,7 +190,7 @@ def test_an_identified_model_worse_than_the_urdf_keeps_the_urdf(tmp_path, monkey
         projection.pi[10:20] *= 3.0
         return projection
     monkeypatch.setattr(pipeline, "consistent_parameters", wrong)
-    summary = identify(data, path, tmp_path / "out")
+    summary = identify(data, path, tmp_path / "out", status=1)
     err = capsys.readouterr().err
     assert "warning: the identified model predicts the training log worse than the URDF" in err
     assert summary["identified_urdf_holds"] == "urdf"
