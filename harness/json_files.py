@@ -49,11 +49,3 @@ def write_json(path: Path, data: Any, indent: int | None = 2,
     Path(path).write_text(text, encoding="utf-8")
     for place in nulls if warn else ():
         note(f"{Path(path).name}: {place} is not a finite number, written as null")
-
-
-def make_strict(path: Path) -> None:
-    """Rewrites the JSON file at ``path`` as strict JSON when a writer that is not
-    :func:`write_json` put NaN or Infinity in it (each named in a warning)."""
-    data = json.loads(Path(path).read_text(encoding="utf-8"))  # takes NaN and Infinity
-    if strict_json(data)[1]:
-        write_json(path, data)

@@ -20,6 +20,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 CONSISTENT_MARGIN = 0.05  # relative: consistent error <= (1 + margin) * the estimate's
+# ... or at most this much more (0.1 % of the torque): on an exact log both errors are
+# rounding, whose ratio means nothing
+CONSISTENT_FLOOR = 1e-3
 
 
 @dataclass
@@ -90,7 +93,7 @@ def choose_model(predictions: dict[str, Prediction], consistent: np.ndarray,
             f"{100 * estimate:.2f} %): identified.urdf keeps the URDF's inertials and "
             f"friction"])
     warnings = []
-    if model > (1 + CONSISTENT_MARGIN) * estimate:
+    if model > (1 + CONSISTENT_MARGIN) * estimate and model - estimate > CONSISTENT_FLOOR:
         warnings.append(
             f"the physically consistent model predicts the training log "
             f"{100 * (model / estimate - 1):.0f} % worse than the base-parameter estimate "

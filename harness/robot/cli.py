@@ -8,7 +8,6 @@ import math
 import sys
 from pathlib import Path
 
-from ..json_files import make_strict
 from ..messages import note
 from ..names import plain
 from ..units import ANGLE_UNITS, LENGTH_UNITS, TIME_UNITS
@@ -176,7 +175,6 @@ def identify_command(args) -> int:
             # the name goes into identified.urdf's comment: one line of printable text
             written = write_results(outputs.staging, robot, log, result,
                                     plain(Path(args.data).name))
-            make_strict(outputs.staging / "summary.json")
     except (UrdfError, LogError, UnitError, ProjectionError) as error:
         print(f"harness identify: {error}", file=sys.stderr)
         return 2

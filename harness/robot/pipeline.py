@@ -25,7 +25,6 @@ here; what a URDF cannot hold goes to DIR/joint_terms.csv.
 from __future__ import annotations
 
 import csv
-import json
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -34,6 +33,7 @@ from pathlib import Path
 import numpy as np
 from scipy.signal import savgol_filter
 
+from ..json_files import write_json
 from ..log_signals import Column, LogSignalsError, header_of, read_signals
 from ..model.fit import Fit
 from ..model.fit import fit as least_squares
@@ -498,7 +498,7 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
                   None if kept or not result.terms.any else result.pi[12 * n:],
                   result.term_std_errors(n))
     summary = out / "summary.json"
-    summary.write_text(json.dumps({
+    write_json(summary, {
         "joints": names,
         "viscous": dict(zip(names, standard[10 * n::2].tolist())),
         "coulomb": dict(zip(names, standard[10 * n + 1::2].tolist())),
@@ -513,7 +513,7 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
         **_terms_json(result, names),
         **({} if result.velocity_window is None else
            {"velocity_window_s": dict(zip(names, result.velocity_window.tolist()))}),
-    }, indent=2) + "\n")
+    })
     plot = out / "velocities.png"
     import matplotlib
     matplotlib.use("Agg")
