@@ -160,9 +160,10 @@ def relative_errors(Y: np.ndarray, r: np.ndarray, theta: np.ndarray
                     ) -> tuple[list[float | None], float]:
     """|Y theta - r| / |r| per equation (None where r is zero on the log) and pooled over
     all equations."""
-    error = Y @ theta - r
-    per = [float(np.linalg.norm(error[:, i]) / np.linalg.norm(r[:, i]))
-           if np.linalg.norm(r[:, i]) > 0 else None for i in range(r.shape[1])]
-    total = float(np.linalg.norm(r))
-    pooled = float(np.linalg.norm(error) / total) if total > 0 else float("inf")
+    with np.errstate(all="ignore"):  # an overflow is a non-finite figure, refused by the caller
+        error = Y @ theta - r
+        per = [float(np.linalg.norm(error[:, i]) / np.linalg.norm(r[:, i]))
+               if np.linalg.norm(r[:, i]) > 0 else None for i in range(r.shape[1])]
+        total = float(np.linalg.norm(r))
+        pooled = float(np.linalg.norm(error) / total) if total > 0 else float("inf")
     return per, pooled

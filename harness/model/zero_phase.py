@@ -49,6 +49,9 @@ REVERSAL_PERIODS = 1.5
 #: ... and where the coordinate moves slower than this share of its RMS speed (the robot
 #: path's 0.05 rad/s, relative: a model file's coordinate has any unit).
 SLOW_FRACTION = 0.05
+#: A log value at least this large makes the equations' products overflow (1e154 squared
+#: is the largest double).
+OVERFLOWING = 1e150
 
 
 @dataclass(frozen=True)
@@ -224,13 +227,14 @@ def regression(model: Model, log: ModelLog, settings: ZeroPhase | None = None) -
     Raises LogFileError for a log too short for them."""
     settings = settings or ZeroPhase.for_log(log)
     check_length(model, log, settings)
-    d = derivatives(log, settings)
     keep = slice(settings.border, log.samples - settings.border)
-    Y, r = model.regressor(d.q[keep], d.qd[keep], d.qdd[keep],
-                           d.inputs[keep] if model.inputs else None)
+    with np.errstate(all="ignore"):  # a non-finite result is refused below, by name
+        d = derivatives(log, settings)
+        Y, r = model.regressor(d.q[keep], d.qd[keep], d.qdd[keep],
+                               d.inputs[keep] if model.inputs else None)
     if not (np.all(np.isfinite(Y)) and np.all(np.isfinite(r))):
         raise LogFileError(f"{log.source}: the model's equations are not finite on this log "
-                           "(a division by zero or a log of a non-positive value)")
+                           f"({_why_not_finite(model, log)})")
     mask = friction_mask(model, d.qd[keep], settings) if settings.friction_rows else None
     if mask is not None:
         # zeroed before the decimation's filter: a decimated row is then a combination of
@@ -239,6 +243,20 @@ def regression(model: Model, log: ModelLog, settings: ZeroPhase | None = None) -
         mask = mask[::settings.decimation].copy()
     return Regression(log.t[keep][::settings.decimation].copy(), decimate(Y, settings),
                       decimate(r, settings), settings, mask)
+
+
+def _why_not_finite(model: Model, log: ModelLog) -> str:
+    """The likely cause of non-finite equations on a log: values so large that the
+    equations overflow (naming the column), else the model's own functions."""
+    names = [*model.coordinates, *model.inputs]
+    values = np.concatenate([log.q, log.inputs], axis=1)
+    largest = np.max(np.abs(values), axis=0) if values.size else np.zeros(0)
+    huge = [(n, v) for n, v in zip(names, largest) if not v < OVERFLOWING]
+    if huge:
+        return ("their terms overflow: " + ", ".join(
+            f"{model.column(n)!r} ({n}) reaches {v:.3g}" for n, v in huge)
+            + "; check the column's unit or scale")
+    return "a division by zero or a log of a non-positive value"
 
 
 def friction_mask(model: Model, qd: np.ndarray, settings: ZeroPhase) -> np.ndarray:

@@ -292,23 +292,25 @@ def fmu_parameters_command(args) -> int:
     with outputs:
         write_ssv(parameters, outputs.file(target.name), name=Path(args.urdf).stem)
     print(f"wrote {target}: {robot.n} joints, {parameters['base_count']} base parameters")
-    _warn_unused_joint_terms(args.urdf, robot.joint_names)
-    return 0
+    # written, but the FMU models less than the identified robot: exit 1 (docs/cli.md)
+    return 1 if _warn_unused_joint_terms(args.urdf, robot.joint_names) else 0
 
 
-def _warn_unused_joint_terms(urdf: str, joint_names: list[str]) -> None:
+def _warn_unused_joint_terms(urdf: str, joint_names: list[str]) -> bool:
     """The RobotObserver FMU carries the URDF's model only: say so when an identify run's
-    joint_terms.csv with terms sits beside the URDF (they are not in the parameters)."""
+    joint_terms.csv with terms sits beside the URDF (they are not in the parameters);
+    True when it did."""
     from .joint_terms import SIDECAR_NAME, JointTermsError, read_sidecar
     beside = Path(urdf).parent / SIDECAR_NAME
     if not beside.is_file():
-        return
+        return False
     try:
         terms = read_sidecar(beside, joint_names).terms
     except JointTermsError:
-        return  # not this robot's terms
+        return False  # not this robot's terms
     if terms.any:
         kinds = [*terms.kinds] + (["smooth Coulomb"] if terms.smooth_coulomb else [])
         print(f"harness robot-fmu-parameters: warning: {beside} holds joint terms "
               f"({', '.join(kinds)}) that the RobotObserver FMU does not model: its "
               "parameters are the URDF's model alone", file=sys.stderr)
+    return terms.any

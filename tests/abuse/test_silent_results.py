@@ -90,6 +90,16 @@ def test_estimates_that_are_not_finite_are_an_error_not_a_file(tmp_path):
     assert not (out / "parameters.csv").exists()
 
 
+def test_a_column_so_large_that_the_equations_overflow_is_named(tmp_path):
+    """A force column 1e307 times too large: the filtered log overflows; the refusal names
+    the column and its size, and no numpy warning reaches the user."""
+    path = model(tmp_path / "m.toml")
+    code, text = cli(["identify", str(mass_log(tmp_path / "log.csv", 1e307)), "--model",
+                      str(path), "--out", str(tmp_path / "out"), "--refine", "none"])
+    refused(code, text, "log.csv", "overflow", "'F'", "unit or scale")
+    assert "RuntimeWarning" not in text
+
+
 def test_robot_columns_name_only_the_robots_roles(tmp_path):
     from harness.robot.examples import example_urdf
     urdf, _ = example_urdf("double_pendulum")

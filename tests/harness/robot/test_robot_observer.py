@@ -155,14 +155,16 @@ def test_the_command_line_writes_the_rule_of_left_out_equations(arm, tmp_path):
 
 def test_joint_terms_beside_the_urdf_are_said_to_be_left_out(arm, tmp_path, capsys):
     """An identify run's joint_terms.csv next to the URDF: the FMU's parameters are the
-    URDF's model alone, and the command says so."""
+    URDF's model alone, and the command says so (exit 1: written, with a warning)."""
     import shutil
     path, robot, _, _ = arm
     urdf = tmp_path / "identified.urdf"
     shutil.copy(path, urdf)
     rows = "".join(f"{name},offset,0.5,,N.m\n" for name in robot.joint_names)
     (tmp_path / "joint_terms.csv").write_text("joint,term,value,std_error,unit\n" + rows)
-    assert main(["robot-fmu-parameters", str(urdf), "--out", str(tmp_path / "r.ssv")]) == 0
+    # written, with a warning: exit 1 (docs/cli.md)
+    assert main(["robot-fmu-parameters", str(urdf), "--out", str(tmp_path / "r.ssv")]) == 1
+    assert (tmp_path / "r.ssv").is_file()
     assert "holds joint terms (offset) that the RobotObserver FMU does not model" in \
         capsys.readouterr().err
     (tmp_path / "joint_terms.csv").write_text("joint,term,value,std_error,unit\n")
