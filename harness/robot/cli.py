@@ -207,7 +207,7 @@ def identify_command(args) -> int:
 
 def _print_terms_choice(choice) -> None:
     """--joint-terms auto: every class's cross-validated error and the one kept."""
-    from .model_class import BLOCKS, label
+    from .model_class import ABSENCE_REPORTED, BLOCKS, label
     print(f"  joint terms by cross-validation (held-out torque error, mean of {BLOCKS} "
           "blocks):")
     for name, score in choice.scores.items():
@@ -215,6 +215,10 @@ def _print_terms_choice(choice) -> None:
         shown = f"{100 * score:.3f} %" if score is not None else choice.reasons.get(
             name, "could not be fitted")
         print(f"    {name:<36} {shown}{mark}")
+    for item, cost in choice.absence_costs().items():
+        if cost > ABSENCE_REPORTED:
+            print(f"  without {item} the class kept scores {100 * cost:.1f} % worse: this "
+                  "log needs it")
 
 
 def _print_assessment(result) -> None:

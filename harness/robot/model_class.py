@@ -11,6 +11,7 @@ differences, harness.model.selection.as_good), the lower mean breaking a tie.
 """
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 from collections.abc import Callable
@@ -30,6 +31,8 @@ if TYPE_CHECKING:
 
 #: Contiguous blocks of the cross-validation.
 BLOCKS = 5
+#: A term whose absence raises the best cross-validated error by more than this is named.
+ABSENCE_REPORTED = 0.01
 #: Every class: each combination of the terms --joint-terms names.
 CANDIDATES = tuple(JointTerms(**dict(zip(OPTION_ITEMS.values(), switches)))
                    for switches in itertools.product((False, True), repeat=len(OPTION_ITEMS)))
@@ -50,8 +53,22 @@ class TermsChoice:
     scores: dict[str, float | None]
     reasons: dict[str, str]
 
+    def absence_costs(self) -> dict[str, float]:
+        """Per term of the class kept, how much worse the class scores without it
+        (relative; more than ABSENCE_REPORTED: the log needs the term)."""
+        chosen = self.scores.get(label(self.terms))
+        out = {}
+        for item, switch in OPTION_ITEMS.items():
+            if not getattr(self.terms, switch) or not chosen:
+                continue
+            without = self.scores.get(label(dataclasses.replace(self.terms, **{switch: False})))
+            if without is not None:
+                out[item] = without / chosen - 1.0
+        return out
+
     def as_dict(self) -> dict[str, object]:
         return {"chosen": label(self.terms), "scores": self.scores, "refused": self.reasons,
+                "absence_costs": self.absence_costs(),
                 "definition": f"mean over {BLOCKS} contiguous held-out blocks of the RMS of "
                               "(predicted - measured torque) over the RMS of the measured "
                               "torque, the model fitted outside each block",

@@ -220,6 +220,16 @@ def test_auto_chooses_the_terms_the_drives_have(tmp_path, arm, capsys, drive, ch
     assert "joint terms by cross-validation" in printed and f"{chosen:<36}" in printed
     if chosen != "none":  # the chosen terms are identified and written as asked by name
         assert "joint_terms" in summary
+    # each term of the class kept, left out, costs what the scores say; the offset the
+    # drives have costs more than 1 % and is named
+    costs = record["absence_costs"]
+    assert set(costs) == set(chosen.split(",")) - {"none"}, costs
+    for item, cost in costs.items():
+        without = ",".join(k for k in chosen.split(",") if k != item) or "none"
+        assert cost == pytest.approx(record["scores"][without] / record["scores"][chosen] - 1)
+        assert (f"without {item} the class kept scores" in printed) == (cost > 0.01)
+    if "offset" in chosen:
+        assert costs["offset"] > 0.01, costs
 
 
 @pytest.mark.parametrize("options, message", [
