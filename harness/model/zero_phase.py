@@ -8,7 +8,9 @@ IDIM-LS), with settings that follow the sample rate and the measurement noise:
 2. velocities and accelerations by central differences of the filtered positions;
 3. the regressor Y and the known side r at every sample, the ends dropped (filter and
    difference transients);
-4. Y and r decimated (8th-order Chebyshev anti-aliasing, zero phase, every 10th sample).
+4. Y and r decimated (8th-order Chebyshev anti-aliasing, zero phase, every 10th sample);
+   with friction rows (a candidate of the cross-validation), each equation with Coulomb
+   terms is first zeroed near the reversals of their coordinates (friction_mask).
 
 At 1 kHz and with a fine encoder these are the benchmark's own choices: 100 Hz,
 decimation by 10.
@@ -22,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.signal
 
-from .friction_rows import friction_rows
+from .friction_rows import joint_friction_rows
 from .log import LogFileError, ModelLog
 from .model import Model
 
@@ -266,13 +268,12 @@ def friction_mask(model: Model, qd: np.ndarray, settings: ZeroPhase) -> np.ndarr
     and faster than SLOW_FRACTION of that velocity's RMS."""
     margin = REVERSAL_PERIODS / settings.cutoff
     speed_rms = np.sqrt(np.mean(qd ** 2, axis=0))
-    moving = friction_rows(qd, settings.step, margin, 0.0)
-    for k in range(qd.shape[1]):
-        moving[:, k] &= np.abs(qd[:, k]) >= SLOW_FRACTION * speed_rms[k]
+    moving = [joint_friction_rows(qd[:, k], settings.step, margin, SLOW_FRACTION * speed_rms[k])
+              for k in range(qd.shape[1])]
     mask = np.ones((len(qd), len(model.equations)), dtype=bool)
     for i, coordinates in enumerate(model.coulomb_coordinates):
         for k in coordinates:
-            mask[:, i] &= moving[:, k]
+            mask[:, i] &= moving[k]
     return mask
 
 
