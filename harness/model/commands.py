@@ -31,7 +31,7 @@ from ..outputs import Outputs
 from .errors import ModelFileError
 from .estimates import Estimates
 from .fit import relative_errors
-from .identification import WEAKLY_EXCITED, Identification, NotExcitedError, identify_model
+from .identification import HELD_SIGNIFICANT, WEAKLY_EXCITED, Identification, NotExcitedError, identify_model
 from .log import LogFileError, ModelLog, read_log
 from .model import Model
 from .reader import read_model
@@ -101,13 +101,16 @@ def identify_command(args: argparse.Namespace) -> int:
     for k, p in enumerate(model.parameters):
         print(f"  {p.name:<{width}} = {found.theta[k]:.6g} {p.unit}   " +
               ("(optional, left out)" if p.name in left_out else
-               f"+- {found.std_error[k]:.2g} (1 sigma)"))
+               f"(held at the {found.held[p.name]['end']} end of its range)"
+               if p.name in found.held else f"+- {found.std_error[k]:.2g} (1 sigma)"))
     _print_class(found)
     _print_choice(found.choice, refined=found.method == "output error")
     _print_refinement(found)
     print(f"  input reconstruction error on this log: {100 * found.pooled:.3f} % (through the "
           "chosen pipeline)")
-    trusted = _print_scores(scores)
+    trusted = _print_scores(scores) and \
+        not any(held["significant"] for held in found.held.values())
+    _print_held(found)
     for p, e in zip(model.parameters, found.least_squares.excitation):
         if e < WEAKLY_EXCITED and p.name not in left_out:
             note(f"{p.name} is weakly excited by the log (excitation {e:.2g}, below "
@@ -187,6 +190,24 @@ def _print_class(found: Identification) -> None:
                   f"the final estimate: this log hardly supports it")
 
 
+def _print_held(found: Identification) -> None:
+    """A declared range that the log pushes against is said, with where the least squares
+    would put the unknown without it: a warning when that is more than HELD_SIGNIFICANT of
+    its standard errors outside (the model class or the range may be wrong)."""
+    for name, held in found.held.items():
+        free, std = held["least_squares_without_range"], held["its_std_error"]
+        text = (f"{name} is held at the {held['end']} end of its declared range, "
+                f"{held['value']:g}" + (f" (least squares without the range: {free:.4g} +- "
+                                        f"{std:.2g})" if free is not None else ""))
+        if held["significant"]:
+            note(f"{text}: the log pushes it outside the range the model file declares by "
+                 f"more than {HELD_SIGNIFICANT:g} standard errors; its standard error is 0 "
+                 "and the others' are those with it fixed. Check the model's terms, or "
+                 "whether the log excites it")
+        else:
+            print(f"  {text}: within {HELD_SIGNIFICANT:g} standard errors of the range")
+
+
 def _print_refinement(found: Identification) -> None:
     info = found.refinement
     held_out = info.get("held_out_simulation_error")
@@ -247,6 +268,7 @@ def _summary(found: Identification, estimates: Estimates) -> dict[str, object]:
                                    "classical_std_error": float(least.classical_error[k])}
                           for k, p in enumerate(model.parameters)},
         "refinement": found.refinement,
+        "held_at_range": found.held,
         "model_class": found.model_class.as_dict() if found.model_class else None,
         "relative_error": {"per_equation": found.per_equation, "pooled": found.pooled},
         "pipeline": found.rows.settings.as_dict(), "rows": least.rows,

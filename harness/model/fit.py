@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.optimize
 
 from .numeric import rms_columns
 
@@ -39,6 +40,11 @@ class Fit:
     rows: int
     covariance: np.ndarray      # sandwich covariance of theta (p, p)
     condition: float            # of the weighted regressor with its columns normalized
+    #: per unknown: -1 held at the lower end of its declared range, 1 at the upper, 0 free
+    #: (a held unknown has standard error 0: the range, not the log, sets it)
+    at_bound: np.ndarray | None = None
+    unbounded: np.ndarray | None = None  # the estimate without the ranges (when one holds)
+    unbounded_std: np.ndarray | None = None  # and its sandwich standard errors
 
 
 def _excitation(gram: np.ndarray) -> np.ndarray:
@@ -68,22 +74,32 @@ def _weighted(Y: np.ndarray, weights: np.ndarray | None) -> np.ndarray:
 
 
 def fit(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float = RIDGE,
-        batch: int = BATCH_SAMPLES, mask: np.ndarray | None = None) -> Fit:
+        batch: int = BATCH_SAMPLES, mask: np.ndarray | None = None,
+        bounds: tuple[np.ndarray, np.ndarray] | None = None) -> Fit:
     """theta minimizing sum over rows and equations of (W (Y theta - r))^2 plus the
     relative ridge toward ``nominal``. With several equations, W weighs each by 1 / its
     residual RMS after an unweighted pass, so that equations in different units count by
     their fit. Standard errors: the sandwich (H^-1 S H^-1, S from the residual scores
     summed over ``batch`` consecutive rows: pass BATCH_SAMPLES / the rows' decimation) and
     the classical residual-variance ones. ``mask`` (rows, equations): the equations to use
-    (False leaves that equation of that row out: no information, no residual)."""
+    (False leaves that equation of that row out: no information, no residual).
+    ``bounds`` (lower, upper per unknown, +-inf for none): the minimum inside that box
+    (:func:`_bounded`); the standard errors of the free unknowns are then those with the
+    held ones fixed."""
     if mask is not None:
         Y, r = Y * mask[:, :, None], r * mask
     rows, equations, p = Y.shape
     used = _used(Y, mask)
     scales, weights, theta, H, information, Z, rw, rms = _weighted_solve(Y, r, nominal, ridge,
                                                                        used)
+    unbounded, at_bound = None, np.zeros(p, dtype=int)
+    if bounds is not None and _outside(theta, bounds):
+        unbounded = theta
+        theta, at_bound = _bounded(theta, H, scales, bounds)
+    free = at_bound == 0
     residual_w = rw - Z @ (theta * scales)  # (rows, equations)
-    H_inv = np.linalg.inv(H)
+    H_inv = np.zeros((p, p))
+    H_inv[np.ix_(free, free)] = np.linalg.inv(H[np.ix_(free, free)])
     scores = np.einsum("sek,se->sk", Z, residual_w)
     usable = rows // batch * batch
     batched = scores[:usable].reshape(-1, batch, p).sum(axis=1)
@@ -91,11 +107,39 @@ def fit(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float = RIDGE,
     covariance = H_inv @ S @ H_inv / np.outer(scales, scales)
     covariance = 0.5 * (covariance + covariance.T)
     sandwich = np.sqrt(np.maximum(np.diag(covariance), 0.0))
-    variance = float(np.sum(residual_w ** 2)) / max(float(used.sum()) - p, 1.0)
+    unbounded_std = None
+    if unbounded is not None:  # how far outside the range the log puts a held unknown
+        H_all = np.linalg.inv(H)
+        unbounded_std = np.sqrt(np.maximum(np.diag(H_all @ S @ H_all), 0.0)) / scales
+    variance = float(np.sum(residual_w ** 2)) / max(float(used.sum()) - int(free.sum()), 1.0)
     classical = np.sqrt(np.maximum(variance * np.diag(H_inv @ information @ H_inv), 0.0)) \
         / scales
     return Fit(theta, sandwich, classical, _excitation(information), rms, rows, covariance,
-               _condition(information))
+               _condition(information), at_bound if unbounded is not None else None,
+               unbounded, unbounded_std)
+
+
+def _outside(theta: np.ndarray, bounds: tuple[np.ndarray, np.ndarray]) -> bool:
+    lower, upper = bounds
+    return bool(np.any(theta < lower) or np.any(theta > upper))
+
+
+def _bounded(theta: np.ndarray, H: np.ndarray, scales: np.ndarray,
+             bounds: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """The least squares inside the box: the regularized objective is
+    (phi - phi_hat)' H (phi - phi_hat) plus a constant in the normalized unknowns, so the
+    box's minimum is the bounded linear least squares of L' (phi - phi_hat), H = L L'
+    (scipy's bounded-variable least squares: an exact active set). Returns theta and
+    which end holds each unknown (-1, 1; 0 free)."""
+    lower, upper = bounds
+    L = np.linalg.cholesky(H)
+    phi_hat = theta * scales
+    result = scipy.optimize.lsq_linear(L.T, L.T @ phi_hat, bounds=(lower * scales,
+                                                                   upper * scales),
+                                       method="bvls", tol=1e-14)
+    held = np.asarray(result.active_mask, dtype=int)
+    out = np.where(held < 0, lower, np.where(held > 0, upper, result.x / scales))
+    return out, held
 
 
 def _condition(information: np.ndarray) -> float:
@@ -106,11 +150,15 @@ def _condition(information: np.ndarray) -> float:
 
 
 def estimate(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float = RIDGE,
-             mask: np.ndarray | None = None) -> np.ndarray:
+             mask: np.ndarray | None = None,
+             bounds: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """The values of :func:`fit` alone (no standard errors, no excitation)."""
     if mask is not None:
         Y, r = Y * mask[:, :, None], r * mask
-    return _weighted_solve(Y, r, nominal, ridge, _used(Y, mask))[2]
+    scales, _, theta, H, *_ = _weighted_solve(Y, r, nominal, ridge, _used(Y, mask))
+    if bounds is not None and _outside(theta, bounds):
+        theta = _bounded(theta, H, scales, bounds)[0]
+    return theta
 
 
 def _used(Y: np.ndarray, mask: np.ndarray | None) -> np.ndarray:

@@ -28,6 +28,10 @@ NOT_EXCITED = 1e-3
 #: ... below this it is identified with a warning (exit 1).
 WEAKLY_EXCITED = 1e-2
 REFINE_MODES = ("auto", "simulation", "none")
+#: A declared range the log pushes an unknown past by more than this many standard
+#: errors (of the least squares without the ranges) is a warning (exit 1); less is a
+#: remark: a true value at the range's end lands outside it half the time.
+HELD_SIGNIFICANT = 2.0
 
 
 class NotExcitedError(ValueError):
@@ -51,6 +55,9 @@ class Identification:
     choice: Choice
     refinement: dict[str, Any] = field(default_factory=dict)
     model_class: ClassChoice | None = None   # None: no parameter is optional
+    #: the unknowns the estimate holds at an end of their declared range: name -> the end
+    #: ("lower", "upper") and the least squares without the ranges (None if they kept it)
+    held: dict[str, dict[str, Any]] = field(default_factory=dict)
 
 
 def identify_model(model: Model, log: ModelLog, refine_mode: str = "auto") -> Identification:
@@ -61,7 +68,8 @@ def identify_model(model: Model, log: ModelLog, refine_mode: str = "auto") -> Id
     choice = choose_pipeline(model, log)
     rows = regression(model, log, choice.settings)
     batch = max(1, round(BATCH_SAMPLES / choice.settings.decimation))
-    least = fit(rows.Y, rows.r, model.nominal, batch=batch, mask=rows.mask)
+    least = fit(rows.Y, rows.r, model.nominal, batch=batch, mask=rows.mask,
+                bounds=model.bounds)
     low = [(p.name, e) for p, e in zip(model.parameters, least.excitation)
            if e < NOT_EXCITED and not p.optional]
     if low:
@@ -79,12 +87,33 @@ def identify_model(model: Model, log: ModelLog, refine_mode: str = "auto") -> Id
                                    NOT_EXCITED)
         free = model_class.free
         if not free.all():
+            lower, upper = model.bounds
             least = _expanded(fit(rows.Y[:, :, free], rows.r, model.nominal[free],
-                                  batch=batch, mask=rows.mask), free, least.excitation)
-    theta, std, method, info = _refined(model, log, rows, least, refine_mode, free)
+                                  batch=batch, mask=rows.mask,
+                                  bounds=(lower[free], upper[free])), free, least.excitation)
+    held = np.zeros(len(free), dtype=bool) if least.at_bound is None else least.at_bound != 0
+    theta, std, method, info = _refined(model, log, rows, least, refine_mode, free & ~held)
     per, pooled = relative_errors(rows.Y, rows.r, theta)
     return Identification(model, log, rows, least, theta, std, method, per, pooled, choice,
-                          info, model_class)
+                          info, model_class, _held(model, theta, least))
+
+
+def _held(model: Model, theta: np.ndarray, least: Fit) -> dict[str, dict[str, Any]]:
+    """The unknowns at an end of their declared range (the least squares' active set, or
+    where the refinement stopped on it), with the unbounded least squares' value."""
+    out: dict[str, dict[str, Any]] = {}
+    for k, p in enumerate(model.parameters):
+        for end, value in (("lower", p.lower), ("upper", p.upper)):
+            if np.isfinite(value) and abs(theta[k] - value) <= 1e-9 * max(1.0, abs(value)):
+                free, std = ((None, None) if least.unbounded is None or
+                             least.unbounded_std is None else
+                             (float(least.unbounded[k]), float(least.unbounded_std[k])))
+                out[p.name] = {"end": end, "value": value,
+                               "least_squares_without_range": free,
+                               "its_std_error": std,
+                               "significant": free is not None and std is not None and
+                               abs(free - value) > HELD_SIGNIFICANT * std}
+    return out
 
 
 def _expanded(part: Fit, free: np.ndarray, excitation: np.ndarray) -> Fit:
@@ -98,7 +127,10 @@ def _expanded(part: Fit, free: np.ndarray, excitation: np.ndarray) -> Fit:
     covariance[np.ix_(free, free)] = part.covariance
     return Fit(full(part.theta), full(part.std_error), full(part.classical_error),
                np.where(free, full(part.excitation), excitation), part.equation_rms, part.rows,
-               covariance, part.condition)
+               covariance, part.condition,
+               None if part.at_bound is None else full(part.at_bound).astype(int),
+               None if part.unbounded is None else full(part.unbounded),
+               None if part.unbounded_std is None else full(part.unbounded_std))
 
 
 def _refined(model: Model, log: ModelLog, rows: Regression, least: Fit, mode: str,

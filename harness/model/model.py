@@ -1,6 +1,7 @@
 """The model a file declares: names, parameters, equations and their regressor."""
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -16,12 +17,21 @@ from .units import si_factor
 @dataclass(frozen=True)
 class Parameter:
     """An unknown to identify: its name, the nominal (first guess) value and its unit;
-    ``optional``: identify may leave it out (at 0) when the log does not support it."""
+    ``optional``: identify may leave it out (at 0) when the log does not support it;
+    ``lower``, ``upper``: the range the file declares (``positive = true``: [0, inf]), which
+    every estimate keeps to."""
 
     name: str
     nominal: float
     unit: str = ""
     optional: bool = False
+    lower: float = -math.inf
+    upper: float = math.inf
+
+    @property
+    def bounded(self) -> bool:
+        """The file declares a range for it."""
+        return math.isfinite(self.lower) or math.isfinite(self.upper)
 
 
 @dataclass(frozen=True)
@@ -87,6 +97,13 @@ class Model:
     def nominal(self) -> np.ndarray:
         """The parameters' nominal values, in the order of the regressor's columns."""
         return np.array([p.nominal for p in self.parameters], dtype=float)
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The declared ranges, lower and upper ends in the order of the regressor's columns
+        (-inf, inf where a parameter has none)."""
+        return (np.array([p.lower for p in self.parameters], dtype=float),
+                np.array([p.upper for p in self.parameters], dtype=float))
 
     @cached_property
     def coulomb_coordinates(self) -> tuple[tuple[int, ...], ...]:

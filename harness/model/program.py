@@ -126,6 +126,9 @@ def compile_program(model: Model) -> str:
               "coordinate_scale " + " ".join(
                   repr(si_factor(model.units[c]) if model.units else 1.0)
                   for c in model.coordinates)]
+    if any(q.bounded for q in model.parameters):
+        header.append("bounds " + " ".join(f"{q.lower!r} {q.upper!r}"
+                                           for q in model.parameters))
     return "\n".join(header + lines) + "\n"
 
 

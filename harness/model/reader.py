@@ -165,18 +165,48 @@ def _parameter(name: str, spec: Any, fail: Fail) -> Parameter:
     if not isinstance(spec, dict):
         raise fail(f"parameter {name} must be a table such as "
                    f"{name} = {{ nominal = 1.0, unit = \"kg\" }}")
-    unknown = set(spec) - {"nominal", "unit", "optional"}
+    unknown = set(spec) - {"nominal", "unit", "optional", "positive", "range"}
     if unknown:
         raise fail(f"parameter {name} has unknown keys {sorted(unknown)} (known: nominal, "
-                   "unit, optional)")
+                   "unit, optional, positive, range)")
     if "nominal" not in spec:
         raise fail(f"parameter {name} has no nominal value")
     nominal = _number(spec["nominal"], f"the nominal value of parameter {name}", fail)
     unit = _unit(spec.get("unit", ""), f"parameter {name}", fail)
-    optional = spec.get("optional", False)
-    if not isinstance(optional, bool):
-        raise fail(f"parameter {name}: optional must be true or false, not {optional!r}")
-    return Parameter(name, nominal, unit, optional)
+    flags = {}
+    for key in ("optional", "positive"):
+        flags[key] = spec.get(key, False)
+        if not isinstance(flags[key], bool):
+            raise fail(f"parameter {name}: {key} must be true or false, not {flags[key]!r}")
+    lower, upper = _range(name, spec, flags["positive"], fail)
+    if not lower <= nominal <= upper:
+        raise fail(f"parameter {name}: the nominal value {nominal:g} is outside its declared "
+                   f"range [{lower:g}, {upper:g}]")
+    if flags["optional"] and not lower <= 0.0 <= upper:
+        raise fail(f"parameter {name}: optional means it may be left out at 0, which is "
+                   f"outside its declared range [{lower:g}, {upper:g}]")
+    return Parameter(name, nominal, unit, flags["optional"], lower, upper)
+
+
+def _range(name: str, spec: dict, positive: bool, fail: Fail) -> tuple[float, float]:
+    """``positive = true`` is the range [0, inf]; ``range = [a, b]`` (a < b, either may be
+    -inf or inf as TOML writes them) any other; not both."""
+    if "range" not in spec:
+        return (0.0 if positive else -math.inf), math.inf
+    if positive:
+        raise fail(f"parameter {name}: give positive = true or range = [a, b], not both")
+    bounds = spec["range"]
+    if not (isinstance(bounds, list) and len(bounds) == 2):
+        raise fail(f"parameter {name}: range must be a list [lower, upper], not {bounds!r}")
+    lower, upper = bounds
+    for value, what in ((lower, "lower"), (upper, "upper")):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or math.isnan(value):
+            raise fail(f"parameter {name}: the {what} end of its range must be a number "
+                       f"(inf and -inf allowed), not {value!r}")
+    if not float(lower) < float(upper):
+        raise fail(f"parameter {name}: range = [{lower}, {upper}] is empty (lower must be "
+                   "below upper)")
+    return float(lower), float(upper)
 
 
 def _constant(name: str, spec: Any, fail: Fail) -> Constant:

@@ -83,7 +83,8 @@ def refine(model: Model, log: ModelLog, theta: np.ndarray, first: int = 0,
     cost_start = problem.relative_error(start)
     result = scipy.optimize.least_squares(
         problem.residuals, start, jac=problem.jacobian, method="trf", tr_solver="lsmr",
-        xtol=TOLERANCE, ftol=TOLERANCE, gtol=TOLERANCE, max_nfev=MAX_EVALUATIONS)
+        bounds=problem.box(model.bounds), xtol=TOLERANCE, ftol=TOLERANCE, gtol=TOLERANCE,
+        max_nfev=MAX_EVALUATIONS)
     theta_end = problem.theta(result.x)
     std = problem.std_error(result.x)
     return Refinement(theta_end, std, cost_start, problem.relative_error(result.x),
@@ -108,6 +109,14 @@ class _Problem:
     def start_vector(self) -> np.ndarray:
         states = np.concatenate([self.sim.q0, self.sim.qd0], axis=1) / self.state_scale
         return np.concatenate([self.theta0[self.free] / self.theta_scale, states.ravel()])
+
+    def box(self, bounds: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        """The declared ranges of the free unknowns in the scaled unknowns (the run states
+        are free)."""
+        states = len(self.start_vector()) - self.p
+        return tuple(np.concatenate([end[self.free] / self.theta_scale,
+                                     np.full(states, sign * np.inf)])
+                     for end, sign in zip(bounds, (-1.0, 1.0)))  # type: ignore[return-value]
 
     def theta(self, x: np.ndarray) -> np.ndarray:
         """Every parameter: the free ones from x, the others as they started."""
@@ -230,7 +239,8 @@ def check_on_halves(model: Model, log: ModelLog, rows: Regression, theta: np.nda
                     ) -> RefinementCheck:
     """Fit least squares on the regressor ``rows`` of one half of the log, refine it on that
     half, and score both on the other half; the scores averaged over the two halves. Only
-    the unknowns ``free`` (None: all) are fitted; the others stay 0."""
+    the unknowns ``free`` (None: all) are fitted; the others keep their values in
+    ``theta``."""
     from .fit import estimate
 
     dynamics = dynamics or Dynamics(model)
@@ -241,11 +251,15 @@ def check_on_halves(model: Model, log: ModelLog, rows: Regression, theta: np.nda
     scores: dict[str, list[float]] = {"least_squares": [], "refined": []}
     refined_halves = []
     free = np.ones(len(theta), dtype=bool) if free is None else free
+    lower, upper = model.bounds
     for k, (first, last) in enumerate(halves):
         mine = (rows.t >= log.t[first]) & (rows.t < log.t[last - 1])
-        start = np.zeros(len(theta))
-        start[free] = estimate(rows.Y[mine][:, :, free], rows.r[mine], model.nominal[free],
-                               mask=None if rows.mask is None else rows.mask[mine])
+        start = np.where(free, 0.0, theta)  # the others as given (0 or a range's end)
+        known = rows.Y[mine][:, :, ~free] @ start[~free]
+        start[free] = estimate(rows.Y[mine][:, :, free], rows.r[mine] - known,
+                               model.nominal[free],
+                               mask=None if rows.mask is None else rows.mask[mine],
+                               bounds=(lower[free], upper[free]))
         refined = refine(model, log, start, first, last, dynamics, MOST_RUNS // 2,
                          free).theta
         refined_halves.append(refined)

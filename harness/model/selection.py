@@ -177,8 +177,9 @@ def _estimate(model: Model, rows: Regression, free: np.ndarray, take) -> np.ndar
     """Least squares over the rows ``take`` with the unknowns outside ``free`` at 0."""
     theta = np.zeros(len(model.parameters))
     mask = None if rows.mask is None else rows.mask[take]
+    lower, upper = model.bounds
     theta[free] = estimate(rows.Y[take][:, :, free], rows.r[take], model.nominal[free],
-                           mask=mask)
+                           mask=mask, bounds=(lower[free], upper[free]))
     return theta
 
 

@@ -7,7 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..names import plain
-from .model import Model
+from .model import Model, Parameter
 
 
 def _string(text: str) -> str:
@@ -25,6 +25,15 @@ def _number(value: float) -> str:
     return repr(float(value))
 
 
+def _range(p: Parameter) -> str:
+    """The declared range as the file wrote it (positive = true for [0, inf])."""
+    if not p.bounded:
+        return ""
+    if p.lower == 0.0 and p.upper == float("inf"):
+        return ", positive = true"
+    return f", range = [{_number(p.lower)}, {_number(p.upper)}]"
+
+
 def model_toml(model: Model, values: Sequence[float] | np.ndarray,
                std_errors: Sequence[float] | np.ndarray | None = None,
                header: Sequence[str] = ()) -> str:
@@ -38,9 +47,9 @@ def model_toml(model: Model, values: Sequence[float] | np.ndarray,
               "[parameters]"]
     width = max(len(p.name) for p in model.parameters)
     for k, p in enumerate(model.parameters):
-        optional = ", optional = true" if p.optional else ""
+        flags = (", optional = true" if p.optional else "") + _range(p)
         entry = (f"{p.name:<{width}} = {{ nominal = {_number(values[k])}, "
-                 f"unit = {_string(p.unit)}{optional} }}")
+                 f"unit = {_string(p.unit)}{flags} }}")
         if std_errors is not None:
             entry += f"   # std error {float(std_errors[k]):.3g}"
         lines.append(entry)

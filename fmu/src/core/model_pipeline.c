@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "box_projection.h"
 #include "observer_scheme.h"
 
 #define MAX_N MP_MAX_COORDINATES
@@ -286,15 +287,33 @@ int mp_converged(const ModelPipeline *p, int n)
     return 1;
 }
 
-void mp_estimates(const ModelPipeline *p, const TermProgram *program, double theta[],
-                  double std_error[])
+_Static_assert(TP_MAX_PARAMETERS <= BP_MAX_UNKNOWNS, "every parameter may have a range");
+
+int mp_estimates(const ModelPipeline *p, const TermProgram *program, double theta[],
+                 double std_error[], int held[])
 {
     const double *delta = p->identifying ? sj_freshest_estimate(&p->statistics, &p->id) : NULL;
     const int published = p->identifying && p->statistics.completed > 0.0;
+    double x[TP_MAX_PARAMETERS], lower[TP_MAX_PARAMETERS], upper[TP_MAX_PARAMETERS];
+    int ends[TP_MAX_PARAMETERS] = {0};
+    BpResult result = BP_INSIDE;
     for (int k = 0; k < program->p; ++k) {
-        theta[k] = program->nominal[k] + (delta ? delta[k] / program->scale[k] : 0.0);
-        std_error[k] = published ? p->statistics.std_error[k] / program->scale[k] : 0.0;
+        x[k] = delta ? delta[k] : 0.0; /* SI, as the identifier's information */
+        lower[k] = (program->lower[k] - program->nominal[k]) * program->scale[k];
+        upper[k] = (program->upper[k] - program->nominal[k]) * program->scale[k];
     }
+    if (delta && program->bounded)
+        result = bp_project(program->p, &p->id.P[0][0], RRI_MAX_PARAMETERS, lower, upper, x,
+                            ends);
+    for (int k = 0; k < program->p; ++k) {
+        theta[k] = ends[k] < 0 ? program->lower[k] : ends[k] > 0 ? program->upper[k]
+                                                                : program->nominal[k] +
+                                                                      x[k] / program->scale[k];
+        std_error[k] = published && !ends[k] ? p->statistics.std_error[k] / program->scale[k]
+                                             : 0.0;
+        if (held) held[k] = ends[k];
+    }
+    return (int)result;
 }
 
 #define OUT_OF_RANGE                                                                          \

@@ -95,9 +95,13 @@ void mp_run(ModelPipeline *p, const TermProgram *program, const double y[], cons
 void mp_communicate(ModelPipeline *p);
 
 /* The parameters in the file's units and their standard errors (0 until the
- * first statistics job completes; the nominal values until identification starts). */
-void mp_estimates(const ModelPipeline *p, const TermProgram *program, double theta[],
-                  double std_error[]);
+ * first statistics job completes; the nominal values until identification
+ * starts).  Where the program declares ranges, the estimate is the identifier's
+ * least squares inside them (box_projection.h); held[k] (-1 lower end, 1 upper,
+ * 0 free; may be NULL) says which are held at an end, with standard error 0.
+ * Returns the projection's BpResult (BP_INSIDE without ranges). */
+int mp_estimates(const ModelPipeline *p, const TermProgram *program, double theta[],
+                 double std_error[], int held[]);
 
 /* What turned non-finite first (MP_FINITE: nothing), said in message[size]
  * (at a communication point: formats, so never on the internal step). */

@@ -96,6 +96,41 @@ static int read_double(Cursor *c, const char *what, double *value)
     return 0;
 }
 
+/* An end of a range: a finite number, or "-inf" (lower) / "inf" (upper) for none. */
+static int read_end(Cursor *c, const char *what, int upper, double *value)
+{
+    if (next_word(c)) return -1;
+    if (strcmp(c->token, upper ? "inf" : "-inf") == 0) {
+        *value = upper ? INFINITY : -INFINITY;
+        return 0;
+    }
+    char *end = NULL;
+    const double v = strtod(c->token, &end);
+    if (end == c->token || *end != '\0' || !isfinite(v))
+        return fail(c, "%s: '%s' is not a finite number or %s", what, c->token,
+                    upper ? "inf" : "-inf");
+    *value = v;
+    return 0;
+}
+
+/* "bounds" then lower upper per parameter: lower < upper, the nominal inside. */
+static int read_bounds(Cursor *c, TermProgram *p)
+{
+    for (int k = 0; k < p->p; ++k) {
+        if (read_end(c, "lower bound", 0, &p->lower[k]) ||
+            read_end(c, "upper bound", 1, &p->upper[k]))
+            return -1;
+        if (!(p->lower[k] < p->upper[k]))
+            return fail(c, "range of parameter %d = [%g, %g] is empty", k, p->lower[k],
+                        p->upper[k]);
+        if (!(p->lower[k] <= p->nominal[k] && p->nominal[k] <= p->upper[k]))
+            return fail(c, "nominal value of parameter %d = %g is outside its range [%g, %g]",
+                        k, p->nominal[k], p->lower[k], p->upper[k]);
+    }
+    p->bounded = 1;
+    return 0;
+}
+
 /* How many values an op takes from the stack and the range of its argument. */
 static int op_arity(int op) { return op <= TP_INPUT ? 0 : op <= TP_POWER ? 2 : 1; }
 
@@ -172,6 +207,10 @@ int tp_parse(TermProgram *p, const char *text, size_t length, char *error, size_
     }
     p->identifier = 1;
     for (int i = 0; i < p->n; ++i) p->coordinate_scale[i] = 1.0;
+    for (int k = 0; k < p->p; ++k) {
+        p->lower[k] = -INFINITY;
+        p->upper[k] = INFINITY;
+    }
     if (next_word(&c)) return -1;
     if (strcmp(c.token, "coordinate_scale") == 0) {
         for (int i = 0; i < p->n; ++i) {
@@ -181,6 +220,9 @@ int tp_parse(TermProgram *p, const char *text, size_t length, char *error, size_
                             p->coordinate_scale[i]);
         }
         if (next_word(&c)) return -1;
+    }
+    if (strcmp(c.token, "bounds") == 0) {
+        if (read_bounds(&c, p) || next_word(&c)) return -1;
     }
     if (strcmp(c.token, "identifier") == 0) {
         if (read_int(&c, "identifier", 0, 2, &p->identifier) || next_word(&c)) return -1;

@@ -17,6 +17,8 @@
  *     nominal v_1 .. v_P    the parameters' nominal values (the file's units)
  *     scale s_1 .. s_P      each parameter's unit in SI (theta_SI = s theta)
  *     coordinate_scale c_1 .. c_N   optional: each coordinate's unit in SI (default 1)
+ *     bounds l_1 u_1 .. l_P u_P     optional: each parameter's declared range (the
+ *                           file's units; -inf, inf for an open end), the nominal inside
  *     identifier K          optional: the identifier the model asks for (1 LSM, the
  *                           default; 2 MFF for time-varying parameters; 0 none)
  *     entry I K L  op arg .. op arg     L (op, arg) pairs; K = P: r_I
@@ -53,6 +55,9 @@ typedef struct {
     int n_constants, n_tokens;
     double constant[TP_MAX_CONSTANTS];
     double nominal[TP_MAX_PARAMETERS], scale[TP_MAX_PARAMETERS];
+    /* the ranges the model file declares, in its units (-inf, inf: none) */
+    double lower[TP_MAX_PARAMETERS], upper[TP_MAX_PARAMETERS];
+    int bounded;                   /* some parameter has a range */
     double coordinate_scale[TP_MAX_COORDINATES];
     int identifier;
     int op[TP_MAX_TOKENS], arg[TP_MAX_TOKENS];

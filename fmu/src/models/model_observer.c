@@ -42,6 +42,9 @@ typedef struct {
     double position[MAX_N], velocity[MAX_N], theta[MAX_P], theta_std[MAX_P];
     double excitation, input_hold;
     int converged, identifier_active, coarse_inputs;
+    int parameters_held;  /* held at an end of their declared range */
+    int held_logged;      /* the count the last message said */
+    int held[MAX_P];      /* per parameter -1, 0, 1 (box_projection.h) */
 } ModelData;
 _Static_assert(MAX_N + MAX_U <= IC_MAX_VALUES, "the cadence watches every position and input");
 
@@ -142,6 +145,12 @@ static const ModelVariable VARIABLES[] = {
      .description = "Smallest eigenvalue of the identifier's information per unit time (SI "
                     "parameters); near 0: some parameter is not being learned")},
     INPUT_CADENCE_VARIABLES(364, OFF(input_hold), OFF(coarse_inputs), OFF(input_period)),
+    {.name = "parameters_held", .vr = 367, .type = TYPE_INTEGER,
+     .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
+     .offset = OFF(parameters_held),
+     .description = "Parameters the estimate holds at an end of the range the model file "
+                    "declares (positive = true, range = [a, b]): the identifier's least "
+                    "squares lie outside it; their theta_std is 0. 0 without ranges"},
 };
 
 static ModelStatus parse_resource(void *region, const char *text, size_t length,
@@ -166,7 +175,9 @@ static void resource_start_values(void *data)
 static void publish(ModelData *d)
 {
     const int n = d->program.n;
-    mp_estimates(&d->pipe, &d->program, d->theta, d->theta_std);
+    mp_estimates(&d->pipe, &d->program, d->theta, d->theta_std, d->held);
+    d->parameters_held = 0;
+    for (int k = 0; k < d->program.p; ++k) d->parameters_held += d->held[k] != 0;
     for (int i = 0; i < n; ++i) {
         d->position[i] = mp_position(&d->pipe, i);
         d->velocity[i] = mp_velocity(&d->pipe, i); /* for the end of the step, as x1_hat */
@@ -224,6 +235,7 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     const int count = measured(d, values);
     ic_init(&d->cadence, count, values, d->pipe.h, d->input_period);
     d->coarse_logged = 0;
+    d->held_logged = 0;
     d->work_per_step = step_work(d);
     publish(d);
     return MODEL_OK;
@@ -253,6 +265,23 @@ static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
     mp_run(&d->pipe, &d->program, d->y, d->u, start_time, k, k_end);
 }
 
+/* A warning each time more parameters come to be held at their ranges' ends,
+ * naming the first: the log pushes the estimate outside what the file declares. */
+static void log_held(ModelData *d, double t, const ModelLogger *log)
+{
+    if (d->parameters_held > d->held_logged) {
+        int k = 0;
+        while (!d->held[k]) ++k;
+        log->log(log->context, MODEL_WARNING,
+                 "t = %g: %d parameter(s) held at an end of the range the model file declares, "
+                 "theta_%d at its %s end %g: the identifier's least squares lie outside the "
+                 "range (a model term missing, or a parameter the log does not excite yet)",
+                 t, d->parameters_held, k + 1, d->held[k] < 0 ? "lower" : "upper",
+                 d->theta[k]);
+    }
+    d->held_logged = d->parameters_held;
+}
+
 static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
 {
     ModelData *d = data;
@@ -264,6 +293,7 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
     mp_communicate(&d->pipe);
     publish(d);
     log_cadence(&d->coarse_logged, d->coarse_inputs, d->input_hold, d->pipe.h, t, log);
+    log_held(d, t, log);
     for (int i = 0; i < d->program.n; ++i) {
         if (!isfinite(d->position[i]) || !isfinite(d->velocity[i])) {
             log->log(log->context, MODEL_ERROR,
@@ -291,7 +321,7 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
 #define R(field, lo, hi) STATE_FIELD(ModelData, field, FIELD_REAL, lo, hi)
 static const StateField STATE_FIELDS[] = {
     D(alpha1), D(alpha2), I(reset_seen, 0, 1), IC_STATE_FIELDS(ModelData, cadence),
-    I(coarse_logged, 0, 1), D(pipe.gain), D(pipe.warm_up),
+    I(coarse_logged, 0, 1), I(held_logged, 0, MAX_P), I(held, -1, 1), D(pipe.gain), D(pipe.warm_up),
     I(pipe.identifying, 0, 1), I(pipe.started, 0, 1), I(pipe.warm_samples, 0, 1000000000),
     R(pipe.singular_steps, 0.0, NAN), I(pipe.nonfinite, MP_FINITE, MP_NONFINITE_IDENTIFIER),
     I(pipe.nonfinite_equation, 0, MAX_N - 1), I(pipe.nonfinite_entry, -1, MAX_P - 1),

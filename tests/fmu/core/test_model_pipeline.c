@@ -90,7 +90,7 @@ static double identify_drive(int scheme, double resolution, double seconds, doub
     }
     /* the last statistics job completes within its spread */
     for (int extra = 0; extra < 200 && p->statistics.stage != SJ_IDLE; ++extra) sj_step(&p->statistics);
-    mp_estimates(p, &program, theta, std_error);
+    mp_estimates(p, &program, theta, std_error, NULL);
     *velocity_rms = sqrt(square / (double)counted);
     double worst = 0.0;
     for (int k = 0; k < 4; ++k)
@@ -210,7 +210,7 @@ static int identifies_five_coordinates_in_two_groups(void)
     }
     for (int extra = 0; extra < 200 && p->statistics.stage != SJ_IDLE; ++extra) sj_step(&p->statistics);
     double theta[6], std_error[6], worst = 0.0, worst_velocity = 0.0;
-    mp_estimates(p, &program, theta, std_error);
+    mp_estimates(p, &program, theta, std_error, NULL);
     for (int k = 0; k < 6; ++k) worst = fmax(worst, fabs(theta[k] - FIVE_TRUE[k]) / FIVE_TRUE[k]);
     for (int i = 0; i < 5; ++i) worst_velocity = fmax(worst_velocity, sqrt(square[i] / (double)counted));
     failed += check(worst <= 1e-3 && worst_velocity <= 1e-3 && mp_converged(p, 5),
