@@ -13,7 +13,7 @@ set(STO_CORE_ROBOT
     core/statistics_job.c core/input_cadence.c core/gains.c core/tuning.c)
 # A model file's regressor as data (harness/model/program.py writes it).
 set(STO_CORE_MODEL core/model_pipeline.c core/term_program.c core/small_solve.c
-    core/box_projection.c
+    core/box_projection.c core/model_damping.c
     core/observer_scheme.c
     core/super_twisting.c core/implicit_twisting.c core/noise_adaptive.c
     core/regressor_identifier.c core/statistics_job.c core/input_cadence.c core/gains.c

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "../core/gains.h"
+#include "../core/model_damping.h"
 #include "../core/model_pipeline.h"
 #include "../core/term_program.h"
 #include "../instance/model_interface.h"
@@ -45,6 +46,8 @@ typedef struct {
     int parameters_held;  /* held at an end of their declared range */
     int held_logged;      /* the count the last message said */
     int held[MAX_P];      /* per parameter -1, 0, 1 (box_projection.h) */
+    int negative_damping; /* the published model creates energy (model_damping.h) */
+    int damping_logged;   /* the warning stands */
 } ModelData;
 _Static_assert(MAX_N + MAX_U <= IC_MAX_VALUES, "the cadence watches every position and input");
 
@@ -151,6 +154,14 @@ static const ModelVariable VARIABLES[] = {
      .description = "Parameters the estimate holds at an end of the range the model file "
                     "declares (positive = true, range = [a, b]): the identifier's least "
                     "squares lie outside it; their theta_std is 0. 0 without ranges"},
+    {.name = "negative_damping", .vr = 368, .type = TYPE_BOOLEAN,
+     .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
+     .offset = OFF(negative_damping),
+     .description = "The estimated model creates energy: near rest at the position "
+                    "estimate its damping (d equations / d velocities) has a negative "
+                    "eigenvalue or a Coulomb level is negative, so its free response grows "
+                    "(an unstable model). Declare the friction parameters positive = true in "
+                    "the model file"},
 };
 
 static ModelStatus parse_resource(void *region, const char *text, size_t length,
@@ -172,6 +183,15 @@ static void resource_start_values(void *data)
     for (int i = 0; i < d->program.n; ++i) d->f_plus[i] = F_PLUS_SI / d->program.coordinate_scale[i];
 }
 
+/* 0 if the published model takes energy at the position estimate, else 1 + the
+ * coordinate whose friction creates it (model_damping.h). */
+static int creates_energy(const ModelData *d, MdDamping *damping)
+{
+    return md_damping(&d->program, d->theta, d->position, d->u, damping) == 0
+               ? md_creates_energy(d->program.n, damping)
+               : 0;
+}
+
 static void publish(ModelData *d)
 {
     const int n = d->program.n;
@@ -187,6 +207,8 @@ static void publish(ModelData *d)
     d->converged = mp_converged(&d->pipe, n);
     d->input_hold = ic_shortest(&d->cadence) * d->pipe.h;
     d->coarse_inputs = ic_coarse(&d->cadence);
+    MdDamping damping;
+    d->negative_damping = creates_energy(d, &damping) != 0;
 }
 
 /* The positions then the inputs: what the cadence watches. */
@@ -236,6 +258,7 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     ic_init(&d->cadence, count, values, d->pipe.h, d->input_period);
     d->coarse_logged = 0;
     d->held_logged = 0;
+    d->damping_logged = 0;
     d->work_per_step = step_work(d);
     publish(d);
     return MODEL_OK;
@@ -282,6 +305,24 @@ static void log_held(ModelData *d, double t, const ModelLogger *log)
     d->held_logged = d->parameters_held;
 }
 
+/* A warning when the published model turns to creating energy (once per episode). */
+static void log_damping(ModelData *d, double t, const ModelLogger *log)
+{
+    MdDamping damping;
+    const int which = d->negative_damping && !d->damping_logged ? creates_energy(d, &damping) : 0;
+    if (which) {
+        const int i = which - 1;
+        log->log(log->context, MODEL_WARNING,
+                 "t = %g: the estimated model creates energy: at rest, coordinate %d's "
+                 "friction is negative (damping d equation_%d / d velocity_%d = %g, Coulomb "
+                 "level %g), so its free response grows and a simulation of it diverges. "
+                 "Declare the friction parameters positive = true in the model file, or "
+                 "excite the motion more", t, which, which, which, damping.D[i][i],
+                 damping.coulomb[i]);
+    }
+    d->damping_logged = d->negative_damping;
+}
+
 static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
 {
     ModelData *d = data;
@@ -294,6 +335,7 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
     publish(d);
     log_cadence(&d->coarse_logged, d->coarse_inputs, d->input_hold, d->pipe.h, t, log);
     log_held(d, t, log);
+    log_damping(d, t, log);
     for (int i = 0; i < d->program.n; ++i) {
         if (!isfinite(d->position[i]) || !isfinite(d->velocity[i])) {
             log->log(log->context, MODEL_ERROR,
@@ -321,7 +363,8 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
 #define R(field, lo, hi) STATE_FIELD(ModelData, field, FIELD_REAL, lo, hi)
 static const StateField STATE_FIELDS[] = {
     D(alpha1), D(alpha2), I(reset_seen, 0, 1), IC_STATE_FIELDS(ModelData, cadence),
-    I(coarse_logged, 0, 1), I(held_logged, 0, MAX_P), I(held, -1, 1), D(pipe.gain), D(pipe.warm_up),
+    I(coarse_logged, 0, 1), I(held_logged, 0, MAX_P), I(held, -1, 1),
+    I(damping_logged, 0, 1), D(pipe.gain), D(pipe.warm_up),
     I(pipe.identifying, 0, 1), I(pipe.started, 0, 1), I(pipe.warm_samples, 0, 1000000000),
     R(pipe.singular_steps, 0.0, NAN), I(pipe.nonfinite, MP_FINITE, MP_NONFINITE_IDENTIFIER),
     I(pipe.nonfinite_equation, 0, MAX_N - 1), I(pipe.nonfinite_entry, -1, MAX_P - 1),
