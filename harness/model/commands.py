@@ -31,7 +31,13 @@ from ..outputs import Outputs
 from .errors import ModelFileError
 from .estimates import Estimates
 from .fit import relative_errors
-from .identification import HELD_SIGNIFICANT, WEAKLY_EXCITED, Identification, NotExcitedError, identify_model
+from .identification import (
+    HELD_SIGNIFICANT,
+    WEAKLY_EXCITED,
+    Identification,
+    NotExcitedError,
+    identify_model,
+)
 from .log import LogFileError, ModelLog, read_log
 from .model import Model
 from .reader import read_model

@@ -113,10 +113,10 @@ class _Problem:
     def box(self, bounds: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
         """The declared ranges of the free unknowns in the scaled unknowns (the run states
         are free)."""
-        states = len(self.start_vector()) - self.p
-        return tuple(np.concatenate([end[self.free] / self.theta_scale,
-                                     np.full(states, sign * np.inf)])
-                     for end, sign in zip(bounds, (-1.0, 1.0)))  # type: ignore[return-value]
+        lower, upper = bounds
+        states = np.full(self.runs * 2 * self.n, np.inf)
+        return (np.concatenate([lower[self.free] / self.theta_scale, -states]),
+                np.concatenate([upper[self.free] / self.theta_scale, states]))
 
     def theta(self, x: np.ndarray) -> np.ndarray:
         """Every parameter: the free ones from x, the others as they started."""

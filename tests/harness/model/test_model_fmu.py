@@ -309,7 +309,8 @@ def test_the_estimates_do_not_depend_on_the_communication_step(tmp_path, version
     h = float(t[1] - t[0])
     names = list(TRUTH)
     outputs = names + [f"{n}_std" for n in names] + [
-        "observer.input_hold", "observer.coarse_inputs", "observer.excitation"]
+        "observer.input_hold", "observer.coarse_inputs", "observer.excitation",
+        "observer.negative_damping", "observer.parameters_held"]
     runs = [fmpy.simulate_fmu(str(fmu), stop_time=float(t[-1]) - 10 * h, input=signals,
                               output_interval=ratio * h, start_values={"observer.h": h},
                               output=outputs) for ratio in (1, 2, 5, 10)]
