@@ -77,6 +77,8 @@
 #define MP_WARM_UP 10.0             /* time constants of G before its rows enter (e^-10) */
 #define MP_TAU_IDENTIFIER 0.02      /* [s] default of the regression's filter G */
 #define MP_RHO 1e-9                 /* default regularization, SI parameters */
+#define MP_ENERGY_WARNING 1.0       /* [s] the published model creates energy this long
+                                     * before the warning: not every transient estimate */
 
 /* ---- the inputs' cadence (input_cadence.h) ----------------------------------------- */
 #define CADENCE_WINDOW 2.0          /* [s] over which the shortest hold of the inputs counts

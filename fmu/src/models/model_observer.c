@@ -48,6 +48,8 @@ typedef struct {
     int held[MAX_P];      /* per parameter -1, 0, 1 (box_projection.h) */
     int negative_damping; /* the published model creates energy (model_damping.h) */
     int damping_logged;   /* the warning stands */
+    int energy_seen;      /* it did at the last communication point ... */
+    double energy_since;  /* [s] ... since this time */
 } ModelData;
 _Static_assert(MAX_N + MAX_U <= IC_MAX_VALUES, "the cadence watches every position and input");
 
@@ -258,7 +260,8 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     ic_init(&d->cadence, count, values, d->pipe.h, d->input_period);
     d->coarse_logged = 0;
     d->held_logged = 0;
-    d->damping_logged = 0;
+    d->damping_logged = d->energy_seen = 0;
+    d->energy_since = 0.0;
     d->work_per_step = step_work(d);
     publish(d);
     return MODEL_OK;
@@ -305,22 +308,31 @@ static void log_held(ModelData *d, double t, const ModelLogger *log)
     d->held_logged = d->parameters_held;
 }
 
-/* A warning when the published model turns to creating energy (once per episode). */
+/* A warning when the published model has created energy for MP_ENERGY_WARNING
+ * (once per episode; the transient's first estimates often do, briefly). */
 static void log_damping(ModelData *d, double t, const ModelLogger *log)
 {
+    if (!d->negative_damping) {
+        d->damping_logged = d->energy_seen = 0;
+        return;
+    }
+    if (!d->energy_seen) d->energy_since = t;
+    d->energy_seen = 1;
     MdDamping damping;
-    const int which = d->negative_damping && !d->damping_logged ? creates_energy(d, &damping) : 0;
+    const int which = !d->damping_logged && t - d->energy_since >= MP_ENERGY_WARNING
+                          ? creates_energy(d, &damping)
+                          : 0;
     if (which) {
         const int i = which - 1;
         log->log(log->context, MODEL_WARNING,
-                 "t = %g: the estimated model creates energy: at rest, coordinate %d's "
-                 "friction is negative (damping d equation_%d / d velocity_%d = %g, Coulomb "
-                 "level %g), so its free response grows and a simulation of it diverges. "
-                 "Declare the friction parameters positive = true in the model file, or "
-                 "excite the motion more", t, which, which, which, damping.D[i][i],
-                 damping.coulomb[i]);
+                 "t = %g: the estimated model has created energy since t = %g: at rest, "
+                 "coordinate %d's friction is negative (damping d equation_%d / d velocity_%d "
+                 "= %g, Coulomb level %g), so its free response grows and a simulation of it "
+                 "diverges. Declare the friction parameters positive = true in the model "
+                 "file, or excite the motion more", t, d->energy_since, which, which, which,
+                 damping.D[i][i], damping.coulomb[i]);
+        d->damping_logged = 1;
     }
-    d->damping_logged = d->negative_damping;
 }
 
 static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
@@ -364,7 +376,7 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
 static const StateField STATE_FIELDS[] = {
     D(alpha1), D(alpha2), I(reset_seen, 0, 1), IC_STATE_FIELDS(ModelData, cadence),
     I(coarse_logged, 0, 1), I(held_logged, 0, MAX_P), I(held, -1, 1),
-    I(damping_logged, 0, 1), D(pipe.gain), D(pipe.warm_up),
+    I(damping_logged, 0, 1), I(energy_seen, 0, 1), D(pipe.gain), D(pipe.warm_up),
     I(pipe.identifying, 0, 1), I(pipe.started, 0, 1), I(pipe.warm_samples, 0, 1000000000),
     R(pipe.singular_steps, 0.0, NAN), I(pipe.nonfinite, MP_FINITE, MP_NONFINITE_IDENTIFIER),
     I(pipe.nonfinite_equation, 0, MAX_N - 1), I(pipe.nonfinite_entry, -1, MAX_P - 1),
