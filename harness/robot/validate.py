@@ -31,6 +31,7 @@ from .joint_terms import (
     Sidecar,
     read_sidecar,
 )
+from .layout import ParameterLayout
 from .pipeline import JointLog, LogError, savitzky_golay, smooth_column
 from .smoothing import regression_window, velocity_windows
 from .urdf import Robot
@@ -66,15 +67,15 @@ def filtered_friction_columns(log: JointLog, qd: np.ndarray, window: float,
     terms = terms or JointTerms()
     out: dict[int, tuple[int, np.ndarray]] = {}
     coulomb = filtered(log, terms.coulomb(qd), window)
+    layout = ParameterLayout(n, len(terms.kinds))
     for i in range(n):
-        out[10 * n + 2 * i + 1] = (i, coulomb[:, i])
-    k = len(terms.kinds)
+        out[layout.coulomb(i)] = (i, coulomb[:, i])
     signals = terms.signals(qd, np.zeros_like(qd))
     for j, kind in enumerate(terms.kinds):
         if kind in (COULOMB_POSITIVE, COULOMB_NEGATIVE):
             level = filtered(log, signals[:, :, j], window)
             for i in range(n):
-                out[12 * n + k * i + j] = (i, level[:, i])
+                out[layout.term(i, j)] = (i, level[:, i])
     return out
 
 
