@@ -26,6 +26,7 @@ from bench.reports.robots import pinocchio_truth, prediction_error, truth_of
 from harness.robot.base_parameters import base_parameters
 from harness.robot.examples import example_urdf
 from harness.robot.filtered_regression import low_pass
+from harness.robot.layout import ParameterLayout
 from harness.robot.pipeline import JointLog, identify_robot
 from harness.robot.urdf import read_urdf
 
@@ -65,16 +66,19 @@ def main() -> int:
     scale = np.sqrt(np.mean(tau ** 2, axis=0))
     start = int(START / h)
 
+    layout = ParameterLayout(n)
+
     def body(v_s: float = 0.02):
-        return robot.rigid_body(link=pi[:10 * n].reshape(n, 10),
-                                friction=pi[10 * n:].reshape(n, 2), coulomb_velocity=v_s)
+        link, friction, _ = layout.split(pi)
+        return robot.rigid_body(link=link, friction=friction, coulomb_velocity=v_s)
 
     def report(label: str, delta: np.ndarray) -> None:
         estimate = pi.copy()
         estimate[base.dependent] = 0.0
         estimate[base.base] = base.project(pi) + delta
-        error = np.abs(estimate[10 * n:] / truth[10 * n:] - 1)
-        print(f"| {label} | {100 * error[0::2].max():.2f} % / {100 * error[1::2].max():.2f} % "
+        viscous, coulomb = (np.abs(estimate[part] / truth[part] - 1)
+                            for part in (layout.viscous_levels, layout.coulomb_levels))
+        print(f"| {label} | {100 * viscous.max():.2f} % / {100 * coulomb.max():.2f} % "
               f"| {100 * prediction_error(robot, estimate, validation):.3f} % |", flush=True)
 
     def batch(label: str, Y: np.ndarray, u: np.ndarray) -> None:
