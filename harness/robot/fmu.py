@@ -60,7 +60,7 @@ def fmu_parameters(robot: Robot, unknown: str = "all", h: float = 1e-3, f_plus=1
     layout = ParameterLayout(n)
     if pi is not None:
         arrays["link"], arrays["friction"], _ = layout.split(pi)
-    nominal = np.concatenate([arrays["link"].ravel(), arrays["friction"].ravel()])
+    nominal = layout.join(arrays["link"], arrays["friction"])
     base = base_parameters(robot.rigid_body(), arrays["types"], robot.joint_names, unknown)
     scale = np.ones(n) if torque_scale is None else np.asarray(torque_scale, float)
     return {

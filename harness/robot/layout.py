@@ -153,7 +153,7 @@ class ParameterLayout:
         blocks = [np.ravel(links), np.ravel(friction)]
         if terms is not None:
             blocks.append(np.ravel(terms))
-        pi = np.concatenate(blocks).astype(float)
+        pi = np.concatenate(blocks)
         if pi.shape != (self.size,):
             raise ValueError(f"{pi.size} parameters, the layout has {self.size}")
         return pi

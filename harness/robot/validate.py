@@ -31,7 +31,7 @@ from .joint_terms import (
     Sidecar,
     read_sidecar,
 )
-from .layout import ParameterLayout
+from .layout import ParameterLayout, core_layout
 from .pipeline import JointLog, LogError, savitzky_golay, smooth_column
 from .smoothing import regression_window, velocity_windows
 from .urdf import Robot
@@ -52,7 +52,7 @@ def coulomb_torque(robot: Robot, qd: np.ndarray, sidecar: Sidecar | None = None
                    ) -> np.ndarray:
     """The Coulomb friction (N, n) that a URDF's model (with a sidecar's terms) predicts at
     the velocities qd: a step at every reversal."""
-    coulomb = robot.arrays()["friction"][:, 1]
+    coulomb = robot.arrays()["friction"][:, core_layout().coulomb]
     return (coulomb[None, :] * np.sign(qd) if sidecar is None
             else sidecar.coulomb_torque(qd, coulomb))
 
@@ -98,7 +98,7 @@ def torque_errors(robot: Robot, log: JointLog, window: float, sidecar: Sidecar |
     predicted = robot.rigid_body().inverse_dynamics(q[inside], qd[inside], qdd[inside])
     if sidecar is not None:
         predicted += sidecar.torque_change(qd[inside], qdd[inside],
-                                           robot.arrays()["friction"][:, 1])
+                                           robot.arrays()["friction"][:, core_layout().coulomb])
     # the model's Coulomb steps through the filter the measured torque passed
     steps = coulomb_torque(robot, qd, sidecar)
     predicted += (filtered(log, steps, window) - steps)[inside]
