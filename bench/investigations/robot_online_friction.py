@@ -61,16 +61,16 @@ def main() -> int:
     qm = quantize(q, args.bits) if args.bits else q
     pi = identify_robot(robot, JointLog(t, qm, tau), unknown=unknown, method="sg").pi
     alpha1, alpha2 = GAINS[args.robot][bool(args.bits)]
-    truth = np.concatenate([link.ravel(), friction.ravel()])
+    layout = ParameterLayout(n)
+    truth = layout.join(link, friction)
     base = base_parameters(nominal, robot.arrays()["types"], robot.joint_names, unknown)
     scale = np.sqrt(np.mean(tau ** 2, axis=0))
     start = int(START / h)
 
-    layout = ParameterLayout(n)
-
     def body(v_s: float = 0.02):
-        link, friction, _ = layout.split(pi)
-        return robot.rigid_body(link=link, friction=friction, coulomb_velocity=v_s)
+        identified_link, identified_friction, _ = layout.split(pi)
+        return robot.rigid_body(link=identified_link, friction=identified_friction,
+                                coulomb_velocity=v_s)
 
     def report(label: str, delta: np.ndarray) -> None:
         estimate = pi.copy()

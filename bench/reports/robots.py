@@ -134,8 +134,8 @@ def run_case(name: str, rate: float, seconds: float, seed: int = 1,
                           kp=gains[0], kd=gains[1])
     simulated = time.perf_counter() - started
     t, q, qd, _, tau = train
-    truth_pi = np.concatenate([link.ravel(), friction.ravel()])
     layout = ParameterLayout(robot.n)
+    truth_pi = layout.join(link, friction)
     rows = []
     skip = int(0.5 / h)
     for bits in (None, 17):
