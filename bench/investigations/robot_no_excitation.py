@@ -44,6 +44,7 @@ from bench.reports.robot_trajectories import multisine, quantize, simulate
 from bench.reports.robots import pinocchio_truth, truth_of
 from harness.robot.base_parameters import base_parameters
 from harness.robot.examples import example_urdf
+from harness.robot.layout import ParameterLayout
 from harness.robot.pipeline import JointLog, identify_robot
 from harness.robot.urdf import read_urdf
 
@@ -138,8 +139,9 @@ def measure(case: dict, variant: str, bits: int | None, rule: str, excite: float
     pi = case["models"][bits]["identified"]
     base = base_parameters(robot.rigid_body(), robot.arrays()["types"], robot.joint_names,
                            unknown)
-    body = robot.rigid_body(link=pi[:10 * n].reshape(n, 10), friction=pi[10 * n:].reshape(n, 2),
-                            coulomb_velocity=0.02)
+    layout = ParameterLayout(n)
+    link, friction, _ = layout.split(pi)
+    body = robot.rigid_body(link=link, friction=friction, coulomb_velocity=0.02)
     alpha1, alpha2 = TUNED[case["name"]][bits is not None]
     scale = np.sqrt(np.mean(tau[:end] ** 2, axis=0))
     identify = {"columns": base.base, "kind": "mff", "R": R, "rho": rho, "torque_scale": scale,
@@ -156,12 +158,12 @@ def measure(case: dict, variant: str, bits: int | None, rule: str, excite: float
     # the prediction's states: the excitation's true ones (every 10th sample, after 0.5 s)
     used = np.arange(int(0.5 * RATE), end, 10)
     Y = base.regressor(robot.rigid_body().regressor(q[used], qd[used], qdd[used]))
-    known = np.setdiff1d(np.arange(12 * n), np.union1d(base.base, base.dependent))
+    known = np.setdiff1d(layout.indices(layout.standard), np.union1d(base.base, base.dependent))
     tau_known = robot.rigid_body().regressor(q[used], qd[used], qdd[used])[:, :, known] @ \
         robot.parameters()[known]
     rms_tau = float(np.sqrt(np.mean(tau[used] ** 2)))
     at_end = beta_at(end)
-    friction_end = standard(base, pi, at_end)[10 * n:]
+    friction_end = standard(base, pi, at_end)[layout.friction]
     tracking = float(np.sqrt(np.mean((Y @ at_end + tau_known - tau[used]) ** 2)) / rms_tau)
     moved = {"torque": 0.0, "friction": 0.0, "base": 0.0, "settled": 0.0}
     settled = None
@@ -170,7 +172,7 @@ def measure(case: dict, variant: str, bits: int | None, rule: str, excite: float
         change = beta - at_end
         moved["torque"] = max(moved["torque"],
                               float(np.sqrt(np.mean((Y @ change) ** 2)) / rms_tau))
-        friction = standard(base, pi, beta)[10 * n:]
+        friction = standard(base, pi, beta)[layout.friction]
         moved["friction"] = max(moved["friction"],
                                 float(np.max(np.abs(friction - friction_end) / np.abs(friction_end))))
         moved["base"] = max(moved["base"], float(np.linalg.norm(change) / np.linalg.norm(at_end)))

@@ -26,6 +26,7 @@ from bench.reports.robots import pinocchio_truth, prediction_error, truth_of
 from harness.robot.base_parameters import base_parameters
 from harness.robot.examples import example_urdf
 from harness.robot.filtered_regression import low_pass
+from harness.robot.layout import ParameterLayout
 from harness.robot.pipeline import JointLog, identify_robot
 from harness.robot.urdf import read_urdf
 
@@ -60,21 +61,24 @@ def main() -> int:
     qm = quantize(q, args.bits) if args.bits else q
     pi = identify_robot(robot, JointLog(t, qm, tau), unknown=unknown, method="sg").pi
     alpha1, alpha2 = GAINS[args.robot][bool(args.bits)]
-    truth = np.concatenate([link.ravel(), friction.ravel()])
+    layout = ParameterLayout(n)
+    truth = layout.join(link, friction)
     base = base_parameters(nominal, robot.arrays()["types"], robot.joint_names, unknown)
     scale = np.sqrt(np.mean(tau ** 2, axis=0))
     start = int(START / h)
 
     def body(v_s: float = 0.02):
-        return robot.rigid_body(link=pi[:10 * n].reshape(n, 10),
-                                friction=pi[10 * n:].reshape(n, 2), coulomb_velocity=v_s)
+        identified_link, identified_friction, _ = layout.split(pi)
+        return robot.rigid_body(link=identified_link, friction=identified_friction,
+                                coulomb_velocity=v_s)
 
     def report(label: str, delta: np.ndarray) -> None:
         estimate = pi.copy()
         estimate[base.dependent] = 0.0
         estimate[base.base] = base.project(pi) + delta
-        error = np.abs(estimate[10 * n:] / truth[10 * n:] - 1)
-        print(f"| {label} | {100 * error[0::2].max():.2f} % / {100 * error[1::2].max():.2f} % "
+        viscous, coulomb = (np.abs(estimate[part] / truth[part] - 1)
+                            for part in (layout.viscous_levels, layout.coulomb_levels))
+        print(f"| {label} | {100 * viscous.max():.2f} % / {100 * coulomb.max():.2f} % "
               f"| {100 * prediction_error(robot, estimate, validation):.3f} % |", flush=True)
 
     def batch(label: str, Y: np.ndarray, u: np.ndarray) -> None:

@@ -26,6 +26,7 @@ from bench.reports.robots import truth_of
 from harness.robot.base_parameters import base_parameters
 from harness.robot.consistency import DEFAULT_URDF_TOLERANCE, consistent_parameters
 from harness.robot.examples import example_urdf
+from harness.robot.layout import ParameterLayout
 from harness.robot.urdf import read_urdf
 
 
@@ -37,11 +38,12 @@ def problem(name: str):
     base = base_parameters(robot.rigid_body(), robot.arrays()["types"], robot.joint_names)
     rng = np.random.default_rng(1)
     link, friction, _ = truth_of(name, robot, rng)
-    beta = base.project(np.concatenate([link.ravel(), friction.ravel()]))
+    layout = ParameterLayout(robot.n)
+    beta = base.project(layout.join(link, friction))
     sigma = 1e-3 * np.abs(beta) + 1e-6
     # the friction's scale as the pipeline's data would give it (prior_scales): the truth's
-    data_scale = np.full(12 * robot.n, np.nan)
-    data_scale[10 * robot.n:] = friction.ravel()
+    data_scale = np.full(layout.size, np.nan)
+    data_scale[layout.friction] = friction.ravel()
     return (robot, base, beta + sigma * rng.normal(size=len(beta)), np.diag(sigma ** 2),
             data_scale)
 

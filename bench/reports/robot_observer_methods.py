@@ -33,6 +33,7 @@ from bench.reports.robot_trajectories import multisine
 from harness.robot.base_parameters import base_parameters
 from harness.robot.examples import example_urdf
 from harness.robot.fmu import fmu_parameters, run_fmu
+from harness.robot.layout import ParameterLayout
 from harness.robot.pipeline import identify_robot
 from harness.robot.urdf import read_urdf
 
@@ -59,8 +60,8 @@ def tune(robot, pi: np.ndarray, log, qd: np.ndarray, skip: int, shapes=SHAPES):
     n, h = robot.n, log.step
     best = (np.inf, None, None)
     for v_s in shapes:
-        body = robot.rigid_body(link=pi[:10 * n].reshape(n, 10),
-                                friction=pi[10 * n:].reshape(n, 2), coulomb_velocity=v_s)
+        link, friction, _ = ParameterLayout(n).split(pi)
+        body = robot.rigid_body(link=link, friction=friction, coulomb_velocity=v_s)
         for k in (0.3, 1.0, 3.0, 10.0):
             def cost(alpha1, body=body, k=k):
                 return _rms(body.observe(log.q, log.u, h, 0.0, alpha1=alpha1,

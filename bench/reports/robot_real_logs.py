@@ -60,6 +60,7 @@ from bench.reports.robots import COULOMB_VELOCITY, pinocchio_truth, truth_of
 from harness.robot.base_parameters import base_parameters
 from harness.robot.examples import example_urdf
 from harness.robot.joint_terms import SIDECAR_NAME, JointTerms, Sidecar, parse_terms, read_sidecar
+from harness.robot.layout import core_layout
 from harness.robot.pipeline import JointLog, savitzky_golay
 from harness.robot.urdf import Robot, read_urdf
 from harness.robot.validate import filtered_friction_columns, scoring_window, torque_errors
@@ -254,7 +255,8 @@ def true_state_error(robot: Robot, truth: tuple[np.ndarray, ...], beta: np.ndarr
     if beta is None:
         predicted = robot.rigid_body().inverse_dynamics(q, qd, qdd)
         if sidecar is not None:
-            predicted += sidecar.torque_change(qd, qdd, robot.arrays()["friction"][:, 1])
+            coulomb = robot.arrays()["friction"][:, core_layout().coulomb]
+            predicted += sidecar.torque_change(qd, qdd, coulomb)
     else:
         predicted = _regressor(robot.rigid_body(), base, q, qd, qdd, terms) @ beta
     return float(np.linalg.norm(predicted - tau) / np.linalg.norm(tau))
@@ -364,7 +366,7 @@ def run_case(case: Case, train_seconds: float, work: Path) -> dict:
         "identified": true_state_error(identified, true_states, sidecar=sidecar),
         "estimate": true_state_error(robot, true_states, estimate, base, terms),
         "ols": true_state_error(robot, true_states, ols, base, terms)}
-    masses_urdf = robot.arrays()["link"][:, 0]
+    masses_urdf = robot.arrays()["link"][:, core_layout().mass]
     masses = np.array(list(summary["masses"].values()))
     row.update(
         scores={k: {"per_joint": v[0], "pooled": v[1]} for k, v in scores.items()},

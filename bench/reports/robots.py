@@ -50,6 +50,7 @@ from bench.reports.robot_trajectories import quantize, simulate
 from harness.model.fit import fit as least_squares
 from harness.robot.base_parameters import base_parameters
 from harness.robot.examples import example_urdf
+from harness.robot.layout import ParameterLayout
 from harness.robot.pipeline import JointLog, identify_robot, savitzky_golay
 from harness.robot.urdf import read_urdf
 
@@ -95,9 +96,8 @@ def pinocchio_truth(path, locked, link, friction):
 def prediction_error(robot, pi, validation) -> float:
     """With the truth's Coulomb shape: what is scored is the identified parameters."""
     _, q, qd, qdd, tau = validation
-    n = robot.n
-    body = robot.rigid_body(link=pi[:10 * n].reshape(n, 10), friction=pi[10 * n:].reshape(n, 2),
-                            coulomb_velocity=COULOMB_VELOCITY)
+    link, friction, _ = ParameterLayout(robot.n).split(pi)
+    body = robot.rigid_body(link=link, friction=friction, coulomb_velocity=COULOMB_VELOCITY)
     error = body.inverse_dynamics(q, qd, qdd) - tau
     return float(np.sqrt(np.mean(error ** 2)) / np.sqrt(np.mean(tau ** 2)))
 
@@ -134,7 +134,8 @@ def run_case(name: str, rate: float, seconds: float, seed: int = 1,
                           kp=gains[0], kd=gains[1])
     simulated = time.perf_counter() - started
     t, q, qd, _, tau = train
-    truth_pi = np.concatenate([link.ravel(), friction.ravel()])
+    layout = ParameterLayout(robot.n)
+    truth_pi = layout.join(link, friction)
     rows = []
     skip = int(0.5 / h)
     for bits in (None, 17):
@@ -152,7 +153,8 @@ def run_case(name: str, rate: float, seconds: float, seed: int = 1,
                 base = base_parameters(body, robot.arrays()["types"], robot.joint_names, unknown)
                 used = np.arange(skip, len(t) - skip, max(1, (len(t) - 2 * skip) // 20000))
                 Y = body.regressor(qs[used], qds[used], qdds[used])
-                known = np.setdiff1d(np.arange(12 * robot.n), np.union1d(base.base, base.dependent))
+                known = np.setdiff1d(layout.indices(layout.standard),
+                                     np.union1d(base.base, base.dependent))
                 z = us[used] - Y[:, :, known] @ robot.parameters()[known]
                 # torque-space least squares, the joints weighted by their residual RMS
                 beta = least_squares(base.regressor(Y), z,
@@ -168,8 +170,9 @@ def run_case(name: str, rate: float, seconds: float, seed: int = 1,
                 if method == "sg":  # the model the model-based methods observe with
                     shared["identified"] = pi
             cost = time.perf_counter() - started
-            friction_error = np.abs(pi[10 * robot.n:] - truth_pi[10 * robot.n:]) / truth_pi[10 * robot.n:]
-            payload_error = (abs(pi[10 * (robot.n - 1)] - link[-1, 0]) / PAYLOAD
+            viscous, coulomb = (np.abs(pi[part] - truth_pi[part]) / truth_pi[part]
+                                for part in (layout.viscous_levels, layout.coulomb_levels))
+            payload_error = (abs(pi[layout.mass(robot.n - 1)] - link[-1, 0]) / PAYLOAD
                              if name == "double_pendulum" else float("nan"))
             joints = np.sqrt(np.mean((velocity[skip:-skip] - qd[skip:-skip]) ** 2, axis=0))
             rows.append({
@@ -182,8 +185,8 @@ def run_case(name: str, rate: float, seconds: float, seed: int = 1,
                 and "tuned" in shared else None,
                 "prediction": prediction_error(robot, pi, validation),
                 "payload": payload_error,
-                "viscous": float(friction_error[0::2].max()),
-                "coulomb": float(friction_error[1::2].max()),
+                "viscous": float(viscous.max()),
+                "coulomb": float(coulomb.max()),
                 "seconds": cost, "simulation": simulated})
             print(format_row(rows[-1]), flush=True)
     return rows

@@ -19,6 +19,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .layout import ParameterLayout
+
 CONSISTENT_MARGIN = 0.05  # relative: consistent error <= (1 + margin) * the estimate's
 # ... or at most this much more (0.1 % of the torque): on an exact log both errors are
 # rounding, whose ratio means nothing
@@ -70,8 +72,9 @@ def implausible_masses(consistent: np.ndarray, nominal: np.ndarray,
     """Warnings for the links whose identified mass is MASS_RATIO times the URDF's, or
     less than its MASS_RATIO-th: the data leave it to directions they hardly see."""
     out = []
+    layout = ParameterLayout(len(link_names))
     for i, name in enumerate(link_names):
-        mass, urdf = consistent[10 * i], nominal[10 * i]
+        mass, urdf = consistent[layout.mass(i)], nominal[layout.mass(i)]
         if urdf > 0 and not (urdf / MASS_RATIO <= mass <= MASS_RATIO * urdf):
             out.append(f"{name}'s identified mass {mass:.4g} kg is {mass / urdf:.3g} times the "
                        f"URDF's {urdf:.4g} kg: the log hardly determines it (a coarse encoder "

@@ -15,6 +15,7 @@ import numpy as np
 import scipy.linalg
 
 from .joint_terms import ARMATURE, COULOMB_NEGATIVE, COULOMB_POSITIVE, OFFSET, JointTerms
+from .layout import ParameterLayout
 
 LINK_NAMES = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
 FRICTION_NAMES = ("fv", "fc")
@@ -70,8 +71,9 @@ def _independent_extras(Y: np.ndarray, chosen: np.ndarray, terms: JointTerms, n:
     Q = np.linalg.qr(Y[:, chosen])[0] if len(chosen) else np.zeros((len(Y), 0))
     taken = []
     rank = {kind: EXTRA_PREFERENCE.index(kind) for kind in terms.kinds}
+    start = ParameterLayout(n, k).standard_size  # the extras' first column
     for j in sorted(range(k * n), key=lambda j: (rank[terms.kinds[j % k]], j)):
-        column = Y[:, 12 * n + j]
+        column = Y[:, start + j]
         size = float(np.linalg.norm(column))
         for _ in range(2):  # projected twice: orthogonal to rounding
             column = column - Q @ (Q.T @ column)
@@ -92,10 +94,12 @@ def random_states(types: np.ndarray, count: int, rng: np.random.Generator):
 def unknown_columns(n: int, unknown: str) -> np.ndarray:
     """The standard parameters to identify: "all", or "payload" (the last link's 10
     and the friction; the other links are taken as the URDF's)."""
+    layout = ParameterLayout(n)
     if unknown == "all":
-        return np.arange(12 * n)
+        return layout.indices(layout.standard)
     if unknown == "payload":
-        return np.concatenate([np.arange(10 * (n - 1), 10 * n), np.arange(10 * n, 12 * n)])
+        return np.concatenate([layout.indices(layout.link(n - 1)),
+                               layout.indices(layout.friction)])
     raise ValueError(f"unknown parameters {unknown!r}: 'all' or 'payload'")
 
 
@@ -114,15 +118,16 @@ def base_parameters(body, types: np.ndarray, joint_names: list[str], unknown: st
     rng = np.random.default_rng(seed)
     n = len(types)
     terms = terms or JointTerms()
+    layout = ParameterLayout(n, len(terms.kinds))
     columns = np.setdiff1d(unknown_columns(n, unknown), terms.replaced(n))
     q, qd, qdd = random_states(types, samples, rng)
-    Y = terms.extend(body.regressor(q, qd, qdd), qd, qdd).reshape(-1, 12 * n + terms.count(n))
+    Y = terms.extend(body.regressor(q, qd, qdd), qd, qdd).reshape(-1, layout.size)
     _, R, order = scipy.linalg.qr(Y[:, columns], mode="economic", pivoting=True)
     diagonal = np.abs(np.diag(R))
     rank = int(np.sum(diagonal > tolerance * diagonal[0]))
     base_local = np.sort(order[:rank])
     extra = _independent_extras(Y, columns[base_local], terms, n, tolerance)
-    columns = np.concatenate([columns, 12 * n + np.arange(terms.count(n))])
+    columns = np.concatenate([columns, layout.indices(layout.extra)])
     base_local = np.sort(np.concatenate([base_local, len(columns) - terms.count(n) + extra]))
     rank = len(base_local)
     Y = Y[:, columns]

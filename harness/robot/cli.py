@@ -146,6 +146,7 @@ def identify_command(args) -> int:
     from ..outputs import Outputs
     from .consistency import ProjectionError
     from .joint_terms import JointTermsError, parse_terms
+    from .layout import ParameterLayout
     from .log_units import UnitError
     from .pipeline import OUTPUT_NAMES, LogError, identify_robot, write_results
     from .urdf import UrdfError
@@ -187,14 +188,14 @@ def identify_command(args) -> int:
     n, terms = robot.n, result.terms
     if result.terms_choice is not None:
         _print_terms_choice(result.terms_choice)
-    standard = result.standard(n)
+    standard, layout = result.standard(n), ParameterLayout(n)
     values = result.term_values(n)
     for i, joint in enumerate(robot.joints):
         coulomb = ("" if terms.asymmetric_coulomb else
-                   f", Coulomb {standard[10 * n + 2 * i + 1]:.6g}")
+                   f", Coulomb {standard[layout.coulomb(i)]:.6g}")
         extras = "".join(f", {kind} {values[i, j]:.6g}" for j, kind in enumerate(terms.kinds))
-        print(f"  {joint.name}: mass {standard[10 * i]:.6g} kg, viscous "
-              f"{standard[10 * n + 2 * i]:.6g}{coulomb}{extras}")
+        print(f"  {joint.name}: mass {standard[layout.mass(i)]:.6g} kg, viscous "
+              f"{standard[layout.viscous(i)]:.6g}{coulomb}{extras}")
     if terms.any and result.urdf_kept:
         print("  the joint terms are not written: identified.urdf keeps the URDF's values")
     elif terms.any:

@@ -62,6 +62,7 @@ from lxml import etree
 
 from .base_parameters import BaseParameters
 from .joint_terms import JointTerms
+from .layout import ParameterLayout
 from .urdf import Robot, UrdfError, body_inertial, check_inertia, inertia_matrix, parse_urdf
 
 # the default relative tolerance of the URDF's values (--urdf-tolerance):
@@ -166,13 +167,14 @@ def prior_scales(nominal: np.ndarray, n: int, data_scale: np.ndarray) -> np.ndar
     nominal = np.asarray(nominal, float)
     data_scale = np.asarray(data_scale, float)
     physical = np.full(len(nominal), np.nan)  # 12 n, and the extra joint terms
+    layout = ParameterLayout(n)
     for i in range(n):
-        link = nominal[10 * i:10 * i + 10]
+        link = nominal[layout.link(i)]
         mass = link[0]
         trace = link[4] + link[6] + link[9]
         if mass > 0 and trace > 0:
             size = np.sqrt(trace / (2 * mass))
-            physical[10 * i:10 * i + 10] = [mass, *[mass * size] * 3, *[mass * size ** 2] * 6]
+            physical[layout.link(i)] = [mass, *[mass * size] * 3, *[mass * size ** 2] * 6]
     fallback = np.where(np.isfinite(data_scale) & (data_scale > 0), data_scale, np.nan)
     physical = np.where(np.isnan(physical), fallback, physical)
     scale = np.fmax(np.abs(nominal), physical)
@@ -184,8 +186,9 @@ def reference_body(nominal: np.ndarray, n: int) -> np.ndarray:
     link mass and size (sqrt(tr I_o / 2m) over the links with mass; 1 kg and 0.1 m
     without any) centred on the joint frame: the metric of regularized_prior."""
     masses, sizes = [], []
+    layout = ParameterLayout(n)
     for i in range(n):
-        link = nominal[10 * i:10 * i + 10]
+        link = nominal[layout.link(i)]
         mass, trace = link[0], link[4] + link[6] + link[9]
         if mass > 0 and trace > 0:
             masses.append(mass)
@@ -236,17 +239,19 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
     n = robot.n
     terms = terms or JointTerms()
     extra = terms.count(n)
-    size = 12 * n + extra
+    layout = ParameterLayout(n, len(terms.kinds))
+    size = layout.size
     nominal = np.concatenate([robot.parameters(), np.zeros(extra)])
     free = np.union1d(base.base, base.dependent)
-    links = sorted({int(k) // 10 for k in free if k < 10 * n})
-    joint = np.array([k for k in free if k >= 10 * n], dtype=int)  # friction and terms
-    nonnegative = np.concatenate([np.ones(2 * n, bool), terms.nonnegative(n)])[joint - 10 * n]
+    links = sorted({int(k) // layout.link_size for k in free if k < layout.link_end})
+    joint = np.array([k for k in free if k >= layout.link_end], dtype=int)  # friction, terms
+    friction = np.ones(layout.friction_size * n, bool)  # viscous and Coulomb: >= 0
+    nonnegative = np.concatenate([friction, terms.nonnegative(n)])[joint - layout.link_end]
     if data_scale is None:
         data_scale = np.full(size, np.nan)
     scale = prior_scales(nominal, n, data_scale)[joint]
     reference = reference_body(nominal, n)
-    priors = [regularized_prior(pseudo_inertia(nominal[10 * i:10 * i + 10]), reference)
+    priors = [regularized_prior(pseudo_inertia(nominal[layout.link(i)]), reference)
               for i in links]
     factors = [np.linalg.cholesky(J0) for J0 in priors]
 
@@ -256,8 +261,8 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
     A = np.zeros((size, 16 * len(links) + len(joint)))
     unit = np.eye(16).reshape(16, 4, 4).transpose(0, 2, 1)  # vec's column-major order
     for j, (i, C) in enumerate(zip(links, factors)):
-        fixed[10 * i:10 * i + 10] = 0.0
-        A[10 * i:10 * i + 10, 16 * j:16 * j + 16] = link_of_pseudo_inertia(C @ unit @ C.T).T
+        fixed[layout.link(i)] = 0.0
+        A[layout.link(i), 16 * j:16 * j + 16] = link_of_pseudo_inertia(C @ unit @ C.T).T
     A[joint, 16 * len(links) + np.arange(len(joint))] = scale
     whiten = _whitening(beta, covariance)
     projector = base.project(np.eye(size)).T  # (r, size): beta = P pi
@@ -295,7 +300,7 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
     distance = float(np.sum((whiten @ (projector @ pi - beta)) ** 2))
     per_link = np.zeros(n)
     for i, J0 in zip(links, priors):
-        per_link[i] = divergence(pseudo_inertia(pi[10 * i:10 * i + 10]), J0)
+        per_link[i] = divergence(pseudo_inertia(pi[layout.link(i)]), J0)
     deviation = (pi[joint] - nominal[joint]) / scale
     return Projection(
         pi, distance, float(scipy.stats.chi2.ppf(CONFIDENCE, len(beta))),
@@ -337,9 +342,9 @@ def write_identified_urdf(robot: Robot, pi: np.ndarray, path: Path, comment: str
     root.insert(0, etree.Comment(f" {comment.replace('--', '- -')} "))
     links = {link.get("name"): link for link in root.findall("link")}
     joints = {joint.get("name"): joint for joint in root.findall("joint")}
-    n = robot.n
+    layout = ParameterLayout(robot.n)
     for i, joint in enumerate(robot.joints):
-        mass, com, inertia = body_inertial(pi[10 * i:10 * i + 10])
+        mass, com, inertia = body_inertial(pi[layout.link(i)])
         if not (np.isfinite(mass) and np.all(np.isfinite(com))
                 and np.all(np.isfinite(inertia))):
             raise UrdfError(f"the identified link {joint.child_link!r} has a mass, centre of "
@@ -356,8 +361,8 @@ def write_identified_urdf(robot: Robot, pi: np.ndarray, path: Path, comment: str
         element = joints[joint.name]
         for dynamics in element.findall("dynamics"):
             element.remove(dynamics)
-        etree.SubElement(element, "dynamics", damping=f"{pi[10 * n + 2 * i]:.12g}",
-                         friction=f"{pi[10 * n + 2 * i + 1]:.12g}")
+        etree.SubElement(element, "dynamics", damping=f"{pi[layout.viscous(i)]:.12g}",
+                         friction=f"{pi[layout.coulomb(i)]:.12g}")
     tree.write(str(path), xml_declaration=True, encoding="utf-8", pretty_print=True)
 
 

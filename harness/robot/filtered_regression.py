@@ -21,6 +21,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import lfilter
 
+from .layout import ParameterLayout
+
 CHUNK = 4096      # samples per batch of regressors
 EPSILON = 1e-6    # [s] of the central difference along q' that gives M'(q, q') q'
 
@@ -85,7 +87,7 @@ def filtered_regression(body, q: np.ndarray, velocity: np.ndarray, u: np.ndarray
             z_out.append(0.5 * (t[rows + 1] + t[rows]))
         previous = [f[-1:] for f in filtered]
     if not Y_out:
-        return np.zeros((0, n, 12 * n)), zeros[:0]
+        return np.zeros((0, n, ParameterLayout(n).standard_size)), zeros[:0]
     return np.concatenate(Y_out), np.concatenate(z_out)
 
 

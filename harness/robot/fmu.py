@@ -20,6 +20,7 @@ import numpy as np
 
 from ..names import plain
 from .base_parameters import base_parameters
+from .layout import ParameterLayout
 from .native import core_defaults
 from .pipeline import JointLog
 from .urdf import Robot
@@ -56,9 +57,10 @@ def fmu_parameters(robot: Robot, unknown: str = "all", h: float = 1e-3, f_plus=1
             raise ValueError(f"{name} must be a finite number >= 0, not {value!r}")
     arrays = robot.arrays()
     n = robot.n
+    layout = ParameterLayout(n)
     if pi is not None:
-        arrays["link"], arrays["friction"] = pi[:10 * n].reshape(n, 10), pi[10 * n:].reshape(n, 2)
-    nominal = np.concatenate([arrays["link"].ravel(), arrays["friction"].ravel()])
+        arrays["link"], arrays["friction"], _ = layout.split(pi)
+    nominal = layout.join(arrays["link"], arrays["friction"])
     base = base_parameters(robot.rigid_body(), arrays["types"], robot.joint_names, unknown)
     scale = np.ones(n) if torque_scale is None else np.asarray(torque_scale, float)
     return {
@@ -68,8 +70,8 @@ def fmu_parameters(robot: Robot, unknown: str = "all", h: float = 1e-3, f_plus=1
         "gravity": np.asarray(arrays["gravity"], float),
         "joint_type": np.asarray(arrays["types"], int),
         "axis": arrays["axis"].reshape(n, 3), "xyz": arrays["xyz"].reshape(n, 3),
-        "rpy": arrays["rpy"].reshape(n, 3), "link": arrays["link"].reshape(n, 10),
-        "friction": arrays["friction"].reshape(n, 2),
+        "rpy": arrays["rpy"].reshape(n, 3), "link": arrays["link"].reshape(n, layout.link_size),
+        "friction": arrays["friction"].reshape(n, layout.friction_size),
         **{name: np.broadcast_to(np.asarray(value, float), (n,)).copy()
            for name, value in (("f_plus", f_plus), ("alpha1", alpha1), ("alpha2", alpha2))},
         "torque_scale": np.broadcast_to(scale, (n,)).copy(),

@@ -37,6 +37,7 @@ import numpy as np
 
 from ..inputs import InputError, read_text
 from .filtered_regression import first_order, lfilter_zi_at
+from .layout import ParameterLayout
 from .urdf import LARGEST
 
 # the terms' names in joint_terms.csv and parameters.csv, in the regressor's order per joint
@@ -104,7 +105,7 @@ class JointTerms:
     def replaced(self, n: int) -> np.ndarray:
         """The core's columns (of 12 n) this model leaves out: each joint's Coulomb
         column when the asymmetric levels replace it."""
-        return (10 * n + 2 * np.arange(n) + 1 if self.asymmetric_coulomb
+        return (ParameterLayout(n).coulomb_indices if self.asymmetric_coulomb
                 else np.zeros(0, dtype=int))
 
     def signals(self, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
@@ -139,8 +140,7 @@ class JointTerms:
         n = qd.shape[1]
         out = np.concatenate([Y, self.columns(qd, qdd)], axis=2)
         if self.asymmetric_coulomb or self.smooth_coulomb is not None:
-            joints = np.arange(n)
-            out[:, joints, 10 * n + 2 * joints + 1] = self.coulomb(qd)
+            out[:, np.arange(n), ParameterLayout(n).coulomb_indices] = self.coulomb(qd)
         return out
 
     def extend_filtered(self, Y: np.ndarray, velocity: np.ndarray, h: float, tau: float,
@@ -150,17 +150,17 @@ class JointTerms:
         momentum form (the armature's Ia q'' as the derivative of its momentum Ia q')."""
         n = velocity.shape[1]
         out = np.concatenate([Y, np.zeros((len(Y), n, self.count(n)))], axis=2)
-        k = len(self.kinds)
+        layout = ParameterLayout(n, len(self.kinds))
         zeros = np.zeros_like(velocity[:, 0])
         for i in range(n):
             v = velocity[:, i:i + 1]
             rest = self.signals(v, np.zeros_like(v))[:, 0, :]  # armature: no rest part
             for j, kind in enumerate(self.kinds):
                 momentum = v[:, 0] if kind == ARMATURE else zeros
-                out[:, i, 12 * n + k * i + j] = _filtered(momentum, rest[:, j], h, tau, used)
+                out[:, i, layout.term(i, j)] = _filtered(momentum, rest[:, j], h, tau, used)
             if self.asymmetric_coulomb or self.smooth_coulomb is not None:
-                out[:, i, 10 * n + 2 * i + 1] = _filtered(zeros, self.coulomb(v)[:, 0], h,
-                                                          tau, used)
+                out[:, i, layout.coulomb(i)] = _filtered(zeros, self.coulomb(v)[:, 0], h,
+                                                         tau, used)
         return out
 
     def units(self, kinds_of_joints: list[str]) -> list[str]:

@@ -13,6 +13,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..native_library import load_library
+from .layout import ParameterLayout
 
 _double_p = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
 _int_p = np.ctypeslib.ndpointer(dtype=np.int32, flags="C_CONTIGUOUS")
@@ -154,7 +155,7 @@ class RigidBody:
                              *flat, float(coulomb_velocity))
         if status != 0:
             raise ValueError(f"rigid-body model rejected: {STATUS.get(status, status)}")
-        self.parameter_count = 12 * self.n
+        self.parameter_count = ParameterLayout(self.n).standard_size
 
     def inverse_dynamics(self, q, qd, qdd, gravity: bool = True,
                          friction: bool = True) -> np.ndarray:

@@ -55,6 +55,7 @@ from .joint_terms import (
     check_directions,
     write_sidecar,
 )
+from .layout import ParameterLayout
 from .log_units import LogUnits
 from .model_class import TermsChoice, choose_joint_terms
 from .native import core_defaults
@@ -197,26 +198,28 @@ class Identification:
         """The 12 n parameters identified.urdf holds: with asymmetric Coulomb friction
         (unless the URDF's values are kept), each joint's Coulomb friction is the mean
         of its two levels."""
-        pi = self.pi[:12 * n].copy()
+        layout = ParameterLayout(n)
+        pi = self.pi[layout.standard].copy()
         if self.terms.asymmetric_coulomb and not self.urdf_kept:
             levels = self.term_values(n)
             kinds = list(self.terms.kinds)
-            pi[10 * n + 1::2] = 0.5 * (levels[:, kinds.index(COULOMB_POSITIVE)] +
-                                       levels[:, kinds.index(COULOMB_NEGATIVE)])
+            pi[layout.coulomb_levels] = 0.5 * (levels[:, kinds.index(COULOMB_POSITIVE)] +
+                                               levels[:, kinds.index(COULOMB_NEGATIVE)])
         return pi
 
     def term_values(self, n: int) -> np.ndarray:
         """(n, k): each joint's extra terms (terms.kinds' order)."""
-        return self.pi[12 * n:].reshape(n, len(self.terms.kinds))
+        return ParameterLayout(n, len(self.terms.kinds)).split(self.pi)[2]
 
     def term_std_errors(self, n: int) -> np.ndarray:
         """(k n,): each extra term's standard error where the term is a base parameter
         by itself (no other parameter folded into it), NaN where it is not identified
         alone."""
         out = np.full(self.terms.count(n), np.nan)
+        start = ParameterLayout(n).standard_size  # the terms' first column
         for row, column in enumerate(self.base.base):
-            if column >= 12 * n and not np.any(np.abs(self.base.K[row]) > 1e-9):
-                out[column - 12 * n] = self.fit.std_error[row]
+            if column >= start and not np.any(np.abs(self.base.K[row]) > 1e-9):
+                out[column - start] = self.fit.std_error[row]
         return out
 
 
@@ -350,7 +353,8 @@ def regression_rows(robot: Robot, body, log: JointLog, method: str, window: floa
 
 def known_columns(n: int, base: BaseParameters) -> np.ndarray:
     """The standard parameters taken as the URDF's (neither base nor folded into one)."""
-    return np.setdiff1d(np.arange(12 * n), np.union1d(base.base, base.dependent))
+    layout = ParameterLayout(n)
+    return np.setdiff1d(layout.indices(layout.standard), np.union1d(base.base, base.dependent))
 
 
 def _identified(robot: Robot, rows: Rows, base: BaseParameters, Y: np.ndarray,
@@ -487,6 +491,7 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
     urdf = out / "identified.urdf"
     kept = result.urdf_kept
     standard = result.standard(n)
+    layout = ParameterLayout(n, len(result.terms.kinds))
     write_identified_urdf(robot, standard, urdf,
                           f"the input URDF's inertials and joint dynamics, kept: the model "
                           f"identified from {data_name} predicts it worse (summary.json)"
@@ -495,14 +500,15 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
                           f"python -m harness identify")
     sidecar = out / SIDECAR_NAME
     write_sidecar(sidecar, result.terms, names, [joint.kind for joint in robot.joints],
-                  None if kept or not result.terms.any else result.pi[12 * n:],
+                  None if kept or not result.terms.any else result.pi[layout.extra],
                   result.term_std_errors(n))
     summary = out / "summary.json"
     write_json(summary, {
         "joints": names,
-        "viscous": dict(zip(names, standard[10 * n::2].tolist())),
-        "coulomb": dict(zip(names, standard[10 * n + 1::2].tolist())),
-        "masses": dict(zip([j.child_link for j in robot.joints], result.pi[:10 * n:10].tolist())),
+        "viscous": dict(zip(names, standard[layout.viscous_levels].tolist())),
+        "coulomb": dict(zip(names, standard[layout.coulomb_levels].tolist())),
+        "masses": dict(zip([j.child_link for j in robot.joints],
+                           result.pi[layout.masses].tolist())),
         "residual_rms": dict(zip(names, result.fit.equation_rms.tolist())),
         "condition_number": result.fit.condition,
         "base_parameters": result.base.count,

@@ -20,6 +20,7 @@ import numpy as np
 from lxml import etree
 
 from ..inputs import xml_parser
+from .layout import ParameterLayout, core_layout
 from .native import core_defaults
 
 MOVING_TYPES = {"revolute": 0, "continuous": 0, "prismatic": 1}  # -> RbJointType
@@ -86,7 +87,7 @@ class Robot:
     def parameters(self) -> np.ndarray:
         """The nominal parameter vector pi (12 n) of the regressor."""
         a = self.arrays()
-        return np.concatenate([a["link"].ravel(), a["friction"].ravel()])
+        return ParameterLayout(self.n).join(a["link"], a["friction"])
 
     def rigid_body(self, link: np.ndarray | None = None, friction: np.ndarray | None = None,
                    coulomb_velocity: float = 0.0):
@@ -377,7 +378,8 @@ class _Chain:
             raise UrdfError(f"{where}: mimics another joint; lock it (--lock {joint.get('name')})")
         kind = "prismatic" if joint.get("type") == "prismatic" else "revolute"
         body = ChainJoint(joint.get("name"), kind, child, axis / np.linalg.norm(axis), p,
-                          matrix_rpy(R), np.zeros(10), damping, friction)
+                          matrix_rpy(R), np.zeros(core_layout().link_size), damping,
+                          friction)
         self.joints.append(body)
         return body
 

@@ -31,6 +31,7 @@ from .joint_terms import (
     Sidecar,
     read_sidecar,
 )
+from .layout import ParameterLayout, core_layout
 from .pipeline import JointLog, LogError, savitzky_golay, smooth_column
 from .smoothing import regression_window, velocity_windows
 from .urdf import Robot
@@ -51,7 +52,7 @@ def coulomb_torque(robot: Robot, qd: np.ndarray, sidecar: Sidecar | None = None
                    ) -> np.ndarray:
     """The Coulomb friction (N, n) that a URDF's model (with a sidecar's terms) predicts at
     the velocities qd: a step at every reversal."""
-    coulomb = robot.arrays()["friction"][:, 1]
+    coulomb = robot.arrays()["friction"][:, core_layout().coulomb]
     return (coulomb[None, :] * np.sign(qd) if sidecar is None
             else sidecar.coulomb_torque(qd, coulomb))
 
@@ -66,15 +67,15 @@ def filtered_friction_columns(log: JointLog, qd: np.ndarray, window: float,
     terms = terms or JointTerms()
     out: dict[int, tuple[int, np.ndarray]] = {}
     coulomb = filtered(log, terms.coulomb(qd), window)
+    layout = ParameterLayout(n, len(terms.kinds))
     for i in range(n):
-        out[10 * n + 2 * i + 1] = (i, coulomb[:, i])
-    k = len(terms.kinds)
+        out[layout.coulomb(i)] = (i, coulomb[:, i])
     signals = terms.signals(qd, np.zeros_like(qd))
     for j, kind in enumerate(terms.kinds):
         if kind in (COULOMB_POSITIVE, COULOMB_NEGATIVE):
             level = filtered(log, signals[:, :, j], window)
             for i in range(n):
-                out[12 * n + k * i + j] = (i, level[:, i])
+                out[layout.term(i, j)] = (i, level[:, i])
     return out
 
 
@@ -97,7 +98,7 @@ def torque_errors(robot: Robot, log: JointLog, window: float, sidecar: Sidecar |
     predicted = robot.rigid_body().inverse_dynamics(q[inside], qd[inside], qdd[inside])
     if sidecar is not None:
         predicted += sidecar.torque_change(qd[inside], qdd[inside],
-                                           robot.arrays()["friction"][:, 1])
+                                           robot.arrays()["friction"][:, core_layout().coulomb])
     # the model's Coulomb steps through the filter the measured torque passed
     steps = coulomb_torque(robot, qd, sidecar)
     predicted += (filtered(log, steps, window) - steps)[inside]

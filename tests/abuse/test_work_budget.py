@@ -21,6 +21,7 @@ import time
 import pytest
 from fmu.fmi_helpers import RawFMU3
 
+from harness.robot.layout import ParameterLayout
 from tools.abuse.abuse_fmi import ERROR, MODELS, OK, REPO, Raw, assert_usable_after_reset, isolated
 
 OBS, PEN, CTL, ROBOT, *_ = MODELS
@@ -37,7 +38,8 @@ def robot(n: int, identifier: int, p: int) -> dict:
     parameters = {"n": n, "identifier": identifier,
                   **{f"f_plus[{i + 1}]": 1000.0 for i in range(n)}}
     if identifier:
-        first = 0 if p == 12 * n else 10 * n  # all columns, or the friction columns
+        layout = ParameterLayout(n)
+        first = 0 if p == layout.standard_size else layout.link_end  # all, or the friction
         parameters["base_count"] = p
         parameters.update({f"base_columns[{k + 1}]": first + k for k in range(p)})
     return parameters

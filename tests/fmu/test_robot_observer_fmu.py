@@ -9,6 +9,7 @@ from fmpy import simulate_fmu
 
 from harness.robot.examples import example_urdf
 from harness.robot.fmu import INTEGERS, fmu_parameters, run_fmu, start_values
+from harness.robot.layout import ParameterLayout
 from harness.robot.pipeline import JointLog
 from harness.robot.urdf import read_urdf
 from tests.conftest import fmu_path
@@ -28,7 +29,8 @@ def case():
     link = payload_link(robot.arrays()["link"])
     truth = robot.rigid_body(link=link, friction=FRICTION)
     t, q, qd, _, tau = multisine_log(truth, 1.0, H)
-    pi = np.concatenate([link.ravel(), np.zeros(4)])
+    layout = ParameterLayout(robot.n)
+    pi = layout.join(link, np.zeros(layout.friction_size * robot.n))
     parameters = fmu_parameters(robot, unknown="payload", f_plus=F_PLUS, pi=pi, t_id=0.2,
                                 torque_scale=np.sqrt(np.mean(tau ** 2, axis=0)))
     offline = robot.rigid_body(link=link, friction=np.zeros((2, 2))).observe(

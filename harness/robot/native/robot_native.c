@@ -18,6 +18,18 @@ size_t rn_model_size(void) { return sizeof(RigidBodyModel); }
 
 int rn_max_joints(void) { return RB_MAX_JOINTS; }
 
+/* The parameter vector's layout (rigid_body.h), so that the harness keeps no copy of
+ * it: a link's parameter count, a joint's friction count, and the offsets of the mass
+ * in a link's parameters and of the viscous and Coulomb levels in a joint's friction. */
+void rn_layout(int out[5])
+{
+    out[0] = RB_LINK_PARAMETERS;
+    out[1] = RB_JOINT_FRICTION;
+    out[2] = RB_MASS;
+    out[3] = RB_VISCOUS;
+    out[4] = RB_COULOMB;
+}
+
 /* The core's defaults that the harness shares (tuning.h): the regression's
  * min_speed and reversal_margin, the statistics' interval. */
 void rn_defaults(double out[3])

@@ -29,6 +29,7 @@ from harness.robot.consistency import (
     regularized_prior,
 )
 from harness.robot.examples import example_urdf
+from harness.robot.layout import ParameterLayout
 from harness.robot.urdf import read_urdf
 
 
@@ -187,7 +188,7 @@ def test_an_identified_model_worse_than_the_urdf_keeps_the_urdf(tmp_path, monkey
 
     def wrong(*args, **kwargs):
         projection = right(*args, **kwargs)
-        projection.pi[10:20] *= 3.0
+        projection.pi[ParameterLayout(robot.n).link(1)] *= 3.0
         return projection
     monkeypatch.setattr(pipeline, "consistent_parameters", wrong)
     summary = identify(data, path, tmp_path / "out", status=1)
@@ -227,16 +228,17 @@ def test_the_prior_scales_have_no_absolute_floor():
     link's mass times its size, a massless link the data's scale."""
     from harness.robot.consistency import prior_scales
     n = 2
-    nominal = np.zeros(12 * n)
+    layout = ParameterLayout(n)
+    nominal = np.zeros(layout.size)
     moment = 0.04 / 3  # size sqrt(tr I / 2 m) = 0.1 m
-    nominal[:10] = [2.0, 0.0, 0.0, 0.0, moment, 0.0, moment, 0.0, 0.0, moment]
-    data = np.full(12 * n, 7.0)
-    data[20] = 300.0  # joint 1's viscous friction
+    nominal[layout.link(0)] = [2.0, 0.0, 0.0, 0.0, moment, 0.0, moment, 0.0, 0.0, moment]
+    data = np.full(layout.size, 7.0)
+    data[layout.viscous(0)] = 300.0
     scale = prior_scales(nominal, n, data)
     assert scale[0] == 2.0 and np.isclose(scale[1], 0.2) and np.isclose(scale[5], 0.02)
     assert np.isclose(scale[4], 0.02) and 0.02 > moment  # m l^2, the larger
-    assert scale[20] == 300.0 and np.all(scale[10:20] == 7.0)
-    assert prior_scales(nominal, n, np.full(12 * n, np.inf))[21] == 1.0
+    assert scale[layout.viscous(0)] == 300.0 and np.all(scale[layout.link(1)] == 7.0)
+    assert prior_scales(nominal, n, np.full(layout.size, np.inf))[layout.coulomb(0)] == 1.0
 
 
 def test_the_tolerance_is_refused_unless_positive(tmp_path, capsys):
@@ -332,10 +334,11 @@ def _example(name: str, scale: float = 1.0, tmp_path=None):
     robot = read_urdf(path, locked=locked)
     base = base_parameters(robot.rigid_body(), robot.arrays()["types"], robot.joint_names)
     n = robot.n
+    layout = ParameterLayout(n)
     rng = np.random.default_rng(1)
     truth = robot.parameters().copy()
-    truth[:10 * n] *= np.repeat(rng.uniform(0.8, 1.2, n), 10)
-    truth[10 * n:] = np.column_stack([rng.uniform(0.2, 1.0, n),
+    truth[layout.links] *= np.repeat(rng.uniform(0.8, 1.2, n), layout.link_size)
+    truth[layout.friction] = np.column_stack([rng.uniform(0.2, 1.0, n),
                                       rng.uniform(0.5, 2.0, n)]).ravel()
     prior = robot
     if scale != 1.0:
@@ -351,8 +354,9 @@ def _ur5(scale: float = 1.0, tmp_path=None):
 
 def _assert_psd(robot, projection):
     """Every link's pseudo-inertia positive semidefinite to the solver's tolerance."""
+    layout = ParameterLayout(robot.n)
     for i in range(robot.n):
-        J = pseudo_inertia(projection.pi[10 * i:10 * i + 10])
+        J = pseudo_inertia(projection.pi[layout.link(i)])
         assert np.linalg.eigvalsh(J)[0] >= -1e-8 * np.abs(J).max(), (i, np.linalg.eigvalsh(J))
 
 
@@ -395,7 +399,7 @@ def test_the_projection_is_a_no_op_on_a_consistent_estimate_equal_to_the_urdf():
     p = consistent_parameters(robot, base, beta, covariance, None, 0.3)
     assert p.status == "optimal"
     n = robot.n
-    scale = prior_scales(nominal, n, np.full(12 * n, np.nan))
+    scale = prior_scales(nominal, n, np.full(ParameterLayout(n).size, np.nan))
     # the solver's gap (1e-8) allows sqrt(1e-8 / prior weight) in the directions only the
     # prior holds: 2e-5 of the scale
     assert np.all(np.abs(p.pi - nominal) <= 1e-4 * scale), np.abs(p.pi - nominal) / scale
@@ -424,8 +428,9 @@ def test_rich_data_overrule_a_urdf_twice_the_truth(tmp_path):
     _assert_psd(robot, p)
     # the prior decides what the data leave open: the links' divergence from the wrong
     # URDF, 3.0 in all, is below the truth's 4.6 (not link by link: they trade)
-    truth_divergence = sum(divergence(pseudo_inertia(truth[10 * i:10 * i + 10]),
-                                      pseudo_inertia(prior.parameters()[10 * i:10 * i + 10]))
+    layout = ParameterLayout(robot.n)
+    truth_divergence = sum(divergence(pseudo_inertia(truth[layout.link(i)]),
+                                      pseudo_inertia(prior.parameters()[layout.link(i)]))
                            for i in range(robot.n))
     assert p.link_divergence.sum() < truth_divergence, (p.link_divergence, truth_divergence)
 
@@ -445,7 +450,8 @@ def test_a_massless_urdf_link_gets_a_regular_prior(tmp_path):
                 link.remove(inertial)
     tree.write(str(tmp_path / "massless.urdf"))
     massless = read_urdf(tmp_path / "massless.urdf")
-    assert massless.parameters()[10] == 0.0
+    layout = ParameterLayout(massless.n)
+    assert massless.parameters()[layout.mass(1)] == 0.0
     base = base_parameters(robot.rigid_body(), robot.arrays()["types"], robot.joint_names)
     beta = base.project(robot.parameters())
     covariance = np.diag((1e-3 * np.abs(beta) + 1e-6) ** 2)
@@ -455,12 +461,12 @@ def test_a_massless_urdf_link_gets_a_regular_prior(tmp_path):
     # the base parameters as the data say; link 2's mass (no base parameter of the
     # planar arm: the prior's) 0.36 kg against the truth's 0.33
     assert p.distance < 1.0, p.distance
-    assert 0.3 < p.pi[10] < 0.4, p.pi[10]
-    J0 = pseudo_inertia(massless.parameters()[10:20])
+    assert 0.3 < p.pi[layout.mass(1)] < 0.4, p.pi[layout.mass(1)]
+    J0 = pseudo_inertia(massless.parameters()[layout.link(1)])
     reference = reference_body(massless.parameters(), massless.n)
     lifted = regularized_prior(J0, reference)
     assert np.allclose(lifted, SINGULAR_FLOOR * reference)
-    real = pseudo_inertia(robot.parameters()[:10])
+    real = pseudo_inertia(robot.parameters()[layout.link(0)])
     assert regularized_prior(real, reference) is real  # a link with a body: unchanged
 
 

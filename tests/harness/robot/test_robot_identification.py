@@ -8,6 +8,7 @@ import pytest
 from harness.model.fit import fit as least_squares
 from harness.robot.base_parameters import base_parameters, random_states
 from harness.robot.examples import example_urdf
+from harness.robot.layout import ParameterLayout
 from harness.robot.urdf import read_urdf
 
 # known counts: planar 2R (6 inertial), UR5 (36), Panda (43), plus 2 friction per joint
@@ -30,7 +31,7 @@ def test_base_parameters_reproduce_the_torques(example, unknown):
     rng = np.random.default_rng(4)
     Y = body.regressor(*random_states(types, 100, rng))
     # any change of the unknown parameters moves the torques as its base projection does
-    change = np.zeros(12 * robot.n)
+    change = np.zeros(ParameterLayout(robot.n).size)
     change[base.base] = rng.normal(size=base.count)
     change[base.dependent] = rng.normal(size=len(base.dependent))
     exact = Y @ change
@@ -43,7 +44,7 @@ def test_offline_least_squares_is_exact_without_noise():
     robot, body, types, base = setup("ur5")
     rng = np.random.default_rng(5)
     q, qd, qdd = random_states(types, 400, rng)
-    truth = robot.parameters() * rng.uniform(0.7, 1.3, 12 * robot.n)
+    truth = robot.parameters() * rng.uniform(0.7, 1.3, ParameterLayout(robot.n).size)
     tau = body.regressor(q, qd, qdd) @ truth
     fit = least_squares(base.regressor(body.regressor(q, qd, qdd)), tau,
                         base.project(robot.parameters()))

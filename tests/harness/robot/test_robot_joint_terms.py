@@ -14,6 +14,7 @@ from harness.cli import main
 from harness.robot.base_parameters import base_parameters, random_states
 from harness.robot.examples import example_urdf
 from harness.robot.joint_terms import JointTerms, JointTermsError, parse_terms, read_sidecar
+from harness.robot.layout import ParameterLayout
 from harness.robot.urdf import read_urdf
 
 OFFSET = np.array([0.3, -0.2])          # N.m
@@ -296,11 +297,11 @@ def test_the_base_parameters_with_terms_reproduce_the_torques(arm):
     rng = np.random.default_rng(1)
     q, qd, qdd = random_states(robot.arrays()["types"], 50, rng)
     Y = terms.extend(body.regressor(q, qd, qdd), qd, qdd)
-    n = robot.n
-    assert Y.shape == (50, n, 12 * n + 4 * n)
-    assert np.all(Y[:, :, 10 * n + 1:12 * n:2] == 0)  # the core's Coulomb column replaced
-    pi = np.concatenate([robot.parameters(), rng.uniform(0.1, 1, 4 * n)])
-    pi[10 * n + 1:12 * n:2] = 0.0  # replaced: not a parameter of this model
+    layout = ParameterLayout(robot.n, len(terms.kinds))
+    assert Y.shape == (50, robot.n, layout.size)
+    assert np.all(Y[:, :, layout.coulomb_levels] == 0)  # the core's Coulomb column replaced
+    pi = np.concatenate([robot.parameters(), rng.uniform(0.1, 1, terms.count(robot.n))])
+    pi[layout.coulomb_levels] = 0.0  # replaced: not a parameter of this model
     assert np.allclose(base.regressor(Y) @ base.project(pi), Y @ pi, atol=1e-9)
     offsets = [f"{j}.offset" for j in robot.joint_names]
     assert set(offsets) <= set(base.dependent_names)

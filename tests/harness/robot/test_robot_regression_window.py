@@ -8,6 +8,7 @@ import pytest
 from robot_helpers import FRICTION, multisine_log, payload_link
 
 from harness.robot.examples import example_urdf
+from harness.robot.layout import ParameterLayout
 from harness.robot.pipeline import JointLog, identify_robot
 from harness.robot.smoothing import SHORTEST_REGRESSION_WINDOW, regression_window
 from harness.robot.urdf import read_urdf
@@ -32,9 +33,8 @@ def test_the_window_is_the_longest_velocity_window_at_least_the_floor():
 def model_error(robot, result, log) -> float:
     """The identified consistent model's torque error on the exact states (pooled)."""
     t, q, qd, qdd, tau = log
-    n = robot.n
-    body = robot.rigid_body(link=result.pi[:10 * n].reshape(n, 10),
-                            friction=result.pi[10 * n:].reshape(n, 2))
+    link, friction, _ = ParameterLayout(robot.n).split(result.pi)
+    body = robot.rigid_body(link=link, friction=friction)
     return float(np.linalg.norm(body.inverse_dynamics(q, qd, qdd) - tau) / np.linalg.norm(tau))
 
 

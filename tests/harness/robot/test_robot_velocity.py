@@ -14,6 +14,7 @@ from scipy.signal import lfilter, ss2tf
 
 from harness.robot.examples import example_urdf
 from harness.robot.filtered_regression import filtered_regression
+from harness.robot.layout import ParameterLayout
 from harness.robot.pipeline import JointLog, observer_velocities
 from harness.robot.smoothing import adaptive_velocities, noise_std
 from harness.robot.urdf import read_urdf
@@ -119,7 +120,7 @@ def test_the_filtered_regression_is_exact(arm_log, time_constant):
     pi = np.concatenate([link.ravel(), FRICTION.ravel()])
     used = np.arange(SKIP, len(t), 3)
     Y, z = filtered_regression(robot.rigid_body(), q, qd, tau, H, time_constant, used)
-    assert Y.shape == (len(used), 2, 24) and z.shape == (len(used), 2)
+    assert Y.shape == (len(used), 2, ParameterLayout(2).size) and z.shape == (len(used), 2)
     relative = np.sqrt(np.mean((Y @ pi - z) ** 2, axis=0) / np.mean(z ** 2, axis=0))
     assert np.all(relative < 2e-5), relative
 
