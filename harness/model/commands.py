@@ -41,7 +41,7 @@ from .identification import (
 from .log import LogFileError, ModelLog, read_log
 from .model import Model
 from .reader import read_model
-from .scores import reconstruction_error, simulation_error
+from .scores import independent_scores
 from .selection import CLASS_TOLERANCE, POWER_ABOVE, Choice
 from .zero_phase import Regression, derivatives, regression
 
@@ -81,8 +81,7 @@ def identify_command(args: argparse.Namespace) -> int:
             _check_finite(found)
             acceleration = derivatives(log, found.rows.settings).qdd
             estimates = causal_estimates(log, acceleration)
-            scores = {"reconstruction_error": reconstruction_error(model, log, found.theta),
-                      "simulation_error": simulation_error(model, log, found.theta)}
+            scores = independent_scores(model, log, found.theta)
             _write_parameters(outputs.file("parameters.csv"), model, found)
             outputs.file("identified.toml").write_text(model_toml(
                 model, found.theta, found.std_error,
@@ -228,9 +227,10 @@ def _print_refinement(found: Identification) -> None:
         print(f"  output-error refinement not applied: {info.get('reason')}")
 
 
-def _print_scores(scores: dict[str, dict[str, Any]]) -> bool:
-    """The scores that share nothing with the pipeline; a diverging simulation is said
-    (False: the model is not to be trusted)."""
+def _print_scores(scores: dict[str, Any]) -> bool:
+    """The scores that share nothing with the pipeline; a diverging simulation and a model
+    that creates energy are said (False: the model is not to be trusted)."""
+    trusted = True
     reconstruction = scores["reconstruction_error"]
     if reconstruction["pooled"] is not None:
         print(f"  input reconstruction, raw central differences at the full rate: "
@@ -244,8 +244,15 @@ def _print_scores(scores: dict[str, dict[str, Any]]) -> bool:
         note(f"the model's simulation driven by the measured input diverges after "
              f"{simulation['diverged_at_s']:.4g} s: the model is unstable on this log (or "
              "the machine runs in closed loop, which the model file does not describe)")
-        return False
-    return True
+        trusted = False
+    energy = scores["creates_energy"]
+    if energy is not None and energy["share"] > 0:
+        note(f"the model creates energy: near rest at {100 * energy['share']:.0f} % of the "
+             f"log's positions the friction of {energy['coordinate']} is negative (a "
+             "negative viscous damping or Coulomb level), so its free response grows; "
+             "declare the friction parameters positive = true in the model file")
+        trusted = False
+    return trusted
 
 
 def _write_parameters(path: Path, model: Model, result: Identification) -> None:
@@ -304,8 +311,7 @@ def validate_command(args: argparse.Namespace) -> int:
                      names=VALIDATE_OUTPUTS) as outputs:
             model, log = _load(args)
             rows, predicted, per, pooled = validate_model(model, log)
-            scores = {"reconstruction_error": reconstruction_error(model, log, model.nominal),
-                      "simulation_error": simulation_error(model, log, model.nominal)}
+            scores = independent_scores(model, log, model.nominal)
             write_json(outputs.file("validation.json"), {
                 "model": model.source, "log": log.source, "resampled": log.resampled,
                 "relative_error": {"per_equation": per, "pooled": pooled},

@@ -207,3 +207,31 @@ def simulate_program(text: str, theta: np.ndarray, q0: np.ndarray, qd0: np.ndarr
     if status != 0:
         raise MemoryError("the native simulation ran out of memory")
     return q, qd, diverged.astype(int)
+
+
+def energy_check(text: str, theta: np.ndarray, q: np.ndarray, inputs: np.ndarray) -> np.ndarray:
+    """Per state (q: (samples, n), inputs: (samples, m), the model file's units), whether the
+    program's equations with parameters ``theta`` create energy near rest, by the core's C
+    (core/model_damping.h, the model FMU's ``negative_damping``): 0, or 1 + the coordinate
+    whose friction gives energy (-1 where an entry is not finite)."""
+    from ..native_library import load_library
+
+    function = load_library().sto_term_program_energy
+    pointer = ctypes.POINTER(ctypes.c_double)
+    function.argtypes = [ctypes.c_char_p, ctypes.c_size_t, ctypes.c_long, pointer, pointer,
+                         pointer, ctypes.POINTER(ctypes.c_int), ctypes.c_char_p,
+                         ctypes.c_size_t]
+    function.restype = ctypes.c_int
+    arrays = [np.ascontiguousarray(a, dtype=float) for a in (theta, q, inputs)]
+    which = np.zeros(q.shape[0], dtype=ctypes.c_int)
+    error = ctypes.create_string_buffer(512)
+    data = text.encode()
+    status = function(data, len(data), q.shape[0],
+                      *(a.ctypes.data_as(pointer) if a.size else
+                        np.zeros(1).ctypes.data_as(pointer) for a in arrays),
+                      which.ctypes.data_as(ctypes.POINTER(ctypes.c_int)), error, len(error))
+    if status == -1:
+        raise ProgramError(error.value.decode(errors="replace"))
+    if status != 0:
+        raise MemoryError("the native energy check ran out of memory")
+    return which.astype(int)

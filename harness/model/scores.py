@@ -5,6 +5,9 @@
   decimation) against the raw measured input. Noise in the positions enters the
   accelerations here unfiltered, so on a noisy log this figure has a floor, and it
   favours models that weigh the accelerations less: read it beside the simulation.
+* **Energy**: whether the model's friction gives energy near rest at the log's positions
+  (core/model_damping.h, the model FMU's ``negative_damping``): a model that does has a
+  growing free response, whatever this log's simulation shows.
 * **Simulation**: the model driven by the measured input from the measured initial state
   (position as logged, velocity by spectral differentiation), free run over the whole
   log; the RMS of each coordinate's error in its unit and relative to the RMS of the coordinate's
@@ -24,6 +27,7 @@ import numpy as np
 from .fit import relative_errors
 from .log import ModelLog
 from .model import Model
+from .program import ProgramError, compile_program, energy_check
 from .simulation import (
     Dynamics,
     Run,
@@ -41,6 +45,37 @@ def reference_velocity(log: ModelLog) -> np.ndarray:
     for a band-limited motion, noisy where the positions are): the runs fit their initial
     state."""
     return spectral(log.q, log.step, 1)
+
+
+#: The log's states at which the energy check runs (evenly spread).
+ENERGY_STATES = 200
+
+
+def independent_scores(model: Model, log: ModelLog, theta: np.ndarray) -> dict[str, Any]:
+    """The scores of a model on a log that share nothing with the pipeline, by their keys
+    in identification.json and validation.json."""
+    return {"reconstruction_error": reconstruction_error(model, log, theta),
+            "simulation_error": simulation_error(model, log, theta),
+            "creates_energy": creates_energy(model, log, theta)}
+
+
+def creates_energy(model: Model, log: ModelLog, theta: np.ndarray) -> dict[str, Any] | None:
+    """At ENERGY_STATES of the log's positions and inputs, whether the model's friction
+    gives energy near rest; the share of those states and the first coordinate whose
+    friction does. None for a model the core's term program cannot hold (not checked)."""
+    try:
+        text = compile_program(model)
+    except ProgramError:
+        return None
+    take = np.unique(np.linspace(0, log.samples - 1, ENERGY_STATES).round().astype(int))
+    inputs = log.inputs[take] if model.inputs else np.zeros((len(take), 0))
+    which = energy_check(text, np.asarray(theta, float), log.q[take], inputs)
+    bad = which[which > 0]
+    return {"share": float(len(bad) / len(take)), "states": int(len(take)),
+            "coordinate": model.coordinates[bad[0] - 1] if len(bad) else None,
+            "definition": "near rest at the log's positions: the damping d equations / d "
+                          "velocities has a negative eigenvalue or a Coulomb level is "
+                          "negative (the model's free response grows)"}
 
 
 def reconstruction_error(model: Model, log: ModelLog, theta: np.ndarray) -> dict[str, Any]:

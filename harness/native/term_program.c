@@ -1,9 +1,11 @@
 /* The native library's entry points of the term program (core/term_program.h):
  * a model file's regressor, compiled to its text form by harness/model/program.py,
  * evaluated over a whole log by the same C the FMU runs, and its equations
- * simulated (core/model_simulation.h; harness/model/simulation.py). */
+ * simulated (core/model_simulation.h; harness/model/simulation.py), and checked for
+ * friction that gives energy (core/model_damping.h). */
 #include <stdlib.h>
 
+#include "model_damping.h"
 #include "model_simulation.h"
 #include "term_program.h"
 
@@ -66,6 +68,28 @@ int sto_term_program_simulate(const char *text, size_t length, int runs, long sa
     if (!program) return status;
     const MsShape shape = {runs, samples, parts, step};
     ms_simulate(program, shape, theta, q0, qd0, u, limit, q, qd, diverged);
+    free(program);
+    return 0;
+}
+
+/* At each of `samples` states (q: samples x n, u: samples x m), whether the
+ * equations with the parameters theta (p) create energy near rest
+ * (md_creates_energy: 0, or 1 + the coordinate; -1 where an entry is not
+ * finite) into which[samples].  Returns 0, -1 for a text tp_parse refuses (its
+ * message in error), -2 out of memory. */
+int sto_term_program_energy(const char *text, size_t length, long samples, const double *theta,
+                            const double *q, const double *u, int *which, char *error,
+                            size_t error_size)
+{
+    int status;
+    TermProgram *program = parsed(text, length, error, error_size, &status);
+    if (!program) return status;
+    for (long s = 0; s < samples; ++s) {
+        MdDamping damping;
+        which[s] = md_damping(program, theta, q + s * program->n, u + s * program->m, &damping)
+                       ? -1
+                       : md_creates_energy(program->n, &damping);
+    }
     free(program);
     return 0;
 }

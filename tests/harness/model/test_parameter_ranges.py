@@ -208,3 +208,20 @@ def test_the_fmu_flags_a_model_that_creates_energy(oscillator, capfd):
         flags[sign] = (bool(np.all(result["observer.negative_damping"][1:])),
                        messages.count("created energy"))
     assert flags[-1] == (True, 1) and flags[1] == (False, 0), flags
+
+
+def test_validate_says_a_model_creates_energy(oscillator, capsys):
+    """A negative damping: validate exits 1 with a warning and records the share of the
+    log's positions where the friction gives energy (all of them); the positive one is
+    not flagged."""
+    folder, log = oscillator
+    for sign, code, share in ((-1, 1, 1.0), (1, 0, 0.0)):
+        path = folder / f"validate{sign}.toml"
+        path.write_text(MODEL.format(m="", d="", k="").replace("nominal = 0.5",
+                                                                f"nominal = {0.5 * sign}"),
+                        encoding="utf-8")
+        out = folder / f"validated{sign}"
+        assert main(["validate", str(log), "--model", str(path), "--out", str(out)]) == code
+        energy = json.loads((out / "validation.json").read_text())["creates_energy"]
+        assert energy["share"] == share and energy["states"] == 200
+        assert ("creates energy" in capsys.readouterr().err) == (sign < 0)
