@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import csv
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -38,6 +39,7 @@ from .identification import (
     NotExcitedError,
     identify_model,
 )
+from .input_timing import InputTiming, choose_input_timing
 from .log import LogFileError, ModelLog, read_log
 from .model import Model
 from .reader import read_model
@@ -81,10 +83,12 @@ def identify_command(args: argparse.Namespace) -> int:
             _check_finite(found)
             acceleration = derivatives(log, found.rows.settings).qdd
             estimates = causal_estimates(log, acceleration)
-            scores = independent_scores(model, log, found.theta)
+            scores = independent_scores(model, found.log, found.theta)
             _write_parameters(outputs.file("parameters.csv"), model, found)
+            timing = found.input_timing
             outputs.file("identified.toml").write_text(model_toml(
-                model, found.theta, found.std_error,
+                replace(model, input_timing=timing.name if timing and model.inputs else None),
+                found.theta, found.std_error,
                 header=[f"{plain(Path(args.model).name)} identified from "
                         f"{plain(Path(args.data).name)} by sto-harness identify "
                         f"({found.method}); std errors: sandwich, 1 sigma"]),
@@ -110,6 +114,8 @@ def identify_command(args: argparse.Namespace) -> int:
                if p.name in found.held else f"+- {found.std_error[k]:.2g} (1 sigma)"))
     _print_class(found)
     _print_choice(found.choice, refined=found.method == "output error")
+    if found.input_timing:
+        _print_timing(found.input_timing)
     _print_refinement(found)
     print(f"  input reconstruction error on this log: {100 * found.pooled:.3f} % (through the "
           "chosen pipeline)")
@@ -213,6 +219,13 @@ def _print_held(found: Identification) -> None:
             print(f"  {text}: within {HELD_SIGNIFICANT:g} standard errors of the range")
 
 
+def _print_timing(timing: InputTiming) -> None:
+    """How the inputs act between samples in the simulations, and why."""
+    scores = ", ".join(f"{name} {100 * e:.4g} %" for name, e in timing.scores.items())
+    print(f"  inputs between samples: {timing.name} "
+          f"({timing.method}{': ' + scores if scores else ''})")
+
+
 def _print_refinement(found: Identification) -> None:
     info = found.refinement
     held_out = info.get("held_out_simulation_error")
@@ -282,6 +295,7 @@ def _summary(found: Identification, estimates: Estimates) -> dict[str, object]:
                           for k, p in enumerate(model.parameters)},
         "refinement": found.refinement,
         "held_at_range": found.held,
+        "input_timing": found.input_timing.as_dict() if found.input_timing else None,
         "model_class": found.model_class.as_dict() if found.model_class else None,
         "relative_error": {"per_equation": found.per_equation, "pooled": found.pooled},
         "pipeline": found.rows.settings.as_dict(), "rows": least.rows,
@@ -311,7 +325,8 @@ def validate_command(args: argparse.Namespace) -> int:
                      names=VALIDATE_OUTPUTS) as outputs:
             model, log = _load(args)
             rows, predicted, per, pooled = validate_model(model, log)
-            scores = independent_scores(model, log, model.nominal)
+            timing = choose_input_timing(model, log, rows.settings, model.nominal)
+            scores = independent_scores(model, timing.log, model.nominal)
             write_json(outputs.file("validation.json"), {
                 "model": model.source, "log": log.source, "resampled": log.resampled,
                 "relative_error": {"per_equation": per, "pooled": pooled},
@@ -319,7 +334,7 @@ def validate_command(args: argparse.Namespace) -> int:
                               "the zero-phase pipeline; r: each equation's known side",
                 "parameters": {p.name: p.nominal for p in model.parameters},
                 "pipeline": rows.settings.as_dict(), "rows": int(rows.Y.shape[0]),
-                **scores,
+                "input_timing": timing.as_dict(), **scores,
             })
             plot_validation(rows.t, rows.r, predicted, model, outputs.file("validation.png"),
                             f"validate: {Path(args.data).name}, relative error "
@@ -331,4 +346,5 @@ def validate_command(args: argparse.Namespace) -> int:
         print(f"  equation {i}: relative error "
               + ("n/a (its known side is zero)" if e is None else f"{100 * e:.3f} %"))
     print(f"  pooled: {100 * pooled:.3f} % (through the zero-phase pipeline)")
+    _print_timing(timing)
     return 0 if _print_scores(scores) else 1

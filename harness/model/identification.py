@@ -2,10 +2,12 @@
 
 1. the derivative pipeline chosen by blocked cross-validation
    (:func:`harness.model.selection.choose_pipeline`);
-2. least squares on its regressor rows (:func:`harness.model.fit.fit`), refused when an
+2. how the inputs act between samples, held or sampled
+   (:func:`harness.model.input_timing.choose_input_timing`);
+3. least squares on its regressor rows (:func:`harness.model.fit.fit`), refused when an
    unknown is not excited; the parameters marked optional kept or left out (at 0) by the
    same cross-validation (:func:`harness.model.selection.choose_class`);
-3. the output-error refinement (:mod:`harness.model.refine`): always, never, or (auto)
+4. the output-error refinement (:mod:`harness.model.refine`): always, never, or (auto)
    when it lowers the simulation error on held-out halves of the log.
 """
 from __future__ import annotations
@@ -16,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from .fit import BATCH_SAMPLES, Fit, fit, relative_errors
+from .input_timing import InputTiming, choose_input_timing
 from .log import ModelLog
 from .model import Model
 from .refine import check_on_halves, refine
@@ -58,6 +61,9 @@ class Identification:
     #: the unknowns the estimate holds at an end of their declared range: name -> the end
     #: ("lower", "upper") and the least squares without the ranges (None if they kept it)
     held: dict[str, dict[str, Any]] = field(default_factory=dict)
+    #: how the inputs act between samples (``log`` is the log as identified: a held
+    #: input's samples half a sample later)
+    input_timing: InputTiming | None = None
 
 
 def identify_model(model: Model, log: ModelLog, refine_mode: str = "auto") -> Identification:
@@ -66,6 +72,8 @@ def identify_model(model: Model, log: ModelLog, refine_mode: str = "auto") -> Id
     if refine_mode not in REFINE_MODES:
         raise ValueError(f"refine mode {refine_mode!r} is not one of {', '.join(REFINE_MODES)}")
     choice = choose_pipeline(model, log)
+    timing = choose_input_timing(model, log, choice.settings)
+    log = timing.log  # a held input's samples, half a sample later
     rows = regression(model, log, choice.settings)
     batch = max(1, round(BATCH_SAMPLES / choice.settings.decimation))
     least = fit(rows.Y, rows.r, model.nominal, batch=batch, mask=rows.mask,
@@ -95,7 +103,7 @@ def identify_model(model: Model, log: ModelLog, refine_mode: str = "auto") -> Id
     theta, std, method, info = _refined(model, log, rows, least, refine_mode, free & ~held)
     per, pooled = relative_errors(rows.Y, rows.r, theta)
     return Identification(model, log, rows, least, theta, std, method, per, pooled, choice,
-                          info, model_class, _held(model, theta, least))
+                          info, model_class, _held(model, theta, least), timing)
 
 
 def _held(model: Model, theta: np.ndarray, least: Fit) -> dict[str, dict[str, Any]]:

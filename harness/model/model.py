@@ -13,6 +13,11 @@ from .expressions import Symbols
 from .numeric import as_samples, compile_regressor, rms_columns, stack
 from .units import si_factor
 
+#: How a log's inputs act between their samples ([log] inputs): held until the next sample
+#: (a digital controller's output: a zero-order hold, which delays them by half a
+#: sample), or samples of a continuous signal.
+INPUT_TIMINGS = ("held", "sampled")
+
 
 @dataclass(frozen=True)
 class Parameter:
@@ -82,6 +87,7 @@ class Model:
     symbols: Symbols = field(repr=False)
     time_unit: str | None = None  # the log's time column's unit ([units] t; None: s)
     sample_rate: float | None = None  # [log] sample_rate [Hz]: no time column read
+    input_timing: str | None = None   # [log] inputs, one of INPUT_TIMINGS (None: by data)
 
     @property
     def parameter_names(self) -> tuple[str, ...]:

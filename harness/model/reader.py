@@ -21,7 +21,7 @@ from ..units import factor
 from .errors import ModelFileError
 from .expressions import RESERVED, ExpressionError, Symbols, free_names, parse_equation
 from .linear import check_accelerations, split_linear
-from .model import Constant, Equation, Model, Parameter
+from .model import INPUT_TIMINGS, Constant, Equation, Model, Parameter
 from .units import check_equation, quantity
 from .zero_terms import cancelled
 
@@ -110,7 +110,7 @@ def parse_model(text: str, source: str | Path | None = None) -> Model:
         unit_table = unit_table or None  # t alone: nothing else scaled or checked
     units = _units(unit_table, coordinates, inputs, parameters, constants, fail)
     columns = _columns(data.get("columns", {}), coordinates, inputs, fail)
-    sample_rate = _sample_rate(data.get("log", {}), fail)
+    sample_rate, input_timing = _log_settings(data.get("log", {}), fail)
     equations = _equations(model, coordinates, symbols, units,
                            {p.name: p.unit for p in parameters},
                            {k.name: k.unit for k in constants}, fail)
@@ -127,7 +127,7 @@ def parse_model(text: str, source: str | Path | None = None) -> Model:
                    "identify it; remove it or write the term it stands for")
     return Model(str(source) if source is not None else "<model>", tuple(coordinates),
                  tuple(inputs), tuple(parameters), tuple(constants), units, columns,
-                 tuple(equations), symbols, time_unit, sample_rate)
+                 tuple(equations), symbols, time_unit, sample_rate, input_timing)
 
 
 def _names(model: Mapping[str, Any], key: str, fail: Fail, required: bool) -> list[str]:
@@ -269,18 +269,24 @@ def _units(table: Any, coordinates: list[str], inputs: list[str],
     return {name: _unit(table[name], name, fail) for name in (*coordinates, *inputs)}
 
 
-def _sample_rate(table: Any, fail: Fail) -> float | None:
+def _log_settings(table: Any, fail: Fail) -> tuple[float | None, str | None]:
     """[log] sample_rate [Hz]: the log's samples are evenly spaced at this rate, and its
-    time column (if any) is not read."""
-    unknown = set(table) - {"sample_rate"}
+    time column (if any) is not read; [log] inputs: "held" (each input sample acts until
+    the next, as a digital controller's output does) or "sampled" (samples of a
+    continuous signal); absent: identify chooses by the data."""
+    unknown = set(table) - {"sample_rate", "inputs"}
     if unknown:
-        raise fail(f"[log] has unknown keys {sorted(unknown)} (known: sample_rate)")
+        raise fail(f"[log] has unknown keys {sorted(unknown)} (known: sample_rate, inputs)")
+    timing = table.get("inputs")
+    if timing is not None and timing not in INPUT_TIMINGS:
+        raise fail(f"[log] inputs must be one of {', '.join(map(repr, INPUT_TIMINGS))}, "
+                   f"not {timing!r}")
     if "sample_rate" not in table:
-        return None
+        return None, timing
     rate = _number(table["sample_rate"], "[log] sample_rate", fail)
     if not rate > 0.0:
         raise fail(f"[log] sample_rate must be > 0 (samples per second), not {rate}")
-    return rate
+    return rate, timing
 
 
 def _columns(table: Any, coordinates: list[str], inputs: list[str],

@@ -61,8 +61,11 @@ def model_toml(model: Model, values: Sequence[float] | np.ndarray,
         lines += ["", "[units]"]
         lines += [f"t = {_string(model.time_unit)}"] if model.time_unit is not None else []
         lines += [f"{name} = {_string(unit)}" for name, unit in model.units.items()]
-    if model.sample_rate is not None:
-        lines += ["", "[log]", f"sample_rate = {_number(model.sample_rate)}"]
+    log = ([f"sample_rate = {_number(model.sample_rate)}"] if model.sample_rate is not None
+           else []) + ([f"inputs = {_string(model.input_timing)}"]
+                       if model.input_timing is not None else [])
+    if log:
+        lines += ["", "[log]", *log]
     lines += ["", "[columns]"]
     lines += [f"{name} = {_string(column)}" for name, column in model.columns.items()]
     return "\n".join(lines) + "\n"
