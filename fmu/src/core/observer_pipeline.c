@@ -28,8 +28,7 @@ static int information(const ObserverPipeline *p)
 /* The estimates from the identifier's last solve (info_finish done). */
 static void publish(const ObserverPipeline *p, ObserverEstimates *out)
 {
-    const int information = p->identifier != IDENTIFIER_OFF &&
-                            p->identifier_form == OP_FORM_INFORMATION;
+    const int info_form = information(p);
     const double (*delta)[MAX_L] = identified_delta(p);
     memset(out->theta_std, 0, sizeof out->theta_std);
     out->b_std = 0.0;
@@ -38,7 +37,7 @@ static void publish(const ObserverPipeline *p, ObserverEstimates *out)
         out->b_hat = p->b;
         for (int j = 0; j < p->m; ++j) {
             const int k = p->selected[j];
-            const double std = information ? p->info.std_error[0][j] : 0.0;
+            const double std = info_form ? p->info.std_error[0][j] : 0.0;
             /* u enters as + (b - bbar) u: Delta = b - bbar there */
             if (k == JOINT_INPUT) {
                 out->b_hat = p->b + delta[0][j];
@@ -53,7 +52,7 @@ static void publish(const ObserverPipeline *p, ObserverEstimates *out)
             for (int k = 0; k < p->l; ++k) out->theta_hat[i][k] = p->theta_nominal[i][k];
             for (int j = 0; j < p->m; ++j) {
                 out->theta_hat[i][p->selected[j]] += delta[i][j];
-                if (information) out->theta_std[i][p->selected[j]] = p->info.std_error[i][j];
+                if (info_form) out->theta_std[i][p->selected[j]] = p->info.std_error[i][j];
             }
         }
     }

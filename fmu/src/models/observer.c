@@ -403,9 +403,11 @@ static ModelStatus check_estimates(const ObserverData *d, const ModelLogger *log
                  "h |Gamma| |phi|^2 < 2; increase rho or reduce h)", t, e->gamma_trace);
         return MODEL_ERROR;
     }
-    double poison = (e->excitation + e->b_hat + e->b_std) * 0.0; /* NaN for inf and NaN */
+    /* x * 0 is NaN for inf and NaN (a sum of finite values could overflow) */
+    double poison = e->excitation * 0.0 + e->b_hat * 0.0 + e->b_std * 0.0;
     for (int i = 0; i < d->pipe.n; ++i)
-        for (int k = 0; k < MAX_L; ++k) poison += (e->theta_hat[i][k] + e->theta_std[i][k]) * 0.0;
+        for (int k = 0; k < MAX_L; ++k)
+            poison += e->theta_hat[i][k] * 0.0 + e->theta_std[i][k] * 0.0;
     if (poison != 0.0) {
         log->log(log->context, MODEL_ERROR,
                  "identifier diverged at t = %g: an estimate of theta_hat, theta_std, b_hat, "
