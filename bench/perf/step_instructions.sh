@@ -12,10 +12,12 @@
 # for 2 STEPS gives the cost of the second STEPS alone (the steady state).  A
 # second count (step_driver CONFIG SCHEME 1 STEPS: STEPS doSteps of H = h)
 # gives the cost per step when every step is a communication point, as in
-# the closed-loop harness.
+# the closed-loop harness; the same for 2 STEPS doSteps gives that cost in the
+# steady state ("H=h then").
 # Callgrind outputs stay in build/bench/callgrind.out.CONFIG-sSCHEME[-H=h]; inspect one with
 #     callgrind_annotate --inclusive=yes build/bench/callgrind.out.joint-lsm-s1
 #     callgrind_annotate --auto=yes build/bench/callgrind.out.joint-lsm-s1   (per source line)
+# ONLY=REGEX runs the configurations whose "config|scheme" matches (ONLY='joint-lsm\|3').
 # Other flags: configure a CMake tree of your own (e.g. -DCMAKE_C_FLAGS="-O3 -flto") and
 # set STEP_DRIVER to its bin/step_driver (valgrind 3.19 cannot run AVX-512 code, so
 # -march=native fails on such machines).
@@ -61,21 +63,24 @@ count() { # config scheme steps calls outfile
     echo "$total $(echo "$out" | grep -o 'identifier_active=[01] converged=[01]')"
 }
 
-printf '%-30s %-8s %13s %10s %10s %12s  %s\n' "configuration" "scheme" "Ir in doStep" "Ir / step" \
-    "Ir / step" "Ir / step" "state at the end"
-printf '%-30s %-8s %13s %10s %10s %12s\n' "" "" "" "H=${STEPS}h" "then" "H=h"
+printf '%-30s %-8s %13s %10s %10s %12s %12s  %s\n' "configuration" "scheme" "Ir in doStep" \
+    "Ir / step" "Ir / step" "Ir / step" "Ir / step" "state at the end"
+printf '%-30s %-8s %13s %10s %10s %12s %12s\n' "" "" "" "H=${STEPS}h" "then" "H=h" "H=h then"
 for entry in "${CONFIGS[@]}"; do
     IFS='|' read -r config scheme description <<< "$entry"
+    [[ -z "${ONLY:-}" || "$config|$scheme" =~ $ONLY ]] || continue
     file="$OUT/callgrind.out.$config-s$scheme"
     read -r total state <<< "$(count "$config" "$scheme" "$STEPS" 1 "$file")"
     read -r total_2 _ <<< "$(count "$config" "$scheme" $((2 * STEPS)) 1 "$file-2")"
     read -r total_h _ <<< "$(count "$config" "$scheme" 1 "$STEPS" "$file-H=h")"
+    read -r total_h2 _ <<< "$(count "$config" "$scheme" 1 $((2 * STEPS)) "$file-H=h-2")"
     per_step=$(awk -v t="$total" -v s="$STEPS" 'BEGIN {printf "%.1f", t / s}')
     then_step=$(awk -v t="$total" -v u="$total_2" -v s="$STEPS" 'BEGIN {printf "%.1f", (u - t) / s}')
     per_step_h=$(awk -v t="$total_h" -v s="$STEPS" 'BEGIN {printf "%.1f", t / s}')
+    then_h=$(awk -v t="$total_h" -v u="$total_h2" -v s="$STEPS" 'BEGIN {printf "%.1f", (u - t) / s}')
     case "$scheme" in 1) label="1 paper" ;; 2) label="2 implicit" ;; *) label="3 default" ;; esac
-    printf '%-30s %-8s %13s %10s %10s %12s  %s\n' "$description" "$label" "$total" "$per_step" \
-        "$then_step" "$per_step_h" "$state"
+    printf '%-30s %-8s %13s %10s %10s %12s %12s  %s\n' "$description" "$label" "$total" \
+        "$per_step" "$then_step" "$per_step_h" "$then_h" "$state"
 done
 echo
 echo "Ir = instructions executed inside fmi2DoStep (callgrind).  'H=${STEPS}h': one doStep of"
@@ -84,5 +89,6 @@ echo "steps (one doStep of $((2 * STEPS)) minus one of $STEPS, divided by $STEPS
 echo "after the start (scheme 3 runs its whole bank until its rankings settle).  'H=h': $STEPS doSteps"
 echo "of one internal step each, as in the closed-loop harness, divided by $STEPS: internal step"
 echo "+ communication point (outputs, identifier solve, checks) + the doStep entry checks."
+echo "'H=h then': the next $STEPS doSteps of h (2 x $STEPS doSteps minus $STEPS): the steady state."
 echo "Goals: n=1 joint LSM <= 200 instructions per internal step for schemes 1 and 2; <= 1500"
 echo "for scheme 3, which runs a bank of linear observers beside scheme 2."

@@ -468,6 +468,62 @@ def test_a_long_communication_step_equals_its_internal_steps(make, model, scheme
     np.testing.assert_array_equal(long, single)
 
 
+@pytest.mark.parametrize("identifier,form", [(1, 2), (2, 2), (1, 1)])
+def test_estimates_read_at_any_point_equal_those_read_at_every_point(make, identifier, form):
+    """The identifier's estimates (theta_hat, theta_std, b_hat, b_std, gamma_trace,
+    excitation) are derived when first read after a doStep, as they were at that
+    communication point: read only now and then, or first through an FMU state taken
+    at a point where nobody read them, they equal bit for bit the values read after
+    every doStep, and the run itself (the model fed back into the observer) does not
+    change.  2.5 s at h = 1 ms: the identifier starts, and its model enters the
+    observer after 1 s of identification."""
+    h, steps = 1e-3, 2500
+    estimates = ["theta_hat[1,1]", "theta_hat[1,2]", "theta_hat[1,3]", "theta_std[1,1]",
+                 "theta_std[1,2]", "theta_std[1,3]", "b_hat", "b_std", "gamma_trace",
+                 "excitation"]
+    names = ["x1_hat[1]", "x2_hat[1]", "z_eq_filtered[1]", *estimates]
+    sparse = {k for k in range(steps) if k % 97 == 5 or k % 251 == 0} | {steps - 1}
+    snapshots = {k for k in range(steps) if k % 389 == 7}  # states taken, never read there
+
+    def run(read_every_point):
+        fmu = make()
+        assert fmu.initialize(integers={"identifier": identifier, "identifier_form": form},
+                              booleans={"identify_b": form == 2},
+                              reals={"h": h}) <= WARNING, fmu.messages()
+        out, states = {}, {}
+        for k in range(steps):
+            t = k * h
+            assert fmu.set_real({"y[1]": 0.3 * math.sin(2 * t) + 0.1 * t,
+                                 "u": 0.5 * math.sin(3 * t)}) == OK
+            assert fmu.do_step(t, h) == OK, fmu.messages()
+            if not read_every_point and k in snapshots:
+                state = ctypes.c_void_p()
+                assert fmu.call("fmi2GetFMUstate", ctypes.byref(state)) == OK
+                states[k] = state
+            if read_every_point or k in sparse:
+                out[k] = fmu.get_real(names)
+            else:  # only what a closed loop reads
+                out[k] = fmu.get_real(names[:3]) + [None] * len(estimates)
+        flags = fmu.get_boolean(["identifier_active", "converged"])
+        restored = {}
+        for k, state in states.items():  # the estimates of the unread point k
+            assert fmu.call("fmi2SetFMUstate", state) == OK
+            restored[k] = fmu.get_real(names)
+            assert fmu.call("fmi2FreeFMUstate", ctypes.byref(state)) == OK
+        return out, restored, flags
+
+    every, _, flags = run(True)
+    seldom, restored, seldom_flags = run(False)
+    assert flags == seldom_flags == [True, True]
+    for k in range(steps):
+        assert seldom[k][:3] == every[k][:3], k
+    for k in sparse:
+        assert seldom[k] == every[k], k
+    assert restored and all(restored[k] == every[k] for k in restored)
+    if form == 2:
+        assert every[steps - 1][names.index("excitation")] > 0.0
+
+
 # ---- FMU state ------------------------------------------------------------------------------
 
 def test_get_and_set_fmu_state_continue_bit_identically(fmu):

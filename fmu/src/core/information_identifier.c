@@ -53,6 +53,9 @@ void info_reset(InformationIdentifier *id)
     memset(id->score_power, 0, sizeof id->score_power);
     memset(id->std_error, 0, sizeof id->std_error);
     id->std_age = 0;
+    memset(id->factor, 0, sizeof id->factor);
+    memset(id->theta_factored, 0, sizeof id->theta_factored);
+    id->solve_pending = 0;
     id->residual_samples = 0.0;
     memset(id->reference, 0, sizeof id->reference);
     memset(id->reference_factor, 0, sizeof id->reference_factor);
@@ -335,53 +338,65 @@ static void update_standard_errors(InformationIdentifier *id)
     }
 }
 
-int info_solve(InformationIdentifier *id)
+/* info_factor and info_finish for constant sizes (small_loops.h): n = m, or 2m
+ * with the drift model (drift, 2m <= ID_MAX_REGRESSORS); the arithmetic of
+ * cholesky.h's factor and solves, in its order. */
+#define SUMS(m, drift) ((drift) && 2 * (m) <= ID_MAX_REGRESSORS ? 2 * (m) : (m))
+
+/* x <- P^-1 x over the leading `size` rows of the factor L. */
+KERNEL factor_solve(double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS], double x[],
+                    const int size)
 {
-    const int n = dimension(id), m = id->m;
+    UNROLL for (int i = 0; i < size; ++i) {
+        UNROLL for (int k = 0; k < i; ++k) x[i] -= L[i][k] * x[k];
+        x[i] /= L[i][i];
+    }
+    UNROLL for (int i = size - 1; i >= 0; --i) {
+        UNROLL for (int k = i + 1; k < size; ++k) x[i] -= L[k][i] * x[k];
+        x[i] /= L[i][i];
+    }
+}
+
+KERNEL factor_kernel(InformationIdentifier *id, int *status, const int rows, const int m,
+                     const int drift)
+{
+    const int n = SUMS(m, drift);
     double L[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
-    if (m == 0) return 0;
-    if (cholesky(id, n, L) != 0) return -1;
-    solve_estimate(id, n, L, id->delta);
-    /* Trace of the current parameters' block of Gamma = P^-1.  Without the
-     * drift model that is the whole trace, ||L^-1||_F^2, by forward
-     * substitution of the columns of L^-1; with it, the first m diagonal
-     * entries of P^-1, one solve each. */
-    double trace = 0.0;
-    if (n == m) {
-        for (int j = 0; j < m; ++j) {
-            double col[ID_MAX_REGRESSORS];
-            for (int i = j; i < m; ++i) {
-                double s = i == j ? 1.0 : 0.0;
-                for (int k = j; k < i; ++k) s -= L[i][k] * col[k];
-                col[i] = s / L[i][i];
-                trace += col[i] * col[i];
-            }
-        }
-    } else {
-        for (int j = 0; j < m; ++j) {
-            double e[ID_MAX_REGRESSORS] = {0};
-            e[j] = 1.0;
-            solve(n, L, e); /* column j of P^-1 */
-            trace += e[j];
+    *status = -1;
+    UNROLL for (int j = 0; j < n; ++j) { /* P = L L^T, cholesky_factor_column */
+        double d = id->P[j][j];
+        UNROLL for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
+        if (!(d > 0.0) || !isfinite(d)) return;
+        L[j][j] = sqrt(d);
+        UNROLL for (int i = j + 1; i < n; ++i) {
+            double s = id->P[j][i];
+            UNROLL for (int k = 0; k < j; ++k) s -= L[i][k] * L[j][k];
+            L[i][j] = s / L[j][j];
         }
     }
-    id->gamma_trace = trace;
+    *status = 0;
+    UNROLL for (int i = 0; i < n; ++i)
+        UNROLL for (int k = 0; k <= i; ++k) id->factor[i][k] = L[i][k];
+    for (int i = 0; i < rows; ++i)
+        UNROLL for (int k = 0; k < n; ++k) id->theta_factored[i][k] = id->theta[i][k];
+    id->solve_pending = 1;
     /* One inverse-iteration step toward the eigenvector of the smallest
      * eigenvalue of the current parameters' information P11 (the leading
      * block of L is its Cholesky factor); the Rayleigh quotient estimates it. */
     double v[ID_MAX_REGRESSORS];
-    memcpy(v, id->eigvec, sizeof v);
-    solve(m, L, v);
+    UNROLL for (int k = 0; k < m; ++k) v[k] = id->eigvec[k];
+    factor_solve(L, v, m);
     double norm = 0.0;
-    for (int k = 0; k < m; ++k) norm += v[k] * v[k];
+    UNROLL for (int k = 0; k < m; ++k) norm += v[k] * v[k];
     norm = sqrt(norm);
     if (norm > 0.0 && isfinite(norm)) {
-        for (int k = 0; k < m; ++k) id->eigvec[k] = v[k] / norm;
+        UNROLL for (int k = 0; k < m; ++k) id->eigvec[k] = v[k] / norm;
     }
     double rayleigh = 0.0;
-    for (int j = 0; j < m; ++j) {
+    UNROLL for (int j = 0; j < m; ++j) {
         double pv = 0.0;
-        for (int k = 0; k < m; ++k) pv += (k >= j ? id->P[j][k] : id->P[k][j]) * id->eigvec[k];
+        UNROLL for (int k = 0; k < m; ++k)
+            pv += (k >= j ? id->P[j][k] : id->P[k][j]) * id->eigvec[k];
         rayleigh += id->eigvec[j] * pv;
     }
     /* Information gathered per unit time: LSM averages over the active time;
@@ -391,5 +406,73 @@ int info_solve(InformationIdentifier *id)
     if (id->lambda < 1.0) id->excitation = excess * id->forgetting_rate * id->used_mean;
     else id->excitation = id->active_time > 0.0 ? excess / id->active_time : 0.0;
     if (id->excitation < 0.0) id->excitation = 0.0;
+}
+
+KERNEL finish_kernel(InformationIdentifier *id, const int rows, const int m, const int drift)
+{
+    const int n = SUMS(m, drift);
+    double(*L)[ID_MAX_REGRESSORS] = id->factor;
+    for (int i = 0; i < rows; ++i) { /* Delta_hat = Theta P^-1 */
+        double x[ID_MAX_REGRESSORS];
+        UNROLL for (int k = 0; k < n; ++k) x[k] = id->theta_factored[i][k];
+        factor_solve(L, x, n);
+        UNROLL for (int k = 0; k < n; ++k) id->delta[i][k] = x[k];
+    }
+    /* Trace of the current parameters' block of Gamma = P^-1.  Without the
+     * drift model that is the whole trace, ||L^-1||_F^2, by forward
+     * substitution of the columns of L^-1; with it, the first m diagonal
+     * entries of P^-1, one solve each. */
+    double trace = 0.0;
+    if (n == m) {
+        UNROLL for (int j = 0; j < m; ++j) {
+            double col[ID_MAX_REGRESSORS];
+            UNROLL for (int i = j; i < m; ++i) {
+                double s = i == j ? 1.0 : 0.0;
+                UNROLL for (int k = j; k < i; ++k) s -= L[i][k] * col[k];
+                col[i] = s / L[i][i];
+                trace += col[i] * col[i];
+            }
+        }
+    } else {
+        for (int j = 0; j < m; ++j) {
+            double e[ID_MAX_REGRESSORS] = {0};
+            e[j] = 1.0;
+            factor_solve(L, e, n); /* column j of P^-1 */
+            trace += e[j];
+        }
+    }
+    id->gamma_trace = trace;
+}
+
+KERNEL factor_sizes(InformationIdentifier *id, int *status, const int rows, const int m)
+{
+    if (id->drift) factor_kernel(id, status, rows, m, 1);
+    else factor_kernel(id, status, rows, m, 0);
+}
+
+KERNEL finish_sizes(InformationIdentifier *id, const int rows, const int m)
+{
+    if (id->drift) finish_kernel(id, rows, m, 1);
+    else finish_kernel(id, rows, m, 0);
+}
+
+int info_factor(InformationIdentifier *id)
+{
+    int status = 0; /* m == 0: nothing to solve */
+    WITH_CONSTANT_SIZES(id->rows, id->m, factor_sizes, id, &status);
+    return status;
+}
+
+void info_finish(InformationIdentifier *id)
+{
+    if (!id->solve_pending) return;
+    id->solve_pending = 0;
+    WITH_CONSTANT_SIZES(id->rows, id->m, finish_sizes, id);
+}
+
+int info_solve(InformationIdentifier *id)
+{
+    if (info_factor(id) != 0) return -1;
+    info_finish(id);
     return 0;
 }

@@ -19,11 +19,16 @@ static const double (*identified_delta(const ObserverPipeline *p))[MAX_L]
                                                : (const double (*)[MAX_L])p->info.delta;
 }
 
-static void publish(ObserverPipeline *p, ObserverEstimates *out)
+/* The information form's identifier is in use. */
+static int information(const ObserverPipeline *p)
 {
-    const int information = p->identifier != IDENTIFIER_OFF &&
-                            p->identifier_form == OP_FORM_INFORMATION;
-    if (information) info_solve(&p->info); /* keeps the previous estimate if it cannot solve */
+    return p->identifier != IDENTIFIER_OFF && p->identifier_form == OP_FORM_INFORMATION;
+}
+
+/* The estimates from the identifier's last solve (info_finish done). */
+static void publish(const ObserverPipeline *p, ObserverEstimates *out)
+{
+    const int info_form = information(p);
     const double (*delta)[MAX_L] = identified_delta(p);
     memset(out->theta_std, 0, sizeof out->theta_std);
     out->b_std = 0.0;
@@ -32,7 +37,7 @@ static void publish(ObserverPipeline *p, ObserverEstimates *out)
         out->b_hat = p->b;
         for (int j = 0; j < p->m; ++j) {
             const int k = p->selected[j];
-            const double std = information ? p->info.std_error[0][j] : 0.0;
+            const double std = info_form ? p->info.std_error[0][j] : 0.0;
             /* u enters as + (b - bbar) u: Delta = b - bbar there */
             if (k == JOINT_INPUT) {
                 out->b_hat = p->b + delta[0][j];
@@ -47,7 +52,7 @@ static void publish(ObserverPipeline *p, ObserverEstimates *out)
             for (int k = 0; k < p->l; ++k) out->theta_hat[i][k] = p->theta_nominal[i][k];
             for (int j = 0; j < p->m; ++j) {
                 out->theta_hat[i][p->selected[j]] += delta[i][j];
-                if (information) out->theta_std[i][p->selected[j]] = p->info.std_error[i][j];
+                if (info_form) out->theta_std[i][p->selected[j]] = p->info.std_error[i][j];
             }
         }
     }
@@ -168,7 +173,9 @@ int op_init(ObserverPipeline *p, const double alpha1[], const double alpha2[],
     memset(p->model_shadow, 0, sizeof p->model_shadow);
     p->model_z = 0.0;
     out->b_hat = p->b;
+    if (information(p)) info_solve(&p->info);
     publish(p, out);
+    p->publish_pending = 0;
     return 0;
 }
 
@@ -349,6 +356,24 @@ void op_communicate(ObserverPipeline *p, ObserverEstimates *out)
 {
     if (p->scheme == STO_SCHEME_ADAPTIVE) adaptive_outputs(&p->obs, &p->bank);
     else sto_update_outputs(&p->obs);
-    publish(p, out);
+    /* The factor and the excitation's iteration belong to this point (the
+     * solve keeps the previous estimate if it cannot factor); the estimate
+     * itself only where the observer's model takes it now. */
+    if (information(p)) {
+        info_factor(&p->info);
+        if (feedback_on(p) && p->identifier_active) info_finish(&p->info);
+    }
+    out->identifier_active = p->identifier_active;
+    out->converged = sto_converged(&p->obs);
     update_model(p);
+    p->publish_pending = 1;
+}
+
+int op_publish(ObserverPipeline *p, ObserverEstimates *out)
+{
+    if (!p->publish_pending) return 0;
+    p->publish_pending = 0;
+    if (information(p)) info_finish(&p->info);
+    publish(p, out);
+    return 1;
 }

@@ -85,6 +85,7 @@ typedef struct {
     double model_delta[OP_MAX_L];
     double model_shadow[3];
     double model_z;
+    int publish_pending; /* op_publish has estimates to derive */
 } ObserverPipeline;
 
 /* Selects the identified regressors from `identify` (and identify_b); returns m. */
@@ -113,8 +114,14 @@ void op_nominal_model(const ObserverPipeline *p, const ObserverInputs *in,
 void op_run(ObserverPipeline *p, const ObserverInputs *in, double start_time, uint64_t k,
             uint64_t k_end, int restart);
 
-/* A communication point: the observer's outputs, the estimates published and
- * the model the observer predicts with brought up to date. */
+/* A communication point: the observer's outputs, identifier_active, converged
+ * and the model the observer predicts with brought up to date; the other
+ * estimates are left to op_publish. */
 void op_communicate(ObserverPipeline *p, ObserverEstimates *out);
+
+/* The estimates of the last communication point into `out`, as op_communicate
+ * would have published them there; only what a reader sees needs them.  Returns 1
+ * if it derived them, 0 if they were up to date. */
+int op_publish(ObserverPipeline *p, ObserverEstimates *out);
 
 #endif

@@ -49,6 +49,8 @@ typedef struct {
     double min, max;      /* valid range (NAN: unbounded); reals and integers */
     bool min_exclusive;   /* min itself is invalid (e.g. a step size > 0) */
     bool max_exclusive;
+    bool on_read;  /* an output derived when read (refresh_outputs, which checks it):
+                    * not checked after each doStep */
     const char *unit;        /* NULL: dimensionless */
     const char *description;
 } ModelVariable;
@@ -145,6 +147,16 @@ typedef struct {
      * outputs that are not read straight from the state, and check them (a
      * diverged state).  May log; MODEL_ERROR if the outputs cannot be trusted. */
     ModelStatus (*communication_point)(void *data, double t, const ModelLogger *log);
+    /* Optional (NULL: every output is derived by communication_point): derives
+     * the outputs marked on_read, which communication_point leaves to be
+     * derived when read, as they were at that communication point, and checks
+     * them (MODEL_ERROR after logging if one is not finite).  The layer calls
+     * it before a get that reads one of them and before the state is copied,
+     * so a value read after a doStep is the value at that communication point;
+     * an output that costs more than the step and that a closed loop never
+     * reads is not derived at every point.  It writes nothing else, and what
+     * the steps and the next points use must not wait for it. */
+    ModelStatus (*refresh_outputs)(void *data, const ModelLogger *log);
     /* A deserialized state that can step again is checked field by field
      * before it is accepted (the checksum only detects accidents: anyone can
      * recompute it).  The layer checks the variables of the table, re-runs

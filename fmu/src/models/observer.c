@@ -36,6 +36,7 @@ typedef struct {
     int reset_seen; /* identifier_reset value at the last step */
     InputCadence cadence; /* of every input (the unused ones do not change) */
     int coarse_logged;    /* the staircase warning stands */
+    double communicated;  /* time of the last communication point */
 } ObserverData;
 
 /* The inputs as the cadence watches them: the struct's doubles. */
@@ -184,11 +185,12 @@ static const ModelVariable VARIABLES[] = {
      OUTPUT(.offset = OFF(pipe.obs.z_filtered), .unit = "rad/s2",
      .description = "Filtered injection: the identified perturbation, eq. (10)")},
     {.name = "theta_hat", .vr = 320, .rows = MAX_N, .cols = MAX_L, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(out.theta_hat),
+     OUTPUT(.on_read = true, .offset = OFF(out.theta_hat),
      .description = "Parameter estimates: built-in joint: theta_hat[1,k] estimates c_k; "
                     "external: theta in xi = theta phi")},
     {.name = "gamma_trace", .vr = 360, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(out.gamma_trace), .description = "Trace of the identifier's Gamma")},
+     OUTPUT(.on_read = true, .offset = OFF(out.gamma_trace),
+     .description = "Trace of the identifier's Gamma")},
     {.name = "identifier_active", .vr = 361, .type = TYPE_BOOLEAN,
      .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
      .offset = OFF(out.identifier_active), .description = "The identifier is integrating"},
@@ -197,19 +199,20 @@ static const ModelVariable VARIABLES[] = {
      .offset = OFF(out.converged),
      .description = "The observer is in its sliding mode by the switching-rate test"},
     {.name = "excitation", .vr = 363, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(out.excitation),
+     OUTPUT(.on_read = true, .offset = OFF(out.excitation),
      .description = "Smallest eigenvalue of the identifier's information per unit time "
                     "(identifier_form 2); near 0: theta_hat is not being learned")},
     {.name = "b_hat", .vr = 364, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(out.b_hat),
+     OUTPUT(.on_read = true, .offset = OFF(out.b_hat),
      .description = "Built-in joint: estimate of the input gain b [1/(kg.m2)] (b while not "
                     "identified)")},
     {.name = "theta_std", .vr = 380, .rows = MAX_N, .cols = MAX_L, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(out.theta_std),
+     OUTPUT(.on_read = true, .offset = OFF(out.theta_std),
      .description = "Standard error of theta_hat (identifier_form 2; 0 where not identified): "
                     "from the information matrix and the residuals' low-frequency power")},
     {.name = "b_std", .vr = 412, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(out.b_std), .description = "Standard error of b_hat (identifier_form 2)")},
+     OUTPUT(.on_read = true, .offset = OFF(out.b_std),
+     .description = "Standard error of b_hat (identifier_form 2)")},
     {.name = "noise_std", .vr = 370, .rows = MAX_N, .type = TYPE_REAL,
      OUTPUT(.offset = OFF(pipe.bank.noise_std), .unit = "rad",
      .description = "Scheme 3: estimated standard deviation of the measurement noise "
@@ -389,6 +392,31 @@ static void explain_divergence(const ObserverData *d, double t, int i, const Mod
     }
 }
 
+/* The identifier's published estimates are finite. */
+static ModelStatus check_estimates(const ObserverData *d, const ModelLogger *log)
+{
+    const ObserverEstimates *e = &d->out;
+    const double t = d->communicated;
+    if (!isfinite(e->gamma_trace)) {
+        log->log(log->context, MODEL_ERROR,
+                 "identifier diverged at t = %g: trace(Gamma) = %g (explicit Euler needs "
+                 "h |Gamma| |phi|^2 < 2; increase rho or reduce h)", t, e->gamma_trace);
+        return MODEL_ERROR;
+    }
+    /* x * 0 is NaN for inf and NaN (a sum of finite values could overflow) */
+    double poison = e->excitation * 0.0 + e->b_hat * 0.0 + e->b_std * 0.0;
+    for (int i = 0; i < d->pipe.n; ++i)
+        for (int k = 0; k < MAX_L; ++k)
+            poison += e->theta_hat[i][k] * 0.0 + e->theta_std[i][k] * 0.0;
+    if (poison != 0.0) {
+        log->log(log->context, MODEL_ERROR,
+                 "identifier diverged at t = %g: an estimate of theta_hat, theta_std, b_hat, "
+                 "b_std or excitation is not finite", t);
+        return MODEL_ERROR;
+    }
+    return MODEL_OK;
+}
+
 static ModelStatus communication_point(void *data, double t, const ModelLogger *log)
 {
     ObserverData *d = data;
@@ -402,13 +430,22 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
             return MODEL_ERROR;
         }
     }
-    if (!isfinite(d->out.gamma_trace)) {
-        log->log(log->context, MODEL_ERROR,
-                 "identifier diverged at t = %g: trace(Gamma) = %g (explicit Euler needs "
-                 "h |Gamma| |phi|^2 < 2; increase rho or reduce h)", t, d->out.gamma_trace);
-        return MODEL_ERROR;
-    }
+    d->communicated = t;
+    /* the paper form's estimates are published here: its explicit Euler can
+     * diverge, and they cost little */
+    if (d->pipe.identifier_form == OP_FORM_PAPER && op_publish(&d->pipe, &d->out))
+        return check_estimates(d, log);
     return MODEL_OK;
+}
+
+/* The estimates of the last communication point, derived when first read
+ * (model_interface.h): the information form's solve costs more than an
+ * internal step, and a closed loop at H = h reads none of them. */
+static ModelStatus refresh_outputs(void *data, const ModelLogger *log)
+{
+    ObserverData *d = data;
+    if (!op_publish(&d->pipe, &d->out)) return MODEL_OK;
+    return check_estimates(d, log);
 }
 
 /* A deserialized state, field by field (model_interface.h): what initialize
@@ -422,6 +459,7 @@ static const StateField STATE_FIELDS[] = {
     D(pipe.m), D(pipe.selected), D(pipe.slot_velocity), D(pipe.slot_velocity_sign),
     D(pipe.slot_input), D(pipe.identifier_gain), D(pipe.feedback), I(pipe.identifier_active, 0, 1),
     I(reset_seen, 0, 1), IC_STATE_FIELDS(ObserverData, cadence), I(coarse_logged, 0, 1),
+    I(pipe.publish_pending, 0, 1), I(pipe.info.solve_pending, 0, 1),
     STO_STATE_FIELDS(ObserverData, pipe.obs),
     BANK_STATE_FIELDS(ObserverData, pipe.bank), D(pipe.id.kind),
     D(pipe.id.rows), D(pipe.id.m), D(pipe.id.h), D(pipe.id.h_log_r), D(pipe.info.rows),
@@ -483,6 +521,7 @@ const ModelDescriptor MODEL_DESCRIPTOR = {
     .work_per_step = work_per_step,
     .advance = advance,
     .communication_point = communication_point,
+    .refresh_outputs = refresh_outputs,
     .state_fields = STATE_FIELDS,
     .n_state_fields = sizeof STATE_FIELDS / sizeof STATE_FIELDS[0],
     .check_restored = check_restored,

@@ -987,6 +987,7 @@ static int pipeline_identifies_a_joint(void)
             ++counted;
         }
     }
+    op_publish(p, &out); /* the estimates are derived when read */
     const double c1 = out.theta_hat[0][0], c2 = out.theta_hat[0][1];
     failed += check(out.identifier_active && out.converged, "identifying and converged at %g s",
                     t_end);
@@ -1001,6 +1002,7 @@ static int pipeline_identifies_a_joint(void)
     /* a restart forgets the estimate: one sample later it is back near the nominal */
     op_run(p, &in, 0.0, (uint64_t)samples, (uint64_t)samples + 1, 1);
     op_communicate(p, &out);
+    op_publish(p, &out);
     failed += check(fabs(out.theta_hat[0][0] - p->c_nominal[0]) < 1e-2,
                     "one sample after a restart c1 = %.6f, within 1e-2 of the nominal %.6f",
                     out.theta_hat[0][0], p->c_nominal[0]);
