@@ -19,7 +19,6 @@ from __future__ import annotations
 import argparse
 import csv
 import sys
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -39,7 +38,7 @@ from .identification import (
     NotExcitedError,
     identify_model,
 )
-from .input_timing import InputTiming, choose_input_timing
+from .input_timing import InputTiming, choose_input_timing, held_fits_better
 from .log import LogFileError, ModelLog, read_log
 from .model import Model
 from .reader import read_model
@@ -85,10 +84,8 @@ def identify_command(args: argparse.Namespace) -> int:
             estimates = causal_estimates(log, acceleration)
             scores = independent_scores(model, found.log, found.theta)
             _write_parameters(outputs.file("parameters.csv"), model, found)
-            timing = found.input_timing
             outputs.file("identified.toml").write_text(model_toml(
-                replace(model, input_timing=timing.name if timing and model.inputs else None),
-                found.theta, found.std_error,
+                model, found.theta, found.std_error,
                 header=[f"{plain(Path(args.model).name)} identified from "
                         f"{plain(Path(args.data).name)} by sto-harness identify "
                         f"({found.method}); std errors: sandwich, 1 sigma"]),
@@ -220,10 +217,14 @@ def _print_held(found: Identification) -> None:
 
 
 def _print_timing(timing: InputTiming) -> None:
-    """How the inputs act between samples in the simulations, and why."""
+    """How the inputs act between samples, why, and the runs' errors of both timings."""
     scores = ", ".join(f"{name} {100 * e:.4g} %" for name, e in timing.scores.items())
-    print(f"  inputs between samples: {timing.name} "
-          f"({timing.method}{': ' + scores if scores else ''})")
+    print(f"  inputs between samples: {timing.name} ({timing.method}"
+          f"{'; runs error ' + scores if scores else ''})")
+    if held_fits_better(timing):
+        print("    the runs follow the log better with the inputs held: if they are a "
+              "digital controller's output, held over each sample, declare [log] inputs = "
+              "\"held\" in the model file")
 
 
 def _print_refinement(found: Identification) -> None:
