@@ -4,18 +4,19 @@ with the evidence of the data shown.
 A drive's or a robot's input is usually a digital controller's output, held from one
 sample to the next: a zero-order hold, which below the sample rate is a delay of half a
 sample (and a gain of sinc(f / fs), 0.9993 at fs / 50). Taken as samples of a continuous
-signal instead, the model sees its input half a sample early: the least squares pair each
-acceleration with the force of the next half sample, and the output-error refinement pays
-for it in the parameters (on a simulated EMPS-like drive at 1 kHz, M 0.3 % high: ten of
-its standard errors). A log declared held ([log] inputs = "held") is therefore
-identified from its inputs delayed by half a sample (:func:`held_inputs`), through the
-same pipeline. The samples cannot show which of the two the machine did; the model can
-hint: each timing's least squares on the chosen pipeline, simulated in runs from the
-measured states. identify reports both runs' errors; the default stays "sampled", and a
-held timing that simulates the log better is said, for the user to declare: on the EMPS drive the held runs follow
-the log better (0.44 % against 0.58 %), yet the benchmark's independent scores of the
-held estimate are not (cross-test 5.97 % against 5.94 %, closed-loop force 6.72 %
-against 6.53 %), so the evidence of the runs alone does not decide.
+signal instead, the model sees its input half a sample early: the least squares pair
+each acceleration with the force of the next half sample, and the output-error
+refinement pays for it in the parameters (on a simulated EMPS-like drive at 1 kHz, M 0.3
+% high: ten of its standard errors). A log declared held ([log] inputs = "held") is
+therefore identified from its inputs delayed by half a sample (:func:`held_inputs`),
+through the same pipeline. The samples cannot show which of the two the machine did; the
+model can hint: each timing's least squares on the chosen pipeline, simulated in runs
+from the measured states. identify reports both runs' errors; the default stays
+"sampled", and a held timing that simulates the log better is said, for the user to
+declare: on the EMPS drive the held runs follow the log better (0.44 % against 0.58 %),
+yet the benchmark's independent scores of the held estimate are not (cross-test 5.97 %
+against 5.94 %, closed-loop force 6.72 % against 6.53 %), so the evidence of the runs
+alone does not decide.
 """
 from __future__ import annotations
 
