@@ -325,9 +325,10 @@ def validate_command(args: argparse.Namespace) -> int:
         with Outputs(args.out, "validate", inputs=[args.data, args.model],
                      names=VALIDATE_OUTPUTS) as outputs:
             model, log = _load(args)
+            timing = choose_input_timing(model, log, None, model.nominal)
+            log = timing.log  # a held input's samples, half a sample later
             rows, predicted, per, pooled = validate_model(model, log)
-            timing = choose_input_timing(model, log, rows.settings, model.nominal)
-            scores = independent_scores(model, timing.log, model.nominal)
+            scores = independent_scores(model, log, model.nominal)
             write_json(outputs.file("validation.json"), {
                 "model": model.source, "log": log.source, "resampled": log.resampled,
                 "relative_error": {"per_equation": per, "pooled": pooled},

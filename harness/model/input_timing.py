@@ -66,11 +66,12 @@ def _timed(model: Model, log: ModelLog, held: bool, method: str,
     return InputTiming(held, held_inputs(log) if held else log, method, scores or {})
 
 
-def choose_input_timing(model: Model, log: ModelLog, settings: ZeroPhase,
+def choose_input_timing(model: Model, log: ModelLog, settings: ZeroPhase | None,
                         theta: np.ndarray | None = None) -> InputTiming:
     """The model file's [log] inputs, else sampled; undeclared, the runs' errors of both
     timings are scored (:func:`held_fits_better`): with parameters ``theta`` when given
-    (validate), else each timing's own least squares on the pipeline ``settings``."""
+    (validate), else each timing's own least squares on the pipeline ``settings`` (None:
+    the default pipeline)."""
     if model.input_timing is not None:
         return _timed(model, log, model.input_timing == "held", "declared by the model file")
     if not model.inputs:

@@ -130,3 +130,24 @@ def test_a_declared_held_input_keeps_the_mass(held_drive):
     assert summary["input_timing"]["method"] == "declared by the model file"
     assert abs(summary["parameters"]["M"]["value"] / MASS - 1) < 1e-3, summary["parameters"]
     assert read_model(out / "identified.toml").input_timing == "held"
+
+
+def test_validate_takes_a_declared_held_input_half_a_sample_later(held_drive):
+    """The true model validated on its log: declared held, validate runs the held timing
+    (its record says so), and its reconstruction beats the same model's with the input
+    taken as sampled."""
+    folder, log = held_drive
+    model = folder / "held_truth.toml"
+    truth = (MODEL.format(log='[log]\ninputs = "TIMING"\n')
+             .replace("M = { nominal = 1 }", f"M = {{ nominal = {MASS} }}")
+             .replace("Fv = { nominal = 0 }", f"Fv = {{ nominal = {VISCOUS} }}")
+             .replace("OF = { nominal = 0 }", f"OF = {{ nominal = {OFFSET} }}"))
+    errors = {}
+    for timing in ("held", "sampled"):
+        model.write_text(truth.replace("TIMING", timing), encoding="utf-8")
+        out = folder / f"validate_{timing}"
+        assert main(["validate", str(log), "--model", str(model), "--out", str(out)]) == 0
+        result = json.loads((out / "validation.json").read_text())
+        assert result["input_timing"]["inputs"] == timing
+        errors[timing] = result["relative_error"]["pooled"]
+    assert errors["held"] < errors["sampled"], errors
