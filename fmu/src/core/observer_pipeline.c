@@ -175,7 +175,7 @@ int op_init(ObserverPipeline *p, const double alpha1[], const double alpha2[],
     out->b_hat = p->b;
     if (information(p)) info_solve(&p->info);
     publish(p, out);
-    p->publish_pending = p->model_pending = 0;
+    p->publish_pending = 0;
     return 0;
 }
 
@@ -317,35 +317,46 @@ KERNEL identify_run(ObserverPipeline *p, const StoTrace *trace, int count, const
     else info_run(&p->info, samples, count);
 }
 
-static void take_pending_model(ObserverPipeline *p);
+/* The identified model: the information form's factor (and the excitation's
+ * iteration; the solve keeps the previous estimate if it cannot factor), the
+ * estimate where the observer's model takes it, and the model. */
+static void model_update(ObserverPipeline *p)
+{
+    if (information(p)) {
+        info_factor(&p->info);
+        if (feedback_on(p) && p->identifier_active) info_finish(&p->info);
+    }
+    update_model(p);
+}
 
 void op_run(ObserverPipeline *p, const ObserverInputs *in, double start_time, uint64_t k,
             uint64_t k_end, int restart)
 {
-    /* the last step's model update first, then the model of the step as it was
-     * before a restart */
+    /* the model of the step as it was before a restart */
     StoAcceleration acceleration[MAX_N];
     double regressor[MAX_L];
-    take_pending_model(p);
     op_nominal_model(p, in, acceleration, regressor);
     const int identifying = p->identifier != IDENTIFIER_OFF;
     if (identifying)
         for (int j = 0; j < p->m; ++j) p->phi_now[j] = regressor[p->selected[j]];
-    if (identifying && restart) op_restart_identifier(p);
+    if (identifying && restart) {
+        op_restart_identifier(p);
+        if (information(p)) model_update(p); /* no estimate of the old information */
+    }
     StoTrace trace;
-    /* The information form's factor (its excitation iteration) and, with model
-     * feedback, the model follow every internal step, never the importer's
-     * communication points: single steps then, each step's update taken before
-     * the next (or when the estimates are read), so that a communication point's
-     * outputs are those of the state its steps left. */
-    const int every_step = information(p);
+    /* In the information form the identified model is updated on the internal
+     * steps' clock, after every OP_MODEL_STEPS-th step of the instance, never at
+     * the importer's communication points: the runs end there. */
+    const int clocked = information(p);
     while (k < k_end) {
         /* Runs of up to STO_RUN_MAX steps; single steps while the identifier
          * waits to start, as its start condition is checked after each. */
         const uint64_t left = k_end - k;
-        const int count = (identifying && !p->identifier_active) || every_step ? 1
-                          : left < STO_RUN_MAX                                ? (int)left
-                                                                              : STO_RUN_MAX;
+        const uint64_t to_update = OP_MODEL_STEPS - k % OP_MODEL_STEPS;
+        const uint64_t most = clocked && to_update < STO_RUN_MAX ? to_update : STO_RUN_MAX;
+        const int count = identifying && !p->identifier_active ? 1
+                          : left < most                       ? (int)left
+                                                              : (int)most;
         if (p->scheme == STO_SCHEME_ADAPTIVE)
             adaptive_run(&p->obs, &p->bank, in->y, acceleration, count, &trace);
         else
@@ -359,31 +370,18 @@ void op_run(ObserverPipeline *p, const ObserverInputs *in, double start_time, ui
             }
         }
         k += count;
-        p->model_pending = every_step;
-        if (every_step && k < k_end) {
-            take_pending_model(p);
+        if (clocked && k % OP_MODEL_STEPS == 0) {
+            model_update(p);
             op_nominal_model(p, in, acceleration, regressor); /* the model it took */
         }
     }
-}
-
-/* After an internal step in information form: the factor and the excitation's
- * iteration (the solve keeps the previous estimate if it cannot factor); the
- * estimate itself only where the observer's model takes it. */
-static void take_pending_model(ObserverPipeline *p)
-{
-    if (!p->model_pending) return;
-    p->model_pending = 0;
-    info_factor(&p->info);
-    if (feedback_on(p) && p->identifier_active) info_finish(&p->info);
-    update_model(p);
 }
 
 void op_communicate(ObserverPipeline *p, ObserverEstimates *out)
 {
     if (p->scheme == STO_SCHEME_ADAPTIVE) adaptive_outputs(&p->obs, &p->bank);
     else sto_update_outputs(&p->obs);
-    if (!information(p)) update_model(p); /* the nominal model (no identified part) */
+    if (!information(p)) update_model(p); /* the paper's form: the nominal model */
     out->identifier_active = p->identifier_active;
     out->converged = sto_converged(&p->obs);
     p->publish_pending = 1;
@@ -393,7 +391,6 @@ int op_publish(ObserverPipeline *p, ObserverEstimates *out)
 {
     if (!p->publish_pending) return 0;
     p->publish_pending = 0;
-    take_pending_model(p); /* what the next step would take first: the same state */
     if (information(p)) info_finish(&p->info);
     publish(p, out);
     return 1;

@@ -86,7 +86,6 @@ typedef struct {
     double model_shadow[3];
     double model_z;
     int publish_pending; /* op_publish has estimates to derive */
-    int model_pending;   /* the last internal step's factor and model update are due */
 } ObserverPipeline;
 
 /* Selects the identified regressors from `identify` (and identify_b); returns m. */

@@ -77,6 +77,11 @@
 #define MP_WARM_UP 10.0             /* time constants of G before its rows enter (e^-10) */
 #define MP_TAU_IDENTIFIER 0.02      /* [s] default of the regression's filter G */
 #define MP_RHO 1e-9                 /* default regularization, SI parameters */
+#define OP_MODEL_STEPS 32           /* internal steps between the updates of the observer's
+                                     * identified model (information form: the factor,
+                                     * the excitation's iteration, the fed-back estimate),
+                                     * on the instance's clock: a long communication step
+                                     * equals its single steps, at a 32nd of the cost */
 #define MP_ENERGY_WARNING 1.0       /* [s] the published model creates energy this long
                                      * before the warning: not every transient estimate */
 

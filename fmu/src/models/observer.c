@@ -459,7 +459,7 @@ static const StateField STATE_FIELDS[] = {
     D(pipe.m), D(pipe.selected), D(pipe.slot_velocity), D(pipe.slot_velocity_sign),
     D(pipe.slot_input), D(pipe.identifier_gain), D(pipe.feedback), I(pipe.identifier_active, 0, 1),
     I(reset_seen, 0, 1), IC_STATE_FIELDS(ObserverData, cadence), I(coarse_logged, 0, 1),
-    I(pipe.publish_pending, 0, 1), I(pipe.model_pending, 0, 1), I(pipe.info.solve_pending, 0, 1),
+    I(pipe.publish_pending, 0, 1), I(pipe.info.solve_pending, 0, 1),
     STO_STATE_FIELDS(ObserverData, pipe.obs),
     BANK_STATE_FIELDS(ObserverData, pipe.bank), D(pipe.id.kind),
     D(pipe.id.rows), D(pipe.id.m), D(pipe.id.h), D(pipe.id.h_log_r), D(pipe.info.rows),
