@@ -218,7 +218,8 @@ def _print_held(found: Identification) -> None:
 
 def _print_timing(timing: InputTiming) -> None:
     """How the inputs act between samples, why, and the runs' errors of both timings."""
-    scores = ", ".join(f"{name} {100 * e:.4g} %" for name, e in timing.scores.items())
+    scores = ", ".join(f"{name} {100 * e:.4g} %" if np.isfinite(e) else f"{name} diverges"
+                       for name, e in timing.scores.items())
     print(f"  inputs between samples: {timing.name} ({timing.method}"
           f"{'; runs error ' + scores if scores else ''})")
     if held_fits_better(timing):

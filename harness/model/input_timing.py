@@ -49,7 +49,9 @@ class InputTiming:
         return "held" if self.held else "sampled"
 
     def as_dict(self) -> dict[str, object]:
-        return {"inputs": self.name, "method": self.method, "runs_error": self.scores}
+        return {"inputs": self.name, "method": self.method,
+                "runs_error": {name: float(e) if np.isfinite(e) else None  # diverged: None
+                               for name, e in self.scores.items()}}
 
 
 def held_inputs(log: ModelLog) -> ModelLog:
@@ -76,6 +78,18 @@ def choose_input_timing(model: Model, log: ModelLog, settings: ZeroPhase | None,
         return _timed(model, log, model.input_timing == "held", "declared by the model file")
     if not model.inputs:
         return _timed(model, log, False, "no inputs")
+    try:
+        scores = _runs_errors(model, log, settings, theta)
+    except (ValueError, ArithmeticError, np.linalg.LinAlgError) as error:
+        return _timed(model, log, False, f"the default; the timings not compared ({error})")
+    if scores is None:
+        return _timed(model, log, False, "too short to tell: taken as sampled")
+    return _timed(model, log, False, "the default (declare [log] inputs to choose)", scores)
+
+
+def _runs_errors(model: Model, log: ModelLog, settings: ZeroPhase | None,
+                 theta: np.ndarray | None) -> dict[str, float] | None:
+    """Each timing's runs' relative position error (None: too few runs)."""
     dynamics = Dynamics(model)
     scores: dict[str, float] = {}
     for held in (False, True):
@@ -88,10 +102,11 @@ def choose_input_timing(model: Model, log: ModelLog, settings: ZeroPhase | None,
         A = linearized_over(dynamics, timed, values)
         runs = pieces(0, log.samples, run_length(timed, time_constant(A)), MOST_RUNS)
         if len(runs.starts) < 2:
-            return _timed(model, log, False, "too short to tell: taken as sampled")
+            return None
         simulator = PieceSimulator(dynamics, timed, runs, substeps(A, log.step))
-        scores["held" if held else "sampled"] = simulator.error(values, CHECK_ITERATIONS)
-    return _timed(model, log, False, "the default (declare [log] inputs to choose)", scores)
+        with np.errstate(all="ignore"):  # a run that diverges scores inf or nan
+            scores["held" if held else "sampled"] = simulator.error(values, CHECK_ITERATIONS)
+    return scores
 
 
 def held_fits_better(timing: InputTiming) -> bool:
