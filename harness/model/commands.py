@@ -232,14 +232,20 @@ def _print_refinement(found: Identification) -> None:
     info = found.refinement
     held_out = info.get("held_out_simulation_error")
     if isinstance(held_out, dict):
-        print(f"  held-out simulation error: least squares {100 * held_out['least_squares']:.4g} "
-              f"%, refined {100 * held_out['refined']:.4g} %")
+        halves = held_out["per_half"]
+        print("  held-out simulation error (each half's fit scored on the other half): "
+              "least squares " + _halves(halves["least_squares"]) + ", refined "
+              + _halves(halves["refined"]) + f" (ratio {held_out['ratio']:.3g})")
     if info.get("applied"):
         print(f"  output-error refinement: run error {100 * info['runs_error_start']:.4g} "
               f"% -> {100 * info['runs_error_end']:.4g} % ({info['evaluations']} "
               "evaluations)")
     else:
         print(f"  output-error refinement not applied: {info.get('reason')}")
+
+
+def _halves(errors: list[float]) -> str:
+    return " and ".join(f"{100 * e:.4g}" for e in errors) + " %"
 
 
 def _print_scores(scores: dict[str, Any]) -> bool:

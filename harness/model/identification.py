@@ -157,8 +157,9 @@ def _refined(model: Model, log: ModelLog, rows: Regression, least: Fit, mode: st
             info["held_out_simulation_error"] = check.as_dict()
             if not check.improves:
                 return (*kept, {**info, "applied": False,
-                                "reason": "it does not lower the simulation error on the "
-                                          "held-out halves"})
+                                "reason": "it does not lower the simulation error on "
+                                          "the held-out halves (the geometric mean of "
+                                          "their ratios)"})
             start = check.start()  # nearer the optimum than least squares: fewer steps
         result = refine(model, log, start, dynamics=dynamics, free=free)
     except (ValueError, np.linalg.LinAlgError, FloatingPointError) as error:

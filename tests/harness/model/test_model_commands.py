@@ -48,14 +48,16 @@ def test_identify_writes_the_parameters_with_units_and_standard_errors(identifie
 
 
 def test_identify_refines_by_output_error_within_two_of_its_errors_of_idim_ls(identified):
-    """The held-out halves favour the refinement on this log (measured: 0.468 % against
-    0.477 %); the refined values lie within 2 of their standard errors of the published
+    """Each held-out half favours the refinement on this log (measured: 0.480 % against
+    0.491 % and 0.456 % against 0.462 %); the refined values lie within 2 of their standard errors of the published
     IDIM-LS values (measured: M 93.89 +- 1.6 kg, Fv 207.7 +- 9.2 N s/m, Fc 20.04 +-
     0.72 N, OF -3.325 +- 0.23 N: 0.8, 0.5, 0.5 and 0.7 of them)."""
     summary = json.loads((identified[1] / "identification.json").read_text())
     assert summary["method"] == "output error" and summary["refinement"]["applied"]
     held_out = summary["refinement"]["held_out_simulation_error"]
-    assert held_out["refined"] < held_out["least_squares"]
+    halves = held_out["per_half"]
+    assert all(np.array(halves["refined"]) < np.array(halves["least_squares"]))
+    assert held_out["ratio"] < 1.0
     rows = _parameters(identified[1])
     for name, (value, _) in PUBLISHED.items():
         found, std = float(rows[name]["value"]), float(rows[name]["std_error"])
