@@ -247,7 +247,8 @@ class RefinementCheck:
 
     def as_dict(self) -> dict[str, Any]:
         return {"least_squares": self.least_squares, "refined": self.refined,
-                "ratio": self.ratio, "per_half": {"least_squares": self.least_squares_halves.tolist(),
+                "ratio": self.ratio,
+                "per_half": {"least_squares": self.least_squares_halves.tolist(),
                              "refined": self.refined_halves_error.tolist()}}
 
     def start(self) -> np.ndarray:
