@@ -14,8 +14,8 @@ import numpy as np
 
 from ..units import ANGLE_UNITS, LENGTH_UNITS, TIME_UNITS, factor
 
-#: The range of a drive gain [N.m/A or N/A]: far beyond any drive's (0.01 to 100 with a
-#: gearbox), and such that the torques and their squares in the regression stay far
+#: The range of a drive gain's size [N.m/A or N/A]: far beyond any drive's (0.01 to 100
+#: with a gearbox), and such that the torques and their squares in the regression stay far
 #: inside float64 (a gain of 1e300 overflows them) and the joints' scales within 1e12.
 GAIN_RANGE = (1e-6, 1e6)
 
@@ -36,7 +36,9 @@ class LogUnits:
 
 
 def parse_gains(text: str) -> tuple[float, ...]:
-    """--torque-gains K1,K2,...: finite numbers > 0; UnitError names the bad item."""
+    """--torque-gains K1,K2,...: finite numbers other than 0, of either sign (a motor
+    mounted the other way round, or a current measured with the opposite convention, has
+    a negative gain); UnitError names the bad item."""
     items = [item.strip() for item in text.split(",")]
     gains = []
     for k, item in enumerate(items, start=1):
@@ -46,13 +48,14 @@ def parse_gains(text: str) -> tuple[float, ...]:
             value = math.nan
             if not item:
                 raise UnitError(f"--torque-gains {text!r}: gain {k} is empty") from None
-        if not (math.isfinite(value) and value > 0.0):
+        if not (math.isfinite(value) and value != 0.0):
             raise UnitError(f"--torque-gains {text!r}: gain {k} ({item!r}) is not a finite "
-                            "number > 0 (N.m/A of the joint's drive)")
-        if not GAIN_RANGE[0] <= value <= GAIN_RANGE[1]:
+                            "number other than 0 (N.m/A of the joint's drive, negative for a "
+                            "drive that turns the other way)")
+        if not GAIN_RANGE[0] <= abs(value) <= GAIN_RANGE[1]:
             raise UnitError(f"--torque-gains {text!r}: gain {k} ({item!r}) is outside "
-                            f"{GAIN_RANGE[0]:g} to {GAIN_RANGE[1]:g} (N.m/A of the joint's "
-                            "drive)")
+                            f"+-{GAIN_RANGE[0]:g} to +-{GAIN_RANGE[1]:g} (N.m/A of the "
+                            "joint's drive)")
         gains.append(value)
     return tuple(gains)
 
@@ -86,8 +89,9 @@ def log_units(kinds: Sequence[str], time: str | None = None, angle: str | None =
             raise UnitError(f"--torque-gains: {len(gains)} gain(s) for a robot of {len(kinds)} "
                             f"joints; give one per joint, in the order of u1..u{len(kinds)}")
         torque = np.asarray(gains, dtype=float)
-        bad = np.flatnonzero(~((torque >= GAIN_RANGE[0]) & (torque <= GAIN_RANGE[1])))
+        size = np.abs(torque)
+        bad = np.flatnonzero(~((size >= GAIN_RANGE[0]) & (size <= GAIN_RANGE[1])))
         if bad.size:
             raise UnitError(f"--torque-gains: gain {bad[0] + 1} ({torque[bad[0]]!r}) is not "
-                            f"a number from {GAIN_RANGE[0]:g} to {GAIN_RANGE[1]:g}")
+                            f"a number from +-{GAIN_RANGE[0]:g} to +-{GAIN_RANGE[1]:g}")
     return LogUnits(seconds, position, torque, time)

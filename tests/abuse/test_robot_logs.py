@@ -117,8 +117,8 @@ def _frame(t):
 @pytest.mark.parametrize("options, words", [
     (["--torque-gains", "1,2,3"], ["--torque-gains", "3 gain(s) for a robot of 2 joints"]),
     (["--torque-gains", "1"], ["--torque-gains", "1 gain(s) for a robot of 2 joints"]),
-    (["--torque-gains", "1,0"], ["--torque-gains", "gain 2 ('0')", "> 0"]),
-    (["--torque-gains=-1,2"], ["--torque-gains", "gain 1 ('-1')"]),
+    (["--torque-gains", "1,0"], ["--torque-gains", "gain 2 ('0')", "other than 0"]),
+    (["--torque-gains=-1e-9,2"], ["--torque-gains", "gain 1 ('-1e-9')", "+-1e-06"]),
     (["--torque-gains", "1,nan"], ["--torque-gains", "gain 2 ('nan')"]),
     (["--torque-gains", "1,inf"], ["--torque-gains", "gain 2 ('inf')"]),
     (["--torque-gains", "1,amps"], ["--torque-gains", "gain 2 ('amps')"]),
