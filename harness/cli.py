@@ -141,13 +141,13 @@ LOG_OPTIONS = {"identifier": ("--identifier", "lsm"), "param": ("--param", []),
                "resample": ("--resample", None), "input_hold": ("--input-hold", "zoh"),
                "csv_decimation": ("--csv-decimation", 1), "format": ("--format", "csv")}
 # the options of the robot path (harness.robot.cli), refused without --robot
-ROBOT_OPTIONS = {"lock": ("--lock", []), "unknown": ("--unknown", "all"),
-                 "velocity": ("--velocity", "sg"), "window": ("--window", None),
-                 "min_speed": ("--min-speed", None), "angle_unit": ("--angle-unit", None),
-                 "length_unit": ("--length-unit", None),
-                 "torque_gains": ("--torque-gains", None),
-                 "joint_terms": ("--joint-terms", None),
-                 "smooth_coulomb": ("--smooth-coulomb", None)}
+ROBOT_OPTIONS: dict[str, tuple[str, object]] = {
+    "lock": ("--lock", []), "unmeasured": ("--unmeasured", None),
+    "unknown": ("--unknown", "all"), "velocity": ("--velocity", "sg"),
+    "window": ("--window", None), "min_speed": ("--min-speed", None),
+    "angle_unit": ("--angle-unit", None), "length_unit": ("--length-unit", None),
+    "torque_gains": ("--torque-gains", None), "joint_terms": ("--joint-terms", None),
+    "smooth_coulomb": ("--smooth-coulomb", None)}
 # the options of the model-file path (harness.model.commands), refused without --model
 MODEL_OPTIONS = {"refine": ("--refine", "auto")}
 # the options of the model-file and robot paths (one log reader), refused without either

@@ -47,7 +47,8 @@ def register_validate(sub, parents) -> None:
                        help="the joint terms (offsets, armature, asymmetric or smooth "
                             "Coulomb) an identify run wrote, added to the URDF's prediction "
                             "(default: joint_terms.csv next to the URDF, if there is one)")
-    from .robot.cli import add_unit_arguments
+    from .robot.cli import add_unit_arguments, add_unmeasured_argument
+    add_unmeasured_argument(robot)
     add_unit_arguments(robot, time=True)
     p.set_defaults(func=_validate)
 
@@ -68,6 +69,7 @@ def _validate(args: argparse.Namespace) -> int:
         return validate_robot(args)
     given = [option for option, value, default in (
         ("--columns", args.columns, ""), ("--lock", args.lock, []),
+        ("--unmeasured", args.unmeasured, None),
         ("--window", args.window, None), ("--time-unit", args.time_unit, None),
         ("--angle-unit", args.angle_unit, None), ("--length-unit", args.length_unit, None),
         ("--torque-gains", args.torque_gains, None),

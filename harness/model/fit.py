@@ -119,6 +119,25 @@ def fit(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float = RIDGE,
                unbounded, unbounded_std)
 
 
+def expanded(part: Fit, free: np.ndarray, excitation: np.ndarray,
+             others: np.ndarray | None = None) -> Fit:
+    """A fit of the unknowns ``free`` as one of every unknown: the others at ``others``
+    (None: 0) with standard error 0, their excitation from ``excitation`` (a fit of every
+    unknown)."""
+    def full(values: np.ndarray, rest: np.ndarray | None = None) -> np.ndarray:
+        out = np.zeros(len(free)) if rest is None else np.array(rest, dtype=float)
+        out[free] = values
+        return out
+    covariance = np.zeros((len(free), len(free)))
+    covariance[np.ix_(free, free)] = part.covariance
+    return Fit(full(part.theta, others), full(part.std_error), full(part.classical_error),
+               np.where(free, full(part.excitation), excitation), part.equation_rms, part.rows,
+               covariance, part.condition,
+               None if part.at_bound is None else full(part.at_bound).astype(int),
+               None if part.unbounded is None else full(part.unbounded, others),
+               None if part.unbounded_std is None else full(part.unbounded_std))
+
+
 def _outside(theta: np.ndarray, bounds: tuple[np.ndarray, np.ndarray]) -> bool:
     lower, upper = bounds
     return bool(np.any(theta < lower) or np.any(theta > upper))

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from .fit import BATCH_SAMPLES, Fit, fit, relative_errors
+from .fit import BATCH_SAMPLES, Fit, expanded, fit, relative_errors
 from .input_timing import InputTiming, choose_input_timing
 from .log import ModelLog
 from .model import Model
@@ -96,7 +96,7 @@ def identify_model(model: Model, log: ModelLog, refine_mode: str = "auto") -> Id
         free = model_class.free
         if not free.all():
             lower, upper = model.bounds
-            least = _expanded(fit(rows.Y[:, :, free], rows.r, model.nominal[free],
+            least = expanded(fit(rows.Y[:, :, free], rows.r, model.nominal[free],
                                   batch=batch, mask=rows.mask,
                                   bounds=(lower[free], upper[free])), free, least.excitation)
     held = np.zeros(len(free), dtype=bool) if least.at_bound is None else least.at_bound != 0
@@ -122,23 +122,6 @@ def _held(model: Model, theta: np.ndarray, least: Fit) -> dict[str, dict[str, An
                                "significant": free is not None and std is not None and
                                abs(free - value) > HELD_SIGNIFICANT * std}
     return out
-
-
-def _expanded(part: Fit, free: np.ndarray, excitation: np.ndarray) -> Fit:
-    """A fit of the unknowns ``free`` as one of every unknown: the others 0, with their
-    excitation from the fit of every unknown."""
-    def full(values: np.ndarray) -> np.ndarray:
-        out = np.zeros(len(free))
-        out[free] = values
-        return out
-    covariance = np.zeros((len(free), len(free)))
-    covariance[np.ix_(free, free)] = part.covariance
-    return Fit(full(part.theta), full(part.std_error), full(part.classical_error),
-               np.where(free, full(part.excitation), excitation), part.equation_rms, part.rows,
-               covariance, part.condition,
-               None if part.at_bound is None else full(part.at_bound).astype(int),
-               None if part.unbounded is None else full(part.unbounded),
-               None if part.unbounded_std is None else full(part.unbounded_std))
 
 
 def _refined(model: Model, log: ModelLog, rows: Regression, least: Fit, mode: str,

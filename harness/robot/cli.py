@@ -20,6 +20,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help="identify a serial robot from columns t, q1..qn, u1..un")
     group.add_argument("--lock", action="append", default=[], metavar="JOINT",
                        help="a URDF joint held at 0 (e.g. gripper fingers); repeatable")
+    add_unmeasured_argument(group)
     group.add_argument("--unknown", choices=["all", "payload"], default="all",
                        help="all: every base parameter and the friction; payload: the last "
                             "link's parameters and the friction, the other links as in the URDF")
@@ -52,6 +53,34 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help="Coulomb friction as fc tanh(q'/VS) instead of fc sign(q') "
                             "[VS in rad/s or m/s, > 0]")
     add_unit_arguments(group, time=False)  # identify's --time-unit serves every log
+
+
+def add_unmeasured_argument(group) -> None:
+    group.add_argument("--unmeasured", default=None, metavar="JOINT,...",
+                       help="URDF joints whose torque the log does not hold (no u column is "
+                            "read for them): their equations are left out, their dynamics "
+                            "stay in the other joints' equations")
+
+
+def unmeasured_indices(text: str | None, robot) -> list[int]:
+    """The 0-based joints --unmeasured names; LogError for a name the robot lacks, a
+    repeat, or every joint."""
+    from .pipeline import LogError
+    if text is None:
+        return []
+    names = [name.strip() for name in text.split(",")]
+    found = []
+    for name in names:
+        if name not in robot.joint_names:
+            raise LogError(f"--unmeasured {text!r}: {name!r} is not a moving joint of the "
+                           f"robot (its joints: {', '.join(robot.joint_names)})")
+        if robot.joint_names.index(name) in found:
+            raise LogError(f"--unmeasured {text!r}: {name!r} is named twice")
+        found.append(robot.joint_names.index(name))
+    if len(found) == robot.n:
+        raise LogError(f"--unmeasured {text!r}: no joint's torque would be left to identify "
+                       "from")
+    return sorted(found)
 
 
 def add_unit_arguments(group, time: bool) -> None:
@@ -133,13 +162,16 @@ def robot_and_log(args, mapping: dict[str, str]):
     robot = read_urdf(args.robot, locked=tuple(args.lock))
     roles = ["t", *(f"q{i}" for i in range(1, robot.n + 1)),
              *(f"u{i}" for i in range(1, robot.n + 1))]
+    unmeasured = unmeasured_indices(args.unmeasured, robot)
+    roles = [role for role in roles if role not in {f"u{i + 1}" for i in unmeasured}]
     unknown = [role for role in mapping if role not in roles]
-    if unknown:  # a role of another robot would be left unread, silently
+    if unknown:  # a role of another robot (or an unmeasured torque) would be left unread
         raise LogError(f"--columns names {', '.join(map(repr, unknown))}, which "
                        f"{'is' if len(unknown) == 1 else 'are'} not a role of this "
-                       f"{robot.n}-joint robot (roles: {', '.join(roles)})")
+                       f"{robot.n}-joint robot (roles: {', '.join(roles)}"
+                       f"{'; --unmeasured leaves out the others' if unmeasured else ''})")
     return robot, read_log(args.data, robot.n, mapping, units=units_of(args, robot),
-                           sample_rate=args.sample_rate)
+                           sample_rate=args.sample_rate, unmeasured=unmeasured)
 
 
 def identify_command(args) -> int:
@@ -238,6 +270,9 @@ def _print_assessment(result) -> None:
     for name in result.passive:
         print(f"  {name}: torque 0 throughout, taken as a passive joint (its equation, "
               f"torque = 0, constrains the parameters)")
+    for name in result.unmeasured:
+        print(f"  {name}: torque not measured (--unmeasured): its equation is left out; what "
+              "only it holds (its friction) keeps the URDF's values, standard error 0")
     for message in result.warnings:  # counted: the command exits 1 (docs/cli.md)
         note(message)
 

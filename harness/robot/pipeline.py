@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import csv
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -35,7 +35,7 @@ from scipy.signal import savgol_filter
 
 from ..json_files import write_json
 from ..log_signals import Column, LogSignalsError, header_of, read_signals
-from ..model.fit import Fit
+from ..model.fit import Fit, expanded
 from ..model.fit import fit as least_squares
 from ..model.friction_rows import joint_friction_rows
 from .assessment import Choice, choose_model, prediction_error
@@ -80,8 +80,9 @@ LogError = LogSignalsError
 class JointLog:
     t: np.ndarray   # (N,)
     q: np.ndarray   # (N, n)
-    u: np.ndarray   # (N, n)
+    u: np.ndarray   # (N, n); 0 for a joint whose torque the log does not hold
     resampled: str | None = None  # what was done to a log whose clock jitters (None: nothing)
+    unmeasured: tuple[int, ...] = ()  # those joints (0-based)
 
     @property
     def step(self) -> float:
@@ -91,16 +92,18 @@ class JointLog:
 
 def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
              relative_tolerance: float = 0.01, units: LogUnits | None = None,
-             sample_rate: float | None = None) -> JointLog:
+             sample_rate: float | None = None, unmeasured: Sequence[int] = ()) -> JointLog:
     """Columns t, q1..qn, u1..un (or the names or 1-based column numbers `mapping` gives
     them; a CSV file without a header row has them in that order) of a CSV, Parquet or
     MATLAB log, read by the one log reader (harness.log_signals): a clock whose steps
     differ from the mean step by more than `relative_tolerance` is resampled onto even
     steps, a gap refused.  `units` (harness.robot.log_units) brings the columns to s, rad
     or m and N.m or N (None: they are in these units).  With a `sample_rate` [Hz] no time
-    column is read: the samples are evenly spaced at it from t = 0."""
+    column is read: the samples are evenly spaced at it from t = 0.  The joints
+    ``unmeasured`` (0-based) have no torque column (JointLog.unmeasured)."""
     path, mapping = Path(path), dict(mapping or {})
-    positions, torques = [f"q{i}" for i in range(1, n + 1)], [f"u{i}" for i in range(1, n + 1)]
+    measured = [i for i in range(n) if i not in set(unmeasured)]
+    positions, torques = [f"q{i}" for i in range(1, n + 1)], [f"u{i + 1}" for i in measured]
     wanted = ([] if sample_rate is not None else ["t"]) + positions + torques
     if units is not None and len(units.position) != n:
         raise ValueError(f"units for {len(units.position)} joints, the robot has {n}")
@@ -110,8 +113,7 @@ def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
             # no header row: the columns in the roles' order, t, q1..qn, u1..un
             if len(header) != len(wanted):
                 raise LogError(f"{path}: no header row and {len(header)} columns; a robot of "
-                               f"{n} joints needs {len(wanted)} ({', '.join(wanted[:1])}"
-                               f"{', ' if sample_rate is None else ''}q1..q{n}, u1..u{n}) or "
+                               f"{n} joints needs {len(wanted)} ({', '.join(wanted)}) or "
                                "--columns with column numbers")
             mapping = {role: str(k + 1) for k, role in enumerate(wanted)}
         found = [k for k in header if k.startswith("q") and k[1:].isdigit()]
@@ -126,11 +128,15 @@ def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
         path, None if sample_rate is not None else Column("t", mapping.get("t", "t")),
         columns(positions), columns(torques), sample_rate=sample_rate,
         time_factor=1.0 if units is None else units.time,
-        factors=None if units is None else np.concatenate([units.position, units.torque]),
+        factors=None if units is None else np.concatenate([units.position,
+                                                           units.torque[measured]]),
         missing_hint=hint, tolerance=relative_tolerance,
         slow_step_hint=None if units is not None and units.time_unit is not None else
         "give --time-unit ms (--time-unit s confirms seconds)")
-    return JointLog(signals.t, signals.q, signals.inputs, signals.resampled)
+    u = np.zeros((len(signals.t), n))
+    u[:, measured] = signals.inputs
+    return JointLog(signals.t, signals.q, u, signals.resampled,
+                    tuple(i for i in range(n) if i not in measured))
 
 
 def _odd(count: int) -> int:
@@ -184,6 +190,7 @@ class Identification:
     passive: list[str] = field(default_factory=list)  # joints whose torque is 0 throughout
     terms: JointTerms = field(default_factory=JointTerms)  # the extra joint terms
     terms_choice: TermsChoice | None = None  # how they were chosen (choose_terms)
+    unmeasured: list[str] = field(default_factory=list)  # joints whose torque the log lacks
 
     @property
     def warnings(self) -> list[str]:
@@ -306,9 +313,11 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     base = base_for(terms)
     Y = rows.extend(terms)
     result = _identified(robot, rows, base, Y, terms, urdf_tolerance)
-    passive = [name for i, name in enumerate(robot.joint_names) if not np.any(log.u[:, i])]
+    passive = [name for i, name in enumerate(robot.joint_names)
+               if not np.any(log.u[:, i]) and i not in log.unmeasured]
     return Identification(result[0], result[1], result[2], velocity, used, velocity_window,
-                          window, result[3], result[4], passive, terms, choice)
+                          window, result[3], result[4], passive, terms, choice,
+                          [robot.joint_names[i] for i in log.unmeasured])
 
 
 def regression_rows(robot: Robot, body, log: JointLog, method: str, window: float,
@@ -347,8 +356,18 @@ def regression_rows(robot: Robot, body, log: JointLog, method: str, window: floa
         x = joint_speed(i)
         mask[:, i] = joint_friction_rows(x, log.step, margin, min_speed, slow_margin, used)
         speed[:, i] = x[used]
-    check_friction_rows(mask, speed, robot.joint_names, min_speed)
+    measured = ~unmeasured_joints(log)
+    check_friction_rows(mask[:, measured], speed[:, measured],
+                        [name for name, m in zip(robot.joint_names, measured) if m], min_speed)
+    mask[:, ~measured] = False  # its equation left out; its dynamics stay in the others'
     return Rows(used, core, torque, speed, mask, correlation, extend)
+
+
+def unmeasured_joints(log: JointLog) -> np.ndarray:
+    """(n,) True for the joints whose torque the log does not hold."""
+    out = np.zeros(log.q.shape[1], dtype=bool)
+    out[list(log.unmeasured)] = True
+    return out
 
 
 def known_columns(n: int, base: BaseParameters) -> np.ndarray:
@@ -369,8 +388,14 @@ def _identified(robot: Robot, rows: Rows, base: BaseParameters, Y: np.ndarray,
     # the ridge of the one least squares pulls a weakly excited base parameter toward the
     # URDF's value
     nominal_beta = base.project(np.concatenate([nominal, np.zeros(terms.count(robot.n))]))
-    fit = least_squares(base.regressor(Y), torque - known_torque, nominal_beta,
+    # a base parameter that no kept equation holds (an unmeasured joint's friction) keeps
+    # the URDF's value, standard error 0, instead of a singular fit
+    Yb_all = base.regressor(Y)
+    held = ~np.any(Yb_all * mask[:, :, None], axis=(0, 1))
+    fit = least_squares(Yb_all[:, :, ~held], torque - known_torque, nominal_beta[~held],
                         batch=rows.correlation, mask=mask)
+    if held.any():
+        fit = expanded(fit, ~held, np.zeros(len(held)), nominal_beta)
     # each parameter's value that alone would explain the torques (prior_scales)
     measured = torque * mask
     with np.errstate(divide="ignore"):
@@ -422,7 +447,8 @@ def check_friction_rows(mask: np.ndarray, velocity: np.ndarray, names: list[str]
 def _assessment_json(result: Identification) -> dict:
     """summary.json's record of the training-log predictions, the consistent projection,
     what identified.urdf holds and the warnings."""
-    out: dict = {"passive_joints": result.passive, "warnings": result.warnings}
+    out: dict = {"passive_joints": result.passive, "unmeasured_joints": result.unmeasured,
+                 "warnings": result.warnings}
     if result.choice is not None:
         out["training_prediction"] = {
             **{name: p.as_json() for name, p in result.choice.predictions.items()},

@@ -32,7 +32,7 @@ from .joint_terms import (
     read_sidecar,
 )
 from .layout import ParameterLayout, core_layout
-from .pipeline import JointLog, LogError, savitzky_golay, smooth_column
+from .pipeline import JointLog, LogError, savitzky_golay, smooth_column, unmeasured_joints
 from .smoothing import regression_window, velocity_windows
 from .urdf import Robot
 
@@ -87,8 +87,9 @@ def filtered(log: JointLog, x: np.ndarray, window: float) -> np.ndarray:
 def torque_errors(robot: Robot, log: JointLog, window: float, sidecar: Sidecar | None = None
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, float | None], float]:
     """(t, measured, predicted torques, relative error per joint (None: a joint whose
-    torque is 0, passive), pooled) on the samples a window away from the log's ends;
-    the sidecar's joint terms (read_sidecar) added to the URDF's prediction."""
+    torque is 0, passive, or not in the log: unmeasured), pooled over the measured joints)
+    on the samples a window away from the log's ends; the sidecar's joint terms
+    (read_sidecar) added to the URDF's prediction."""
     q, qd, qdd, u = savitzky_golay(log, window)
     edge = int(np.ceil(window / log.step - 1e-9))  # not one more for a step's rounding
     inside = slice(edge, len(log.t) - edge)
@@ -107,26 +108,30 @@ def torque_errors(robot: Robot, log: JointLog, window: float, sidecar: Sidecar |
     per_joint: dict[str, float | None] = {}
     for i, name in enumerate(robot.joint_names):
         scale = float(np.sqrt(np.mean(measured[:, i] ** 2)))
-        per_joint[name] = (float(np.sqrt(np.mean(error[:, i] ** 2))) / scale if scale > 0
-                           else None)
-    pooled = float(np.linalg.norm(error) / np.linalg.norm(measured))
+        per_joint[name] = (float(np.sqrt(np.mean(error[:, i] ** 2))) / scale
+                           if scale > 0 and i not in log.unmeasured else None)
+    kept = ~unmeasured_joints(log)
+    pooled = float(np.linalg.norm(error[:, kept]) / np.linalg.norm(measured[:, kept]))
     return log.t[inside], measured, predicted, per_joint, pooled
 
 
 def write_validation(out: Path, urdf: str, data: str, window: float, t: np.ndarray,
                      measured: np.ndarray, predicted: np.ndarray,
                      per_joint: dict[str, float | None],
-                     pooled: float, joint_terms: str | None = None) -> None:
+                     pooled: float, joint_terms: str | None = None,
+                     unmeasured: tuple[str, ...] = ()) -> None:
     """validation.json and validation.png (measured and predicted torques per joint);
     joint_terms: the joint_terms.csv whose terms the prediction includes (None: none)."""
     write_json(out / "validation.json", {
         "urdf": urdf, "joint_terms": joint_terms, "log": data,
         "relative_error": {"per_joint": per_joint, "pooled": pooled},
+        "unmeasured_joints": list(unmeasured),
         "definition": "RMS of (predicted - measured torque) over RMS of the measured torque, "
                       "per joint and pooled over the joints; zero-phase Savitzky-Golay "
                       "derivatives of q and the same filter on the measured torque and on "
                       "the model's Coulomb friction (steps at the reversals), the window's "
-                      "edges left out",
+                      "edges left out; null for a joint whose torque is 0 (passive) or "
+                      "not measured (unmeasured_joints)",
         "window": window, "samples": int(len(t)),
     })
     from matplotlib.figure import Figure
@@ -137,7 +142,8 @@ def write_validation(out: Path, urdf: str, data: str, window: float, t: np.ndarr
     for i, (ax, name) in enumerate(zip(axes, per_joint)):
         ax.plot(t, measured[:, i], lw=0.8, color="k", label="measured")
         ax.plot(t, predicted[:, i], lw=0.8, color="C1", label="predicted")
-        ax.set_ylabel(f"{name}\n{_percent(per_joint[name], 1)}", fontsize=8)
+        ax.set_ylabel(f"{name}\n{_percent(per_joint[name], 1, name in unmeasured)}",
+                      fontsize=8)
     axes[0].legend(loc="upper right", fontsize=8)
     axes[-1].set_xlabel("t [s]")
     fig.suptitle(f"{Path(urdf).name} on {Path(data).name}: pooled {100 * pooled:.2f} %",
@@ -145,9 +151,12 @@ def write_validation(out: Path, urdf: str, data: str, window: float, t: np.ndarr
     fig.savefig(out / "validation.png", dpi=100)
 
 
-def _percent(relative: float | None, digits: int) -> str:
-    """A relative error in %, or what None means (a joint whose torque is 0)."""
-    return "n/a (torque 0: passive)" if relative is None else f"{100 * relative:.{digits}f} %"
+def _percent(relative: float | None, digits: int, unmeasured: bool = False) -> str:
+    """A relative error in %, or what None means (a joint whose torque is 0, or not in
+    the log)."""
+    if relative is None:
+        return "n/a (not measured)" if unmeasured else "n/a (torque 0: passive)"
+    return f"{100 * relative:.{digits}f} %"
 
 
 def sidecar_path(urdf: str, given: str | None) -> Path | None:
@@ -183,9 +192,10 @@ def validate_command(args) -> int:
                 sidecar = None  # only a header: the URDF's model alone
             t, measured, predicted, per_joint, pooled = torque_errors(robot, log, window,
                                                                       sidecar)
+            unmeasured = tuple(robot.joint_names[i] for i in log.unmeasured)
             write_validation(outputs.staging, args.robot, args.data, window, t,
                              measured, predicted, per_joint, pooled,
-                             None if sidecar is None else str(terms_file))
+                             None if sidecar is None else str(terms_file), unmeasured)
     except (UrdfError, LogError, UnitError, JointTermsError) as error:
         print(f"harness validate: {error}", file=sys.stderr)
         return 2
@@ -201,6 +211,6 @@ def validate_command(args) -> int:
     if log.resampled:
         print(f"  {args.data}: {log.resampled}")
     for name, relative in per_joint.items():
-        print(f"  {name}: relative torque error {_percent(relative, 3)}")
+        print(f"  {name}: relative torque error {_percent(relative, 3, name in unmeasured)}")
     print(f"  pooled: {100 * pooled:.3f} % (Savitzky-Golay window {window:.3g} s)")
     return 0
