@@ -142,7 +142,7 @@ LOG_OPTIONS = {"identifier": ("--identifier", "lsm"), "param": ("--param", []),
                "csv_decimation": ("--csv-decimation", 1), "format": ("--format", "csv")}
 # the options of the robot path (harness.robot.cli), refused without --robot
 ROBOT_OPTIONS: dict[str, tuple[str, object]] = {
-    "lock": ("--lock", []), "unmeasured": ("--unmeasured", None),
+    "lock": ("--lock", []), "joints": ("--joints", None), "unmeasured": ("--unmeasured", None),
     "unknown": ("--unknown", "all"), "velocity": ("--velocity", "sg"),
     "window": ("--window", None), "min_speed": ("--min-speed", None),
     "angle_unit": ("--angle-unit", None), "length_unit": ("--length-unit", None),

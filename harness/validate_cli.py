@@ -37,8 +37,6 @@ def register_validate(sub, parents) -> None:
     robot = p.add_argument_group("serial robots (with --robot)")
     robot.add_argument("--columns", default="", metavar="q1=NAME,...",
                        help="log column of each role t, q1..qn, u1..un")
-    robot.add_argument("--lock", action="append", default=[], metavar="JOINT",
-                       help="a URDF joint held at 0 (e.g. gripper fingers); repeatable")
     robot.add_argument("--window", type=_positive_window, default=None,
                        help="Savitzky-Golay window of the derivatives [s] (default: as "
                             "identify chooses it, from the log's joint velocity windows, "
@@ -47,8 +45,8 @@ def register_validate(sub, parents) -> None:
                        help="the joint terms (offsets, armature, asymmetric or smooth "
                             "Coulomb) an identify run wrote, added to the URDF's prediction "
                             "(default: joint_terms.csv next to the URDF, if there is one)")
-    from .robot.cli import add_unit_arguments, add_unmeasured_argument
-    add_unmeasured_argument(robot)
+    from .robot.cli import add_chain_arguments, add_unit_arguments
+    add_chain_arguments(robot)
     add_unit_arguments(robot, time=True)
     p.set_defaults(func=_validate)
 
@@ -69,7 +67,7 @@ def _validate(args: argparse.Namespace) -> int:
         return validate_robot(args)
     given = [option for option, value, default in (
         ("--columns", args.columns, ""), ("--lock", args.lock, []),
-        ("--unmeasured", args.unmeasured, None),
+        ("--unmeasured", args.unmeasured, None), ("--joints", args.joints, None),
         ("--window", args.window, None), ("--time-unit", args.time_unit, None),
         ("--angle-unit", args.angle_unit, None), ("--length-unit", args.length_unit, None),
         ("--torque-gains", args.torque_gains, None),

@@ -18,9 +18,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("serial robots (with --robot)")
     group.add_argument("--robot", metavar="URDF",
                        help="identify a serial robot from columns t, q1..qn, u1..un")
-    group.add_argument("--lock", action="append", default=[], metavar="JOINT",
-                       help="a URDF joint held at 0 (e.g. gripper fingers); repeatable")
-    add_unmeasured_argument(group)
+    add_chain_arguments(group)
     group.add_argument("--unknown", choices=["all", "payload"], default="all",
                        help="all: every base parameter and the friction; payload: the last "
                             "link's parameters and the friction, the other links as in the URDF")
@@ -55,11 +53,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_unit_arguments(group, time=False)  # identify's --time-unit serves every log
 
 
-def add_unmeasured_argument(group) -> None:
+def add_chain_arguments(group, unmeasured: bool = True) -> None:
+    """--lock, --joints (the chain) and, for commands that read a log, --unmeasured."""
+    group.add_argument("--lock", action="append", default=[], metavar="JOINT",
+                       help="a URDF joint held at 0 (e.g. gripper fingers); repeatable")
+    group.add_argument("--joints", type=_joint_names, default=None, metavar="JOINT,...",
+                       help="the chain's moving joints, from the root outward (the log's q1, "
+                            "q2, ...): every other joint of the URDF is held at 0, so that a "
+                            "branching robot (a mobile base's wheels) reduces to one arm")
+    if not unmeasured:
+        return
     group.add_argument("--unmeasured", default=None, metavar="JOINT,...",
                        help="URDF joints whose torque the log does not hold (no u column is "
                             "read for them): their equations are left out, their dynamics "
                             "stay in the other joints' equations")
+
+
+def _joint_names(text: str) -> tuple[str, ...]:
+    names = tuple(name.strip() for name in text.split(","))
+    if not all(names):
+        raise argparse.ArgumentTypeError(f"{text!r}: a joint name is empty")
+    return names
 
 
 def unmeasured_indices(text: str | None, robot) -> list[int]:
@@ -159,7 +173,7 @@ def robot_and_log(args, mapping: dict[str, str]):
     if args.sample_rate is not None and args.time_unit is not None:
         raise LogError("--sample-rate and --time-unit: with a sample rate no time column is "
                        "read; give one of the two")
-    robot = read_urdf(args.robot, locked=tuple(args.lock))
+    robot = read_urdf(args.robot, locked=tuple(args.lock), joints_used=args.joints)
     roles = ["t", *(f"q{i}" for i in range(1, robot.n + 1)),
              *(f"u{i}" for i in range(1, robot.n + 1))]
     unmeasured = unmeasured_indices(args.unmeasured, robot)
@@ -286,8 +300,7 @@ def register_fmu_parameters(sub, parents) -> None:
                        "parameter set (SSV) with the FMU's FMI 2 variable names.")
     p.add_argument("urdf", help="the robot's URDF")
     p.add_argument("--out", required=True, metavar="FILE", help="the .ssv file to write")
-    p.add_argument("--lock", action="append", default=[], metavar="JOINT",
-                   help="a URDF joint held at 0 (e.g. gripper fingers); repeatable")
+    add_chain_arguments(p, unmeasured=False)
     p.add_argument("--unknown", choices=["all", "payload"], default="all",
                    help="identified: every base parameter and the friction (all), or the "
                         "last link's parameters and the friction (payload)")
@@ -319,7 +332,7 @@ def fmu_parameters_command(args) -> int:
     outputs = Outputs(target.parent, "robot-fmu-parameters", inputs=[args.urdf],
                       names=[target.name], lock=False)  # one file: its rename is atomic
     try:
-        robot = read_urdf(args.urdf, locked=tuple(args.lock))
+        robot = read_urdf(args.urdf, locked=tuple(args.lock), joints_used=args.joints)
         rule = {name: value for name, value in (("min_speed", args.min_speed),
                                                 ("reversal_margin", args.reversal_margin))
                 if value is not None}

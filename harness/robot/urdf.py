@@ -13,6 +13,7 @@ Chains of any length are walked without recursion.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -228,8 +229,11 @@ def parse_urdf(source: Path, remove_blank_text: bool = False):
 
 
 def read_urdf(path: str | Path, locked: tuple[str, ...] | list[str] = (),
-              gravity=DEFAULT_GRAVITY) -> Robot:
-    """Read and validate a URDF as a serial chain; `locked` joints are fixed at 0."""
+              gravity=DEFAULT_GRAVITY, joints_used: Sequence[str] | None = None) -> Robot:
+    """Read and validate a URDF as a serial chain; `locked` joints are fixed at 0.
+    `joints_used` (None: every moving joint not locked): the chain's moving joints, from
+    the root outward; every other joint is fixed at 0, so that a branching robot (a
+    mobile base's wheels, a second arm) reduces to the chain of one arm."""
     source = Path(path)
     root = parse_urdf(source).getroot()
     if root.tag != "robot":
@@ -263,6 +267,8 @@ def read_urdf(path: str | Path, locked: tuple[str, ...] | list[str] = (),
     if unknown:
         raise UrdfError(f"{source}: locked joint(s) {', '.join(map(repr, unknown))} not in the "
                         f"URDF (its joints: {', '.join(joints)})")
+    if joints_used is not None:
+        locked = [*locked, *_others_locked(source, joints, list(joints_used), locked)]
     roots = [name for name in links if name not in parent_joint]
     if len(roots) != 1:
         raise UrdfError(f"{source}: expected one root link, found {len(roots)} "
@@ -275,7 +281,11 @@ def read_urdf(path: str | Path, locked: tuple[str, ...] | list[str] = (),
     max_joints = core_defaults().max_joints
     if len(chain.joints) > max_joints:
         raise UrdfError(f"{source}: {len(chain.joints)} moving joints; at most {max_joints} are "
-                        f"supported (lock some with --lock)")
+                        f"supported (name the chain's with --joints, or lock some with --lock)")
+    if joints_used is not None and [j.name for j in chain.joints] != list(joints_used):
+        raise UrdfError(f"{source}: --joints {','.join(joints_used)}: the chain from the root "
+                        f"link meets them in the order {','.join(j.name for j in chain.joints)}"
+                        f"; give them in that order (and map the log's columns with --columns)")
     robot = Robot(root.get("name", source.stem), source, roots[0], chain.joints, tuple(locked),
                   np.asarray(gravity, dtype=float))
     for joint in robot.joints:  # merged bodies: sums of bounded numbers, still finite?
@@ -283,6 +293,22 @@ def read_urdf(path: str | Path, locked: tuple[str, ...] | list[str] = (),
             raise UrdfError(f"{source}: joint {joint.name!r}: its body's position or inertia "
                             f"is not finite")
     return robot
+
+
+def _others_locked(source: Path, joints: dict, used: list[str], locked) -> list[str]:
+    """The moving joints that ``used`` (--joints) leaves out; UrdfError for a name that is
+    not a moving joint of the URDF, a repeat, or a joint also locked."""
+    moving = [name for name, joint in joints.items() if joint.get("type") in MOVING_TYPES]
+    listed = f"--joints {','.join(used)}"
+    for name in used:
+        if name not in moving:
+            raise UrdfError(f"{source}: {listed}: {name!r} is not a moving joint of the URDF "
+                            f"(its moving joints: {', '.join(moving)})")
+        if used.count(name) > 1:
+            raise UrdfError(f"{source}: {listed}: {name!r} is named twice")
+        if name in locked:
+            raise UrdfError(f"{source}: {listed}: {name!r} is also locked (--lock)")
+    return [name for name in moving if name not in used and name not in locked]
 
 
 def _check_connected(source: Path, root: str, links: dict, joints: dict) -> None:
@@ -350,8 +376,8 @@ class _Chain:
             if len(onward) > 1:
                 raise UrdfError(f"{self.source}: not a serial chain: link {name!r} branches into "
                                 f"joints {', '.join(repr(j.get('name')) for j in onward)} that "
-                                f"both lead to moving joints (lock the joints of all but one "
-                                f"branch)")
+                                f"both lead to moving joints (name the chain's joints with "
+                                f"--joints, or lock the joints of all but one branch)")
             for joint in self.children.get(name, []):
                 where = f"{self.source}: joint {joint.get('name')!r}"
                 Rj, pj = _origin(joint, where)

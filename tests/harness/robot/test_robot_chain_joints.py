@@ -1,0 +1,98 @@
+"""--joints: the chain of one arm out of a branching URDF (a mobile base's wheels, a
+finger), every other joint held at 0."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from lxml import etree
+
+from harness.cli import main
+from harness.robot.examples import example_urdf
+from harness.robot.urdf import UrdfError, read_urdf
+
+
+def _add_link(root, name: str, parent: str, kind: str, xyz: str) -> None:
+    link = etree.SubElement(root, "link", name=name)
+    inertial = etree.SubElement(link, "inertial")
+    etree.SubElement(inertial, "origin", xyz="0.01 0.02 0.03", rpy="0 0 0")
+    etree.SubElement(inertial, "mass", value="1.7")
+    etree.SubElement(inertial, "inertia", ixx="0.01", ixy="0", ixz="0", iyy="0.02", iyz="0",
+                     izz="0.03")
+    joint = etree.SubElement(root, "joint", name=f"{name}_joint", type=kind)
+    etree.SubElement(joint, "parent", link=parent)
+    etree.SubElement(joint, "child", link=name)
+    etree.SubElement(joint, "origin", xyz=xyz, rpy="0 0 0")
+    etree.SubElement(joint, "axis", xyz="0 1 0")
+
+
+@pytest.fixture(scope="module")
+def urdfs(tmp_path_factory):
+    """The double pendulum, and the same on a base with two wheels and with a finger on
+    its last link (a prismatic joint)."""
+    folder = tmp_path_factory.mktemp("chain")
+    arm, _ = example_urdf("double_pendulum")
+    tree = etree.parse(str(arm))
+    root = tree.getroot()
+    _add_link(root, "wheel_left", "base_link", "continuous", "0 0.3 0")
+    _add_link(root, "wheel_right", "base_link", "continuous", "0 -0.3 0")
+    _add_link(root, "finger", "link2", "prismatic", "0.1 0 0")
+    branching = folder / "mobile.urdf"
+    tree.write(str(branching))
+    return arm, branching, folder
+
+
+def test_a_branching_urdf_names_the_option(urdfs):
+    _, branching, _ = urdfs
+    with pytest.raises(UrdfError, match="not a serial chain.*--joints"):
+        read_urdf(branching)
+
+
+def test_the_named_chain_is_the_arm_with_the_rest_held(urdfs):
+    """The wheels hang from the fixed base: they weigh nothing on the arm. The finger, held
+    at 0, is part of link 2's body: its mass and inertia join it."""
+    arm, branching, _ = urdfs
+    plain = read_urdf(arm)
+    chain = read_urdf(branching, joints_used=("joint1", "joint2"))
+    assert chain.joint_names == ["joint1", "joint2"]
+    assert set(chain.locked) == {"wheel_left_joint", "wheel_right_joint", "finger_joint"}
+    links, plain_links = chain.arrays()["link"], plain.arrays()["link"]
+    assert np.array_equal(links[0], plain_links[0])
+    assert links[1][0] == pytest.approx(plain_links[1][0] + 1.7)  # the finger's mass
+    # the same as locking the three joints by hand
+    by_hand = read_urdf(branching, locked=("wheel_left_joint", "wheel_right_joint",
+                                           "finger_joint"))
+    assert np.array_equal(by_hand.arrays()["link"], links)
+
+
+@pytest.mark.parametrize("used, words", [
+    (("joint2", "joint1"), "meets them in the order joint1,joint2"),
+    (("joint1", "elbow"), "'elbow' is not a moving joint"),
+    (("joint1", "joint1"), "'joint1' is named twice"),
+    (("joint1", "wheel_left_joint"), "not a serial chain"),
+])
+def test_a_bad_chain_is_refused_by_name(urdfs, used, words):
+    _, branching, _ = urdfs
+    with pytest.raises(UrdfError, match=words):
+        read_urdf(branching, joints_used=used)
+
+
+def test_a_joint_both_named_and_locked_is_refused(urdfs):
+    _, branching, _ = urdfs
+    with pytest.raises(UrdfError, match="'joint2' is also locked"):
+        read_urdf(branching, locked=("joint2",), joints_used=("joint1", "joint2"))
+
+
+def test_every_robot_command_takes_it(urdfs, capsys):
+    """robot-fmu-parameters of the branching URDF with --joints writes what locking by hand
+    writes; identify refuses an empty name in the list by argparse (exit 2)."""
+    _, branching, folder = urdfs
+    assert main(["robot-fmu-parameters", str(branching), "--joints", "joint1,joint2",
+                 "--out", str(folder / "named.ssv")]) == 0
+    assert main(["robot-fmu-parameters", str(branching), "--lock", "wheel_left_joint",
+                 "--lock", "wheel_right_joint", "--lock", "finger_joint",
+                 "--out", str(folder / "locked.ssv")]) == 0
+    assert (folder / "named.ssv").read_bytes() == (folder / "locked.ssv").read_bytes()
+    with pytest.raises(SystemExit) as stop:
+        main(["identify", "log.csv", "--robot", str(branching), "--joints", "joint1,,joint2",
+              "--out", str(folder / "x")])
+    assert stop.value.code == 2 and "a joint name is empty" in capsys.readouterr().err
