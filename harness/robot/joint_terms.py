@@ -181,6 +181,8 @@ def check_directions(terms: JointTerms, speed: np.ndarray, mask: np.ndarray,
         return None
     problems = []
     for i, name in enumerate(names):
+        if not mask[:, i].any():
+            continue  # no equation at all (an unmeasured torque): its terms are not fitted
         used = speed[mask[:, i], i]
         for word, moving in (("forwards (q' > 0)", used > 0), ("backwards (q' < 0)", used < 0)):
             if not moving.any():

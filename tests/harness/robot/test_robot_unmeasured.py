@@ -112,3 +112,18 @@ def test_unmeasured_goes_with_robot_only(runs, capsys):
     code = main(["validate", str(folder / "both.csv"), "--model", str(model), "--out",
                  str(folder / "m"), "--unmeasured", "joint2"])
     assert code == 2 and "--unmeasured" in capsys.readouterr().err
+
+
+def test_joint_terms_of_an_unmeasured_joint_are_held_not_refused(runs, capsys):
+    """Its offset and Coulomb levels have no equation: held at 0 (not 'never moves
+    forwards', the message for a measured joint that moves one way)."""
+    folder, _ = runs
+    out = folder / "terms"
+    code = main(["identify", str(folder / "one.csv"), "--robot",
+                 str(example_urdf("double_pendulum")[0]), "--out", str(out),
+                 "--unmeasured", "joint2", "--joint-terms", "offset,asymmetric-coulomb"])
+    assert code == 0, capsys.readouterr().err
+    with (out / "joint_terms.csv").open() as handle:
+        rows = {(r["joint"], r["term"]): float(r["value"]) for r in csv.DictReader(handle)}
+    assert all(abs(v) < 1e-12 for (joint, _), v in rows.items() if joint == "joint2")
+    assert rows[("joint1", "coulomb_positive")] > 0.1
