@@ -63,7 +63,7 @@ def add_chain_arguments(group, unmeasured: bool = True) -> None:
                             "branching robot (a mobile base's wheels) reduces to one arm")
     if not unmeasured:
         return
-    group.add_argument("--unmeasured", default=None, metavar="JOINT,...",
+    group.add_argument("--unmeasured", type=_joint_names, default=None, metavar="JOINT,...",
                        help="URDF joints whose torque the log does not hold (no u column is "
                             "read for them): their equations are left out, their dynamics "
                             "stay in the other joints' equations")
@@ -76,14 +76,14 @@ def _joint_names(text: str) -> tuple[str, ...]:
     return names
 
 
-def unmeasured_indices(text: str | None, robot) -> list[int]:
+def unmeasured_indices(names: tuple[str, ...] | None, robot) -> list[int]:
     """The 0-based joints --unmeasured names; LogError for a name the robot lacks, a
     repeat, or every joint."""
     from .pipeline import LogError
-    if text is None:
+    if names is None:
         return []
-    names = [name.strip() for name in text.split(",")]
-    found = []
+    text = ",".join(names)
+    found: list[int] = []
     for name in names:
         if name not in robot.joint_names:
             raise LogError(f"--unmeasured {text!r}: {name!r} is not a moving joint of the "
