@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
 
 from harness.scenarios import A_COULOMB, A_GRAVITY, A_VISCOUS, COMMUNICATION_STEP, SCENARIOS, J
@@ -109,6 +110,19 @@ def _damping_samples(damping: Signal | None, t: np.ndarray) -> np.ndarray:
     return np.zeros_like(t) if damping is None else np.asarray(damping(t), dtype=float)
 
 
+@dataclass
+class _Event:
+    """A solve_ivp event function with the attributes that solve_ivp reads off it:
+    ``terminal`` (stop the integration there) and ``direction`` (the zero crossing's sign)."""
+
+    function: Callable[[float, ArrayLike], float]
+    terminal: bool = False
+    direction: float = 0.0
+
+    def __call__(self, t: float, x: ArrayLike) -> float:
+        return self.function(t, x)
+
+
 def _sample_times(rate: float, duration: float) -> np.ndarray:
     return np.arange(int(round(duration * rate))) / rate
 
@@ -137,7 +151,7 @@ def open_loop_accurate(rate: float, duration: float = OPEN_LOOP_DURATION, *,
         f0 = drive(t, x1)
         return int(np.sign(f0)) if abs(f0) > c3 else 0
 
-    segments: list[tuple[float, float, object, int]] = []
+    segments: list[tuple[float, float, Callable[[np.ndarray], np.ndarray], int]] = []
     t0, state, mode = 0.0, np.array([0.0, 0.0]), mode_of(0.0, 0.0)
     end = float(t_samples[-1]) + 1e-9
     while t0 < end:
@@ -149,7 +163,7 @@ def open_loop_accurate(rate: float, duration: float = OPEN_LOOP_DURATION, *,
 
             def event(t, x):  # noqa: ANN001 -- breakaway when the drive beats static friction
                 return abs(drive(t, x_stuck)) - c3  # noqa: B023 (called in this iteration)
-            event.direction = 1
+            direction = 1
         else:
             s = mode
 
@@ -158,13 +172,13 @@ def open_loop_accurate(rate: float, duration: float = OPEN_LOOP_DURATION, *,
 
             def event(t, x):  # noqa: ANN001 -- velocity reversal
                 return x[1]
-            event.direction = -s
-        event.terminal = True
+            direction = -s
         stop = min([b for b in breaks if t0 < b < end] + [end])
         # Stuck, nothing moves and the solver's steps grow without bound: cap them so
         # that the breakaway event cannot fall between two steps (a long stick).
         sol = solve_ivp(rhs, (t0, stop), state, method="DOP853", rtol=1e-12, atol=1e-12,
-                        events=event, dense_output=True,
+                        events=_Event(event, terminal=True, direction=direction),
+                        dense_output=True,
                         max_step=STUCK_MAX_STEP if mode == 0 else math.inf)
         t1 = float(sol.t[-1])
         segments.append((t0, t1, sol.sol, mode))
@@ -225,10 +239,10 @@ def open_loop_rk45(kind: str, rate: float, duration: float = OPEN_LOOP_DURATION,
         return [x[1], B_TRUE * float(torque(t)) - c1 * math.sin(x[0]) - (c2 + d_of(t)) * x[1]
                 - c3 * float(np.sign(x[1]))]
 
-    def stop(t, x):  # noqa: ANN001 -- |x'| falls below STOP_SPEED inside the band
+    def stop_speed(t, x):  # noqa: ANN001 -- |x'| falls below STOP_SPEED inside the band
         held = abs(B_TRUE * float(torque(t)) - c1 * math.sin(x[0])) <= c3
         return abs(x[1]) - STOP_SPEED if held else abs(x[1]) + 1.0
-    stop.terminal, stop.direction = True, -1
+    stop = _Event(stop_speed, terminal=True, direction=-1)
 
     def solve(t0: float, x0: list[float], t1: float, events=None):  # noqa: ANN001, ANN202
         return solve_ivp(rhs, (t0, t1), x0, method="RK45", rtol=rtol, atol=atol,
