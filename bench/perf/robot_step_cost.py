@@ -46,6 +46,7 @@ import tarfile
 import tempfile
 import xml.etree.ElementTree as ElementTree
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -114,6 +115,14 @@ def build(binary: Path, revision: str | None, fmu: bool = False) -> None:
     binary.chmod(0o755)
 
 
+def _search(pattern: str, text: str, flags: int = 0) -> re.Match[str]:
+    """re.search's match of `pattern` in `text`, which must match."""
+    match = re.search(pattern, text, flags)
+    if match is None:
+        raise RuntimeError(f"no match of {pattern!r} in {text[-2000:]!r}")
+    return match
+
+
 def instructions(binary: Path, model: Path, tmp: str, steps: int = 2000,
                  identifier: str = "lsm") -> float:
     """Instructions per step: callgrind's count of 2 steps runs minus steps runs, / steps."""
@@ -122,7 +131,7 @@ def instructions(binary: Path, model: Path, tmp: str, steps: int = 2000,
         run = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={tmp}/cg.out",
                               str(binary), str(model), str(count), identifier],
                              capture_output=True, text=True)
-        counts.append(int(re.search(r"Collected : (\d+)", run.stderr).group(1)))
+        counts.append(int(_search(r"Collected : (\d+)", run.stderr).group(1)))
     return (counts[1] - counts[0]) / steps
 
 
@@ -140,7 +149,7 @@ def fmu_files(name: str, tmp: Path, rows: int, statistics_interval: float | None
     if statistics_interval is not None:
         values["statistics_interval"] = statistics_interval
     root = ElementTree.parse(FMU_DESCRIPTION).getroot()
-    kinds = {v.get("name"): (int(v.get("valueReference")), child.tag[0])
+    kinds = {v.get("name"): (int(v.attrib["valueReference"]), child.tag[0])
              for v in root.iter("ScalarVariable") for child in v
              if child.tag in ("Real", "Integer", "Boolean")}
     n, p = int(values["n"]), int(values["base_count"])
@@ -159,7 +168,7 @@ def fmu_files(name: str, tmp: Path, rows: int, statistics_interval: float | None
 
 
 def fmu_run(binary: Path, files: tuple[Path, Path, int, int], steps: int, calls: int,
-            callgrind: str | None = None) -> dict[str, float]:
+            callgrind: str | None = None) -> dict[str, Any]:
     """One run of robot_fmu_step over fmu_files' files, checked (status OK, identifying
     at the end, the FMU's n and base_count the robot's): {"ns": wall time per internal
     step, "slowest": of the slowest doStep [ns]}, with `callgrind` (the output file) and
@@ -175,11 +184,12 @@ def fmu_run(binary: Path, files: tuple[Path, Path, int, int], steps: int, calls:
             not line.endswith(expected):
         raise RuntimeError(f"{' '.join(command)}: failed or not identifying: {line!r} "
                            f"(expected ... {expected})\n{run.stderr[-2000:]}")
-    result = {key: float(re.search(rf"{name}=([\d.]+)", line).group(1))
-              for key, name in (("ns", "ns_per_step"), ("slowest", "slowest_call_ns"))}
+    result: dict[str, Any] = {
+        key: float(_search(rf"{name}=([\d.]+)", line).group(1))
+        for key, name in (("ns", "ns_per_step"), ("slowest", "slowest_call_ns"))}
     if callgrind:
-        result["instructions"] = float(re.search(r"Collected : (\d+)", run.stderr).group(1))
-    started = re.search(r"identifier_started=(-?\d+) statistics_published=([\d,]*)", watched)
+        result["instructions"] = float(_search(r"Collected : (\d+)", run.stderr).group(1))
+    started = _search(r"identifier_started=(-?\d+) statistics_published=([\d,]*)", watched)
     result["started"] = int(started.group(1))
     result["published"] = [int(x) for x in started.group(2).split(",") if x]
     return result
@@ -199,7 +209,7 @@ def per_call_instructions(binary: Path, files: tuple[Path, Path, int, int], call
     if run.returncode != 0 or "identifier_active=1" not in run.stdout:
         raise RuntimeError(f"{' '.join(command)}: failed or not identifying: {run.stdout!r}")
     dumps = sorted(directory.glob("cg.out.*"), key=lambda f: int(f.suffix[1:]))
-    counts = np.array([int(re.search(r"^totals: (\d+)", f.read_text(), re.M).group(1))
+    counts = np.array([int(_search(r"^totals: (\d+)", f.read_text(), re.M).group(1))
                        for f in dumps], dtype=float)
     shutil.rmtree(directory)
     if len(counts) != FMU_WARMUP + calls:
@@ -242,7 +252,7 @@ def fmu_cost(args, binaries: dict[str, Path], tmp: Path) -> None:
         cases = (("h", lambda m: (1, m * count), (1, args.steps)),
                  (f"{count} h", lambda m: (count, m), (count, max(1, args.steps // count))))
         for H, measured, timed in cases:
-            runs = {label: [] for label in binaries}
+            runs: dict[str, list[dict[str, Any]]] = {label: [] for label in binaries}
             for _ in range(args.runs):
                 for label, binary in binaries.items():
                     runs[label].append(fmu_run(binary, files, *timed))
@@ -299,7 +309,7 @@ def main() -> int:
         for name in () if args.fmu else ("double_pendulum", "ur5", "panda"):
             model = Path(tmp) / f"{name}.txt"
             p = model_file(name, model)
-            times = {label: [] for label in binaries}
+            times: dict[str, list[float]] = {label: [] for label in binaries}
             for _ in range(args.runs):
                 for label, binary in binaries.items():
                     times[label].append(float(subprocess.run(
