@@ -79,7 +79,7 @@ def main() -> None:
     print("|---" * (3 + len(taus)) + "|")
     behind = {tau: 0 for tau in taus}
     for i, condition in enumerate(grid):
-        row = reference[tuple(condition)]
+        row = reference[condition]
         best = min(_score(row, m) for m in BASELINES)
         cells = []
         for tau in taus:

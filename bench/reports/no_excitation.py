@@ -39,6 +39,7 @@ import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -77,17 +78,19 @@ def damping_constant(t: np.ndarray | float) -> np.ndarray:
 DAMPINGS = {"6.3 d(t)": damping_63, "constant d": damping_constant}
 
 
-def make_data(variant: str, kind: str, data_dir: Path) -> dict[str, object]:
+def make_data(variant: str, kind: str, data_dir: Path) -> dict[str, Any]:
     """One trajectory (EXCITED + QUIET seconds at RATE), saved for the row workers."""
     start = time.perf_counter()
-    options = {"torque": torque, "c": C_63, "damping": DAMPINGS[variant]}
+    damping = DAMPINGS[variant]
     duration = EXCITED + QUIET
     if kind == "accurate":
-        data = plants.open_loop_accurate(RATE, duration, breaks=(EXCITED,), **options)
+        data = plants.open_loop_accurate(RATE, duration, breaks=(EXCITED,), torque=torque,
+                                         c=C_63, damping=damping)
     elif kind == "euler":
-        data = plants.open_loop_euler(RATE, duration, **options)
+        data = plants.open_loop_euler(RATE, duration, torque=torque, c=C_63, damping=damping)
     else:
-        data = plants.open_loop_rk45(kind, RATE, duration, stop_after=EXCITED, **options)
+        data = plants.open_loop_rk45(kind, RATE, duration, stop_after=EXCITED, torque=torque,
+                                     c=C_63, damping=damping)
     data.name = "6.3"  # the problem statement of 6.3 (methods.fmu_parameters)
     data.save(data_path(data_dir, variant, kind))
     rest = at_rest_from(data.t, data.x2)
@@ -138,7 +141,7 @@ def quiet_scores(t: np.ndarray, out: dict[str, np.ndarray], d_true: float, rest:
 
 
 def run_row(variant: str, kind: str, meas_name: str, rest: float, data_dir: Path, fmu: Path,
-            overrides: dict[str, float] | None = None) -> dict[str, object]:
+            overrides: dict[str, float] | None = None) -> dict[str, Any]:
     """Both FMU methods on one measured record (overrides: FMU parameters added to
     fmu-default's, for diagnostic runs)."""
     from harness import identify as ident
@@ -149,12 +152,12 @@ def run_row(variant: str, kind: str, meas_name: str, rest: float, data_dir: Path
     # One noise sequence per measurement: the plant kinds and variants see the same one.
     y = sensors.measure(data.x1, meas, sensors.seed_of("no-excitation", meas_name))
     s = SCENARIOS["6.3"]
-    case = methods.Case(data, y, meas, float(s.observer["b"]), tuple(s.c_nominal[:3]),
-                        s.transient)  # type: ignore[arg-type]
+    c1, c2, c3 = s.c_nominal[:3]
+    case = methods.Case(data, y, meas, float(s.observer["b"]), (c1, c2, c3), s.transient)
     d_true = float(data.d[-1])
     results: dict[str, dict[str, object]] = {}
-    row: dict[str, object] = {"variant": variant, "plant": kind, "measurement": meas_name,
-                              "d_true": d_true, "at_rest_from": rest, "methods": results}
+    row: dict[str, Any] = {"variant": variant, "plant": kind, "measurement": meas_name,
+                           "d_true": d_true, "at_rest_from": rest, "methods": results}
     for method in methods.FMU_METHODS:
         params = methods.fmu_parameters(case, method)
         if method == "fmu-default":

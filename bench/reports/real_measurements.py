@@ -33,6 +33,7 @@ import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -137,7 +138,7 @@ def make_data(name: str, kind: str, rates: tuple[int, ...], fmu_dir: Path, data_
 
 
 # ---- one row -------------------------------------------------------------------------
-def run_row(cond: Condition, data_dir: Path, fmu: Path) -> dict[str, object]:
+def run_row(cond: Condition, data_dir: Path, fmu: Path) -> dict[str, Any]:
     """Measure, run every method and score it: one row of results.json."""
     name, kind, rate, meas_name, model = cond
     start = time.perf_counter()
@@ -151,16 +152,17 @@ def run_row(cond: Condition, data_dir: Path, fmu: Path) -> dict[str, object]:
         transient = 1.0
     else:
         s = SCENARIOS[name]
-        b_nom, c_nom = float(s.observer["b"]), tuple(s.c_nominal[:3])
+        c1, c2, c3 = s.c_nominal[:3]
+        b_nom, c_nom = float(s.observer["b"]), (c1, c2, c3)
         transient = s.transient
-    case = methods.Case(data, y, meas, b_nom, c_nom, transient)  # type: ignore[arg-type]
+    case = methods.Case(data, y, meas, b_nom, c_nom, transient)
     estimates = methods.run_all(case, fmu)
-    out: dict[str, object] = {
+    out: dict[str, Any] = {
         "dataset": name, "plant": kind, "rate": rate, "measurement": meas_name, "model": model,
         "kind": case.scenario_kind, "transient": transient, "b_nominal": b_nom,
         "c_nominal": list(c_nom), "methods": {}}
     for m, est in estimates.items():
-        out["methods"][m] = {  # type: ignore[index]
+        out["methods"][m] = {
             "scores": scoring.score(case, est), "tuning": est.tuning, "error": est.error,
             "seconds": round(est.seconds, 3)}
     out["seconds"] = round(time.perf_counter() - start, 3)

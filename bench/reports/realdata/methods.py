@@ -138,7 +138,7 @@ def run_fmu(case: Case, method: str, fmu: Path) -> Estimate:
         return np.concatenate([a[:n], np.full(pad, np.nan)]) if pad else a[:n]
 
     est.velocity = full(out["x2_hat"])
-    est.zbar = full(out.get("z_eq_filtered", out.get("z_eq")))
+    est.zbar = full(out["z_eq_filtered"] if "z_eq_filtered" in out else out["z_eq"])
     est.param_t = case.data.t
     if case.scenario_kind == "lsm":
         est.params = {f"c{k}": full(out[f"theta_hat[1,{k}]"]) for k in (1, 2, 3)}
@@ -173,7 +173,7 @@ def _identify_from(case: Case, est: Estimate, acc: np.ndarray) -> None:
     """Parameters (or d(t)) and the perturbation estimate from a velocity/acceleration."""
     data, v = case.data, est.velocity
     assert v is not None
-    est.zbar = acc - case.nominal_acc(v)
+    zbar = est.zbar = acc - case.nominal_acc(v)
     if case.scenario_kind == "lsm":
         est.param_t, theta = bl.growing_least_squares(data.t, acc, data.u, case.y, v,
                                                       LS_START, LS_EVERY)
@@ -186,7 +186,7 @@ def _identify_from(case: Case, est: Estimate, acc: np.ndarray) -> None:
         mask = data.t >= case.transient
 
         def damping(memory: float) -> np.ndarray:
-            return bl.windowed_damping(data.t, est.zbar, v, memory, causal)
+            return bl.windowed_damping(data.t, zbar, v, memory, causal)
 
         memory = min(DAMPING_MEMORIES, key=lambda m: float(
             np.sqrt(np.mean((damping(m) - data.d)[mask] ** 2))))
