@@ -53,7 +53,7 @@ def main() -> int:
         share = ", ".join(f"{w:.0f}: {100 * c / counts.sum():.0f} %"
                           for w, c in zip(published, counts))
         at_members = {w: rms(kalman(y[:, i], h, (w * h) ** 6)[1]) for w in members}
-        best = min(at_members, key=at_members.get)
+        best = min(at_members, key=at_members.__getitem__)
         log_lam, oracle = tune_log10(lambda lam: rms(kalman(y[:, i], h, lam)[1]), -18, 0,  # noqa: B023 (called in this iteration)
                                      coarse=1.0)
         print(f"joint {i + 1}: bank {rms(bank.velocity[:, i]):.3g} rad/s (published rad/s: "

@@ -25,6 +25,7 @@ the Coulomb friction's smoothing velocity v_s in {0 (sign), 0.005, 0.02, 0.05} r
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 
@@ -58,7 +59,8 @@ def _standard(base, pi_nominal: np.ndarray, beta: np.ndarray) -> np.ndarray:
 def tune(robot, pi: np.ndarray, log, qd: np.ndarray, skip: int, shapes=SHAPES):
     """(the observer's model, (alpha1, alpha2, v_s)) of the least velocity RMS."""
     n, h = robot.n, log.step
-    best = (np.inf, None, None)
+    # (velocity RMS, the observer's model, (alpha1, alpha2, v_s)) of the best so far
+    best: tuple[float, Any, tuple[float, float, float] | None] = (np.inf, None, None)
     for v_s in shapes:
         link, friction, _ = ParameterLayout(n).split(pi)
         body = robot.rigid_body(link=link, friction=friction, coulomb_velocity=v_s)
@@ -69,9 +71,11 @@ def tune(robot, pi: np.ndarray, log, qd: np.ndarray, skip: int, shapes=SHAPES):
             x, rms = tune_log10(cost, -1.0, 5.0, coarse=1.0)
             if rms < best[0]:
                 best = (rms, body, (10.0 ** x, k * 10.0 ** (x / 2), v_s))
-    print(f"  tuned: alpha1 {best[2][0]:.3g}, alpha2 {best[2][1]:.3g}, v_s {best[2][2]:g}",
+    _, best_body, gains = best
+    assert gains is not None, "tune: no gains were scored"
+    print(f"  tuned: alpha1 {gains[0]:.3g}, alpha2 {gains[1]:.3g}, v_s {gains[2]:g}",
           flush=True)
-    return best[1], best[2]
+    return best_body, gains
 
 
 def model_observer(method: str, robot, log, qd: np.ndarray, unknown: str, skip: int,

@@ -144,13 +144,12 @@ def joint_log(case: Case, robot: Robot, forward, seconds: float, seed: int
     def gravity(q: np.ndarray) -> np.ndarray:
         return nominal.gravity(q)[0] * active
 
-    fine = case.jitter is not None
-    h = FINE_STEP if fine else 1.0 / case.rate
+    h = FINE_STEP if case.jitter is not None else 1.0 / case.rate
     t, q, qd, qdd, tau = simulate(forward, gravity, n, seconds, h, seed=seed, kp=kp, kd=kd,
                                   reference=reference, rtol=1e-9)
-    if fine:
+    if case.jitter is not None:
         rng = np.random.default_rng(seed + 1000)
-        low, high = case.jitter  # type: ignore[misc]
+        low, high = case.jitter
         stamps = np.cumsum(rng.uniform(low, high, int(seconds / low) + 2))
         stamps = np.concatenate([[0.0], stamps[stamps <= t[-1]]])
         q_at = CubicHermiteSpline(t, q, qd)(stamps)

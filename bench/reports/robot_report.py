@@ -75,8 +75,8 @@ def judge(rows: Sequence[Row]) -> list[dict]:
                             "figure": _pct(value), "where": _where(row), "met": met,
                             "rows": len(chosen)})
         # no worse than the offline baseline, row by row
-        pairs = [(r, by_row.get((r["robot"], r["rate"], r["encoder"], BASELINE))) for r in torque]
-        pairs = [(r, b) for r, b in pairs if b is not None]
+        found = [(r, by_row.get((r["robot"], r["rate"], r["encoder"], BASELINE))) for r in torque]
+        pairs = [(r, b) for r, b in found if b is not None]
         if pairs:
             row, base = max(pairs, key=lambda p: p[0]["prediction"] / p[1]["prediction"])
             met = all(r["prediction"] <= b["prediction"] for r, b in pairs)

@@ -27,9 +27,9 @@ def multisine(n: int, seed: int, amplitude: float = 0.6, frequencies=(0.15, 0.35
 
 
 def simulate(forward_dynamics: Callable, gravity: Callable, n: int, duration: float, h: float,
-             seed: int, kp: float = 400.0, kd: float = 40.0, rtol: float = 1e-10,
-             reference: Callable | None = None, start: tuple | None = None,
-             method: str = "DOP853"):
+             seed: int, kp: float | np.ndarray = 400.0, kd: float | np.ndarray = 40.0,
+             rtol: float = 1e-10, reference: Callable | None = None,
+             start: tuple | None = None, method: str = "DOP853"):
     """(t, q, qd, qdd, tau) sampled every h of the closed loop; forward_dynamics(q, qd, tau)
     and gravity(q) of the true robot / the nominal model.  reference(t) -> (q_ref, q_ref')
     defaults to multisine(n, seed); start = (t0, q0, qd0) continues a run from its state

@@ -39,6 +39,7 @@ import shutil
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -142,7 +143,8 @@ def run_case(name: str, rate: float, seconds: float, seed: int = 1,
         qm = q if bits is None else quantize(q, bits)
         log = JointLog(t, qm, tau)
         kalman_rms = kalman_velocity_rms(qm, qd, h, skip)
-        shared = {"fmu": fmu}  # the model-based methods' identified model and gains
+        # the model-based methods' identified model and gains
+        shared: dict[str, Any] = {"fmu": fmu}
         for method in methods:
             started = time.perf_counter()
             if method in MODEL_METHODS:
