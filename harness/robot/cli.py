@@ -77,20 +77,14 @@ def _joint_names(text: str) -> tuple[str, ...]:
 
 
 def unmeasured_indices(names: tuple[str, ...] | None, robot) -> list[int]:
-    """The 0-based joints --unmeasured names; LogError for a name the robot lacks, a
-    repeat, or every joint."""
+    """The 0-based joints --unmeasured names; UrdfError for a name the robot's chain lacks
+    or a repeat, LogError for every joint."""
     from .pipeline import LogError
+    from .urdf import joint_indices
     if names is None:
         return []
     text = ",".join(names)
-    found: list[int] = []
-    for name in names:
-        if name not in robot.joint_names:
-            raise LogError(f"--unmeasured {text!r}: {name!r} is not a moving joint of the "
-                           f"robot (its joints: {', '.join(robot.joint_names)})")
-        if robot.joint_names.index(name) in found:
-            raise LogError(f"--unmeasured {text!r}: {name!r} is named twice")
-        found.append(robot.joint_names.index(name))
+    found = joint_indices(names, robot.joint_names, f"--unmeasured {text!r}")
     if len(found) == robot.n:
         raise LogError(f"--unmeasured {text!r}: no joint's torque would be left to identify "
                        "from")

@@ -89,6 +89,13 @@ class JointLog:
         """The sampling step: the mean step (robust to the rounding of epoch stamps)."""
         return float((self.t[-1] - self.t[0]) / (len(self.t) - 1))
 
+    @property
+    def measured(self) -> np.ndarray:
+        """(n,) False for the joints whose torque the log does not hold."""
+        out = np.ones(self.q.shape[1], dtype=bool)
+        out[list(self.unmeasured)] = False
+        return out
+
 
 def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
              relative_tolerance: float = 0.01, units: LogUnits | None = None,
@@ -356,18 +363,11 @@ def regression_rows(robot: Robot, body, log: JointLog, method: str, window: floa
         x = joint_speed(i)
         mask[:, i] = joint_friction_rows(x, log.step, margin, min_speed, slow_margin, used)
         speed[:, i] = x[used]
-    measured = ~unmeasured_joints(log)
+    measured = log.measured
     check_friction_rows(mask[:, measured], speed[:, measured],
                         [name for name, m in zip(robot.joint_names, measured) if m], min_speed)
     mask[:, ~measured] = False  # its equation left out; its dynamics stay in the others'
     return Rows(used, core, torque, speed, mask, correlation, extend)
-
-
-def unmeasured_joints(log: JointLog) -> np.ndarray:
-    """(n,) True for the joints whose torque the log does not hold."""
-    out = np.zeros(log.q.shape[1], dtype=bool)
-    out[list(log.unmeasured)] = True
-    return out
 
 
 def known_columns(n: int, base: BaseParameters) -> np.ndarray:
@@ -388,11 +388,14 @@ def _identified(robot: Robot, rows: Rows, base: BaseParameters, Y: np.ndarray,
     # the ridge of the one least squares pulls a weakly excited base parameter toward the
     # URDF's value
     nominal_beta = base.project(np.concatenate([nominal, np.zeros(terms.count(robot.n))]))
+    # the base regressor over the kept equations only (a copy: fancy indexing), for the
+    # fit, the scores and the estimate's prediction alike
+    Yb = base.regressor(Y)
+    Yb *= mask[:, :, None]
     # a base parameter that no kept equation holds (an unmeasured joint's friction) keeps
     # the URDF's value, standard error 0, instead of a singular fit
-    Yb_all = base.regressor(Y)
-    held = ~np.any(Yb_all * mask[:, :, None], axis=(0, 1))
-    fit = least_squares(Yb_all[:, :, ~held], torque - known_torque, nominal_beta[~held],
+    held = ~np.any(Yb, axis=(0, 1))
+    fit = least_squares(Yb[:, :, ~held], torque - known_torque, nominal_beta[~held],
                         batch=rows.correlation, mask=mask)
     if held.any():
         fit = expanded(fit, ~held, np.zeros(len(held)), nominal_beta)
@@ -401,8 +404,6 @@ def _identified(robot: Robot, rows: Rows, base: BaseParameters, Y: np.ndarray,
     with np.errstate(divide="ignore"):
         data_scale = (np.linalg.norm(measured) /
                       np.sqrt(np.einsum("kij,kij,ki->j", Y, Y, mask.astype(float))))
-    Yb = base.regressor(Y)  # a copy (fancy indexing): masked in place
-    Yb *= mask[:, :, None]
     left, total = measured - known_torque * mask, float(np.linalg.norm(measured))
 
     def score(beta: np.ndarray) -> float:
@@ -412,8 +413,8 @@ def _identified(robot: Robot, rows: Rows, base: BaseParameters, Y: np.ndarray,
                                        urdf_tolerance, score, terms)
     predictions = {
         "urdf": prediction_error(rows.core @ nominal, torque, mask, names),
-        "estimate": prediction_error(known_torque + base.regressor(Y) @ fit.theta, torque,
-                                     mask, names),
+        # the left-out equations' predictions do not count: Yb is 0 there
+        "estimate": prediction_error(known_torque + Yb @ fit.theta, torque, mask, names),
         "consistent": prediction_error(Y @ projection.pi, torque, mask, names)}
     choice = choose_model(predictions, projection.pi,
                           np.concatenate([nominal, np.zeros(terms.count(robot.n))]),

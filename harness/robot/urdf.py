@@ -295,19 +295,30 @@ def read_urdf(path: str | Path, locked: tuple[str, ...] | list[str] = (),
     return robot
 
 
+def joint_indices(names: Sequence[str], moving: Sequence[str], where: str) -> list[int]:
+    """The positions in ``moving`` of the joints an option lists (``where``: the option
+    and its value, for the message); UrdfError for a name that is not a moving joint or
+    is given twice."""
+    found: list[int] = []
+    for name in names:
+        if name not in moving:
+            raise UrdfError(f"{where}: {name!r} is not a moving joint (the moving joints: "
+                            f"{', '.join(moving)})")
+        if moving.index(name) in found:
+            raise UrdfError(f"{where}: {name!r} is named twice")
+        found.append(moving.index(name))
+    return found
+
+
 def _others_locked(source: Path, joints: dict, used: list[str], locked) -> list[str]:
     """The moving joints that ``used`` (--joints) leaves out; UrdfError for a name that is
     not a moving joint of the URDF, a repeat, or a joint also locked."""
     moving = [name for name, joint in joints.items() if joint.get("type") in MOVING_TYPES]
-    listed = f"--joints {','.join(used)}"
+    listed = f"{source}: --joints {','.join(used)}"
+    joint_indices(used, moving, listed)
     for name in used:
-        if name not in moving:
-            raise UrdfError(f"{source}: {listed}: {name!r} is not a moving joint of the URDF "
-                            f"(its moving joints: {', '.join(moving)})")
-        if used.count(name) > 1:
-            raise UrdfError(f"{source}: {listed}: {name!r} is named twice")
         if name in locked:
-            raise UrdfError(f"{source}: {listed}: {name!r} is also locked (--lock)")
+            raise UrdfError(f"{listed}: {name!r} is also locked (--lock)")
     return [name for name in moving if name not in used and name not in locked]
 
 

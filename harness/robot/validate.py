@@ -32,7 +32,7 @@ from .joint_terms import (
     read_sidecar,
 )
 from .layout import ParameterLayout, core_layout
-from .pipeline import JointLog, LogError, savitzky_golay, smooth_column, unmeasured_joints
+from .pipeline import JointLog, LogError, savitzky_golay, smooth_column
 from .smoothing import regression_window, velocity_windows
 from .urdf import Robot
 
@@ -110,7 +110,7 @@ def torque_errors(robot: Robot, log: JointLog, window: float, sidecar: Sidecar |
         scale = float(np.sqrt(np.mean(measured[:, i] ** 2)))
         per_joint[name] = (float(np.sqrt(np.mean(error[:, i] ** 2))) / scale
                            if scale > 0 and i not in log.unmeasured else None)
-    kept = ~unmeasured_joints(log)
+    kept = log.measured
     pooled = float(np.linalg.norm(error[:, kept]) / np.linalg.norm(measured[:, kept]))
     return log.t[inside], measured, predicted, per_joint, pooled
 
