@@ -12,7 +12,7 @@ set(STO_CORE_ROBOT
     core/robot_pipeline.c core/robot_observer.c core/rigid_body.c core/regressor_identifier.c
     core/statistics_job.c core/input_cadence.c core/gains.c core/tuning.c)
 # A model file's regressor as data (harness/model/program.py writes it).
-set(STO_CORE_MODEL core/model_pipeline.c core/term_program.c core/small_solve.c
+set(STO_CORE_MODEL core/model_pipeline.c core/fixed_lag.c core/term_program.c core/small_solve.c
     core/box_projection.c core/model_damping.c
     core/observer_scheme.c
     core/super_twisting.c core/implicit_twisting.c core/noise_adaptive.c

@@ -25,7 +25,7 @@ static const UnitDefinition UNITS[] = {
     {"rad/s2", 0, 0, -2, 1}, {"N.m", 1, 2, -2, 0},    {"kg", 1, 0, 0, 0},
     {"m", 0, 1, 0, 0},       {"m/s2", 0, 1, -2, 0},   {"kg.m2", 1, 2, 0, 0},
     {"kg.m2/s", 1, 2, -1, 0}, {"N.m.s", 1, 2, -1, 0}, {"1/s", 0, 0, -1, 0},
-    {"rad/s3", 0, 0, -3, 1},
+    {"rad/s3", 0, 0, -3, 1}, {"Hz", 0, 0, -1, 0},
 };
 #define N_UNITS (sizeof UNITS / sizeof UNITS[0])
 

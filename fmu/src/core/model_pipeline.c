@@ -36,6 +36,11 @@ int mp_init(ModelPipeline *p, const TermProgram *program, const double alpha1[],
     if (p->identifier != 0 && p->identifier != RRI_LSM && p->identifier != RRI_MFF)
         return refuse(error, error_size, "identifier = %d: 0 (off), 1 (LSM) or 2 (MFF)",
                       p->identifier);
+    if (p->regression != MP_REGRESSION_OBSERVER && p->regression != MP_REGRESSION_WINDOW)
+        return refuse(error, error_size, "regression = %d: 0 (the observer's velocities) or 1 "
+                      "(a fixed-lag window)", p->regression);
+    if (fl_init(&p->window, n, program->m, p->h))
+        return refuse(error, error_size, "the fixed-lag window refused h = %g", p->h);
     if (!(p->tau_identifier >= 0.0) || !isfinite(p->tau_identifier) ||
         !(p->statistics_interval >= 0.0) || !isfinite(p->statistics_interval))
         return refuse(error, error_size, "tau_identifier = %g and statistics_interval = %g must "
@@ -133,19 +138,49 @@ static void flag_nonfinite(ModelPipeline *p, MpNonfinite what, int equation, int
     p->nonfinite_time = isfinite(t) ? t : 0.0;
 }
 
-/* The identifier's sums are finite: its diagonal and right-hand side (the
- * information is positive semidefinite plus rho I, so a finite diagonal bounds
- * every entry). */
+/* The identifier's sums are finite: the diagonals of its information and of its
+ * scores' power, and its right-hand side (both matrices are positive semidefinite,
+ * so a finite diagonal bounds every entry; the scores carry the residuals, which
+ * overflow first where the inputs are huge and the regressors are not). */
 static int identifier_finite(const RegressorIdentifier *id)
 {
     double sum = 0.0;
-    for (int k = 0; k < id->p; ++k) sum += id->P[k][k] + fabs(id->b[k]);
+    for (int k = 0; k < id->p; ++k) sum += id->P[k][k] + fabs(id->b[k]) + id->score_power[k][k];
     return isfinite(sum);
 }
 
-/* One sample of the regression: the equations at the velocity estimates through
- * G (model_pipeline.h), in SI parameters, into the identifier; a non-finite row is
+/* One row of every equation (entry[i][k], k = p the known side; filtered) into the
+ * identifier in SI parameters, once the warm-up is over; a non-finite row is
  * flagged and kept out of it. */
+static void feed_identifier(ModelPipeline *p, const TermProgram *program,
+                            double entry[][TP_MAX_PARAMETERS + 1], double t)
+{
+    const int np = program->p;
+    for (int i = 0; i < program->n; ++i) {
+        double z = entry[i][np];
+        for (int k = 0; k < np; ++k) {
+            if (!isfinite(entry[i][k])) flag_nonfinite(p, MP_NONFINITE_ENTRY, i, k, t);
+            z -= entry[i][k] * program->nominal[k];
+            p->Y.row[i][k] = entry[i][k] / program->scale[k];
+        }
+        p->z[i] = z;
+        if (!isfinite(z)) flag_nonfinite(p, MP_NONFINITE_ENTRY, i, -1, t);
+    }
+    p->started = 1;
+    if (p->nonfinite != MP_FINITE) return; /* the identifier keeps its last finite sums */
+    if (p->warm_samples < p->warm_up) {
+        ++p->warm_samples;
+        return;
+    }
+    rri_step(&p->id, p->z, &p->Y);
+    if (!identifier_finite(&p->id)) flag_nonfinite(p, MP_NONFINITE_IDENTIFIER, 0, 0, t);
+    sj_step(&p->statistics);
+    sj_schedule(&p->statistics, &p->id); /* on the internal steps, whatever the importer's */
+}
+
+/* One sample of the regression at the velocity estimates through G
+ * (model_pipeline.h).  G q'' starts at 0 where the other entries start at their
+ * values: the rows enter once that transient has decayed (warm_up). */
 static void regression_step(ModelPipeline *p, const TermProgram *program, const AffineEntries *e,
                             double t)
 {
@@ -157,8 +192,8 @@ static void regression_step(ModelPipeline *p, const TermProgram *program, const 
         p->velocity_filtered[j] += g * (p->velocity[j] - before);
         acceleration[j] = p->started ? (p->velocity_filtered[j] - before) / p->h : 0.0;
     }
-    for (int i = 0; i < n; ++i) {
-        double entry[TP_MAX_PARAMETERS + 1] = {0};
+    double entry[MAX_N][TP_MAX_PARAMETERS + 1];
+    for (int i = 0; i < n; ++i)
         for (int k = 0; k <= np; ++k) {
             /* the acceleration below is G q'' between the last two samples: the other
              * entries are taken there too, as the mean of their filtered values */
@@ -166,29 +201,25 @@ static void regression_step(ModelPipeline *p, const TermProgram *program, const 
             p->Y0[i][k] += g * (e->e0[i][k] - p->Y0[i][k]);
             double v = 0.5 * (before + p->Y0[i][k]);
             for (int j = 0; j < n; ++j) v += e->A[j][i][k] * acceleration[j];
-            entry[k] = v;
-            if (!isfinite(v)) flag_nonfinite(p, MP_NONFINITE_ENTRY, i, k < np ? k : -1, t);
+            entry[i][k] = v;
         }
-        double z = entry[np];
-        for (int k = 0; k < np; ++k) {
-            z -= entry[k] * program->nominal[k];
-            p->Y.row[i][k] = entry[k] / program->scale[k];
-        }
-        p->z[i] = z;
-        if (!isfinite(z)) flag_nonfinite(p, MP_NONFINITE_ENTRY, i, -1, t);
-    }
-    p->started = 1;
-    if (p->nonfinite != MP_FINITE) return; /* the identifier keeps its last finite sums */
-    /* G q'' starts at 0 where the other entries start at their values: the rows
-     * enter once that transient has decayed (MP_WARM_UP time constants) */
-    if (p->warm_samples < p->warm_up) {
-        ++p->warm_samples;
-        return;
-    }
-    rri_step(&p->id, p->z, &p->Y);
-    if (!identifier_finite(&p->id)) flag_nonfinite(p, MP_NONFINITE_IDENTIFIER, 0, 0, t);
-    sj_step(&p->statistics);
-    sj_schedule(&p->statistics, &p->id); /* on the internal steps, whatever the importer's */
+    feed_identifier(p, program, entry, t);
+}
+
+/* One sample of the window's regression: every entry of the equations at the
+ * window's smoothed sample, a fixed lag behind (model_pipeline.h), through G into
+ * Y0.  G starts at the first row, which satisfies the equations as every later one
+ * does: no warm-up. */
+static void window_step(ModelPipeline *p, const TermProgram *program, double t)
+{
+    TpSample s;
+    memset(&s, 0, sizeof s);
+    fl_at_lag(&p->window, s.q, s.qd, s.qdd, s.u);
+    const double g = p->started ? p->gain : 1.0;
+    for (int i = 0; i < program->n; ++i)
+        for (int k = 0; k <= program->p; ++k)
+            p->Y0[i][k] += g * (tp_entry(program, &s, i, k) - p->Y0[i][k]);
+    feed_identifier(p, program, p->Y0, t);
 }
 
 /* Every group's bank of linear observers has settled (noise_adaptive.h). */
@@ -236,6 +267,8 @@ void mp_run(ModelPipeline *p, const TermProgram *program, const double y[], cons
         }
         current = 0;
         const double t = start_time + (double)k * p->h;
+        const int window = p->identifier && p->regression == MP_REGRESSION_WINDOW;
+        if (window) fl_push(&p->window, y, u);
         for (int i = 0; i < n; ++i)
             if (!isfinite(p->velocity[i])) flag_nonfinite(p, MP_NONFINITE_VELOCITY, i, 0, t);
         if (!p->identifier) continue;
@@ -245,8 +278,16 @@ void mp_run(ModelPipeline *p, const TermProgram *program, const double y[], cons
         if (!p->identifying && t >= p->t_id && ready) {
             p->identifying = 1;
             p->started = p->warm_samples = 0;
+            if (window) {
+                fl_choose(&p->window);
+                p->warm_samples = p->warm_up; /* window_step needs none */
+            }
         }
         if (!p->identifying) continue;
+        if (window) {
+            if (fl_ready(&p->window)) window_step(p, program, t);
+            continue;
+        }
         memcpy(s.qd, p->velocity, (size_t)n * sizeof s.qd[0]);
         affine_entries(program, &s, &e);
         current = 1;
@@ -356,4 +397,5 @@ void mp_restart_identifier(ModelPipeline *p)
     rri_reset(&p->id);
     sj_reset(&p->statistics);
     p->identifying = p->started = p->warm_samples = 0;
+    p->window.chosen = -1; /* chosen again when identification starts */
 }

@@ -10,9 +10,15 @@
  * Where the nominal inertia is singular, F = 0 (the injection then carries the
  * whole acceleration).
  *
- * Identification: the equations at the velocity estimates, every entry through
- * one first-order low-pass filter G (time constant tau_identifier) into the
- * regressor identifier (regressor_identifier.h: LSM or MFF in information form,
+ * Identification (regression = MP_REGRESSION_WINDOW, the default): the
+ * equations at the positions, velocities and accelerations of a zero-phase
+ * window a fixed lag behind the newest sample (fixed_lag.h; its cut-off chosen
+ * from the measurement noise when identification starts), the inputs
+ * through the same window, every entry through one first-order low-pass
+ * filter G (time constant tau_identifier) into the regressor identifier.
+ * The observer's states stay causal; only the parameters lag.
+ * With regression = MP_REGRESSION_OBSERVER: the equations at the observer's
+ * causal velocity estimates, every entry through G into the regressor identifier (regressor_identifier.h: LSM or MFF in information form,
  * standard errors by the sandwich over batches), with the statistics' solve
  * spread over the internal steps (statistics_job.h).  The equations are affine
  * in the accelerations, Y = Y0(q, q', u) + A(q, q') q'' (the same for r), and
@@ -26,6 +32,7 @@
 #ifndef MODEL_PIPELINE_H
 #define MODEL_PIPELINE_H
 
+#include "fixed_lag.h"
 #include "noise_adaptive.h"
 #include "regressor_identifier.h"
 #include "statistics_job.h"
@@ -38,12 +45,18 @@
 #define MP_GROUP_SIZE STO_MAX_DOF
 #define MP_GROUPS ((MP_MAX_COORDINATES + MP_GROUP_SIZE - 1) / MP_GROUP_SIZE)
 
+typedef enum {
+    MP_REGRESSION_OBSERVER = 0, /* at the observer's causal velocities (the paper's) */
+    MP_REGRESSION_WINDOW = 1    /* at a zero-phase window's derivatives, a fixed lag behind */
+} MpRegression;
+
 typedef struct {
     /* configuration */
     double h, tau_identifier, rho, R, t_id, statistics_interval;
     int scheme;                 /* STO_SCHEME_IMPLICIT or STO_SCHEME_ADAPTIVE */
     int identifier;             /* 0 off, RRI_LSM, RRI_MFF */
     int nominal_model;          /* 1: F from the nominal parameters; 0: F = 0 */
+    int regression;             /* MpRegression */
     /* derived at initialization */
     double gain;                /* 1 - exp(-h / tau_identifier) */
     int warm_up;                /* samples of the filters before the rows enter */
@@ -56,7 +69,9 @@ typedef struct {
     int identifying, started;   /* the identifier runs; its filters hold a sample */
     int warm_samples;           /* samples since it started, up to warm_up */
     double Y0[MP_MAX_COORDINATES][TP_MAX_PARAMETERS + 1]; /* G of the acceleration-free */
-    double velocity_filtered[MP_MAX_COORDINATES];          /* entries; G of the velocity */
+    double velocity_filtered[MP_MAX_COORDINATES];          /* entries; G of the velocity
+                                                            * (window: G of every entry) */
+    FixedLag window;            /* the positions and inputs, for MP_REGRESSION_WINDOW */
     RbRegressor Y;              /* the filtered equations (SI parameters) ... */
     double z[MP_MAX_COORDINATES]; /* ... and their residual at the nominal parameters */
     RegressorIdentifier id;

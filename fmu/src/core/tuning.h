@@ -77,13 +77,23 @@
 #define MP_WARM_UP 10.0             /* time constants of G before its rows enter (e^-10) */
 #define MP_TAU_IDENTIFIER 0.02      /* [s] default of the regression's filter G */
 #define MP_RHO 1e-9                 /* default regularization, SI parameters */
+
+/* ---- the identifier's fixed-lag derivatives (fixed_lag.h) --------------------------- */
+#define FL_HIGHEST_FRACTION 0.2     /* the widest candidate's cut-off [sample rate] ... */
+#define FL_CANDIDATES 4             /* ... and each next one half the one before */
+#define FL_CYCLES 6.0               /* half a window: this many periods of its cut-off */
+#define FL_NOISE_SHARE 0.01         /* noise's share of an acceleration's mean square, at
+                                     * most, in the band chosen */
+#define FL_PROBE_FRACTION 0.4       /* [sample rate] the noise is what a kernel of this
+                                     * cut-off leaves of the positions */
 #define OP_MODEL_STEPS 32           /* internal steps between the updates of the observer's
                                      * identified model (information form: the factor,
                                      * the excitation's iteration, the fed-back estimate),
                                      * on the instance's clock: a long communication step
                                      * equals its single steps, at a 32nd of the cost */
-#define MP_ENERGY_WARNING 1.0       /* [s] the published model creates energy this long
-                                     * before the warning: not every transient estimate */
+#define MP_WARNING_DELAY 1.0        /* [s] the published model creates energy, or holds
+                                     * parameters at their ranges, this long before the
+                                     * warning: not every transient estimate */
 
 /* ---- the inputs' cadence (input_cadence.h) ----------------------------------------- */
 #define CADENCE_WINDOW 2.0          /* [s] over which the shortest hold of the inputs counts

@@ -41,10 +41,12 @@ typedef struct {
     int coarse_logged;    /* the staircase warning stands */
     /* outputs */
     double position[MAX_N], velocity[MAX_N], theta[MAX_P], theta_std[MAX_P];
-    double excitation, input_hold;
+    double excitation, input_hold, identifier_cutoff;
     int converged, identifier_active, coarse_inputs;
     int parameters_held;  /* held at an end of their declared range */
     int held_logged;      /* the count the last message said */
+    int held_seen;        /* the count at the last communication point ... */
+    double held_since;    /* [s] ... since this time */
     int held[MAX_P];      /* per parameter -1, 0, 1 (box_projection.h) */
     int negative_damping; /* the published model creates energy (model_damping.h) */
     int damping_logged;   /* the warning stands */
@@ -125,6 +127,12 @@ static const ModelVariable VARIABLES[] = {
      .max = NAN, .unit = "s",
      .description = "Time constant of the filter on every entry of the equations before the "
                     "identifier (0: none)")},
+    {.name = "regression", .vr = 117, .type = TYPE_INTEGER,
+     PARAM(.offset = OFF(pipe.regression), .start = MP_REGRESSION_WINDOW, .min = 0, .max = 1,
+     .description = "What the identifier regresses on: 1 the positions smoothed by a "
+                    "zero-phase window a fixed lag behind the newest sample, its cut-off "
+                    "chosen from the measurement noise (identifier_cutoff); 0 the observer's "
+                    "causal velocity estimates (the paper's scheme)")},
     MAX_INTERNAL_STEPS_VARIABLE(OFF(max_internal_steps)),
     WORK_VARIABLES(OFF(max_work), OFF(work_per_step)),
     SEVEN(INPUT, "position", 200, y, NULL, "Measured coordinate"),
@@ -156,6 +164,12 @@ static const ModelVariable VARIABLES[] = {
      .description = "Parameters the estimate holds at an end of the range the model file "
                     "declares (positive = true, range = [a, b]): the identifier's least "
                     "squares lie outside it; their theta_std is 0. 0 without ranges"},
+    {.name = "identifier_cutoff", .vr = 369, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(identifier_cutoff), .unit = "Hz",
+     .description = "Cut-off of the fixed-lag window the identifier regresses through "
+                    "(regression = 1), chosen when identification starts: the widest band "
+                    "in which the measurement noise is at most 1 % of the accelerations' "
+                    "mean square; its lag is 6 periods of it. 0 before")},
     {.name = "negative_damping", .vr = 368, .type = TYPE_BOOLEAN,
      .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
      .offset = OFF(negative_damping),
@@ -206,6 +220,9 @@ static void publish(ModelData *d)
     }
     d->excitation = d->pipe.identifying ? d->pipe.statistics.excitation : 0.0;
     d->identifier_active = d->pipe.identifying;
+    d->identifier_cutoff = d->pipe.regression == MP_REGRESSION_WINDOW && d->pipe.identifying
+                               ? fl_cutoff(&d->pipe.window)
+                               : 0.0;
     d->converged = mp_converged(&d->pipe, n);
     d->input_hold = ic_shortest(&d->cadence) * d->pipe.h;
     d->coarse_inputs = ic_coarse(&d->cadence);
@@ -224,14 +241,17 @@ static int measured(const ModelData *d, double values[])
 /* Work units (about ns, model_interface.h) of one internal step: the observer
  * per coordinate (the bank of linear observers beside it), two evaluations of
  * the program at n + 1 accelerations, the identifier's rank-n update and the
- * statistics job's slice. */
+ * statistics job's slice, and the fixed-lag window's sums. */
 static double step_work(const ModelData *d)
 {
     const double n = d->program.n, p = d->program.p;
     const double tokens = d->program.n_tokens;
     return (d->pipe.scheme == STO_SCHEME_ADAPTIVE ? 600.0 + 50.0 * n : 15.0 * n) +
            2.0 * (n + 1.0) * 5.0 * tokens +
-           (d->pipe.identifier ? 1000.0 + n * p * (p + 3.0) / 2.0 : 0.0);
+           (d->pipe.identifier ? 1000.0 + n * p * (p + 3.0) / 2.0 : 0.0) +
+           (d->pipe.identifier && d->pipe.regression == MP_REGRESSION_WINDOW
+                ? 1500.0 * (n + d->program.m) + 5.0 * n * tokens /* its kernels, the program */
+                : 0.0);
 }
 
 static ModelStatus initialize(void *data, double start_time, const ModelLogger *log)
@@ -259,7 +279,8 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     const int count = measured(d, values);
     ic_init(&d->cadence, count, values, d->pipe.h, d->input_period);
     d->coarse_logged = 0;
-    d->held_logged = 0;
+    d->held_logged = d->held_seen = 0;
+    d->held_since = 0.0;
     d->damping_logged = d->energy_seen = 0;
     d->energy_since = 0.0;
     d->work_per_step = step_work(d);
@@ -291,24 +312,28 @@ static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
     mp_run(&d->pipe, &d->program, d->y, d->u, start_time, k, k_end);
 }
 
-/* A warning each time more parameters come to be held at their ranges' ends,
- * naming the first: the log pushes the estimate outside what the file declares. */
+/* A warning each time more parameters have been held at their ranges' ends for
+ * MP_WARNING_DELAY, naming the first: the log pushes the estimate outside what the
+ * file declares (the transient's first estimates often are, briefly). */
 static void log_held(ModelData *d, double t, const ModelLogger *log)
 {
-    if (d->parameters_held > d->held_logged) {
+    if (d->parameters_held != d->held_seen) d->held_since = t;
+    d->held_seen = d->parameters_held;
+    if (d->parameters_held < d->held_logged) d->held_logged = d->parameters_held;
+    if (d->parameters_held > d->held_logged && t - d->held_since >= MP_WARNING_DELAY) {
         int k = 0;
         while (!d->held[k]) ++k;
         log->log(log->context, MODEL_WARNING,
-                 "t = %g: %d parameter(s) held at an end of the range the model file declares, "
-                 "theta_%d at its %s end %g: the identifier's least squares lie outside the "
-                 "range (a model term missing, or a parameter the log does not excite yet)",
-                 t, d->parameters_held, k + 1, d->held[k] < 0 ? "lower" : "upper",
-                 d->theta[k]);
+                 "t = %g: %d parameter(s) held at an end of the range the model file declares "
+                 "since t = %g, theta_%d at its %s end %g: the identifier's least squares lie "
+                 "outside the range (a model term missing, or a parameter the log does not "
+                 "excite yet)", t, d->parameters_held, d->held_since, k + 1,
+                 d->held[k] < 0 ? "lower" : "upper", d->theta[k]);
+        d->held_logged = d->parameters_held;
     }
-    d->held_logged = d->parameters_held;
 }
 
-/* A warning when the published model has created energy for MP_ENERGY_WARNING
+/* A warning when the published model has created energy for MP_WARNING_DELAY
  * (once per episode; the transient's first estimates often do, briefly). */
 static void log_damping(ModelData *d, double t, const ModelLogger *log)
 {
@@ -319,7 +344,7 @@ static void log_damping(ModelData *d, double t, const ModelLogger *log)
     if (!d->energy_seen) d->energy_since = t;
     d->energy_seen = 1;
     MdDamping damping;
-    const int which = !d->damping_logged && t - d->energy_since >= MP_ENERGY_WARNING
+    const int which = !d->damping_logged && t - d->energy_since >= MP_WARNING_DELAY
                           ? creates_energy(d, &damping)
                           : 0;
     if (which) {
@@ -375,11 +400,13 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
 #define R(field, lo, hi) STATE_FIELD(ModelData, field, FIELD_REAL, lo, hi)
 static const StateField STATE_FIELDS[] = {
     D(alpha1), D(alpha2), I(reset_seen, 0, 1), IC_STATE_FIELDS(ModelData, cadence),
-    I(coarse_logged, 0, 1), I(held_logged, 0, MAX_P), I(held, -1, 1),
+    I(coarse_logged, 0, 1), I(held_logged, 0, MAX_P), I(held_seen, 0, MAX_P),
+    I(held, -1, 1),
     I(damping_logged, 0, 1), I(energy_seen, 0, 1), D(pipe.gain), D(pipe.warm_up),
     I(pipe.identifying, 0, 1), I(pipe.started, 0, 1), I(pipe.warm_samples, 0, 1000000000),
     R(pipe.singular_steps, 0.0, NAN), I(pipe.nonfinite, MP_FINITE, MP_NONFINITE_IDENTIFIER),
     I(pipe.nonfinite_equation, 0, MAX_N - 1), I(pipe.nonfinite_entry, -1, MAX_P - 1),
+    FL_STATE_FIELDS(ModelData, pipe.window),
     STO_STATE_FIELDS(ModelData, pipe.obs[0]),
     STO_STATE_FIELDS(ModelData, pipe.obs[1]), BANK_STATE_FIELDS(ModelData, pipe.bank[0]),
     BANK_STATE_FIELDS(ModelData, pipe.bank[1]), RRI_STATE_FIELDS(ModelData, pipe.id),
@@ -387,6 +414,7 @@ static const StateField STATE_FIELDS[] = {
     /* the doubles, named by their struct */
     REAL_FIELDS(ModelData, pipe.obs), REAL_FIELDS(ModelData, pipe.bank),
     REAL_FIELDS(ModelData, pipe.id), REAL_FIELDS(ModelData, pipe.statistics),
+    REAL_FIELDS(ModelData, pipe.window),
 };
 #undef D
 #undef I

@@ -6,6 +6,7 @@
 #ifndef STATE_FIELDS_H
 #define STATE_FIELDS_H
 
+#include "../core/fixed_lag.h"
 #include "../core/implicit_twisting.h"
 #include "../core/noise_adaptive.h"
 #include "../core/regressor_identifier.h"
@@ -40,6 +41,18 @@
                 ADAPTIVE_MAX_MEMBERS + ADAPTIVE_ZOOM - 1),                                       \
     STATE_FIELD(T, b.perturbation, FIELD_INT, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS - 1), \
     STATE_FIELD(T, b.follow, FIELD_INT, ADAPTIVE_SUPER_TWISTING, ADAPTIVE_MAX_MEMBERS - 1)
+
+/* A FixedLag (fixed_lag.h); its doubles other than the coefficients are REAL_FIELDS. */
+#define FL_STATE_FIELDS(T, f)                                                                    \
+    DERIVED_FIELD(T, f.coordinates), DERIVED_FIELD(T, f.signals), DERIVED_FIELD(T, f.h),         \
+    DERIVED_FIELD(T, f.half), DERIVED_FIELD(T, f.k0), DERIVED_FIELD(T, f.k1),                    \
+    DERIVED_FIELD(T, f.k2), DERIVED_FIELD(T, f.noise_gain), DERIVED_FIELD(T, f.probe),            \
+    DERIVED_FIELD(T, f.probe_gain), STATE_FIELD(T, f.noise_square, FIELD_REAL, 0.0, NAN),         \
+    STATE_FIELD(T, f.noise_squares, FIELD_REAL, 0.0, NAN),                                       \
+    STATE_FIELD(T, f.newest, FIELD_INT, 0, FL_RING - 1),                                         \
+    STATE_FIELD(T, f.filled, FIELD_INT, 0, FL_RING),                                             \
+    STATE_FIELD(T, f.square, FIELD_REAL, 0.0, NAN), STATE_FIELD(T, f.squares, FIELD_REAL, 0.0, NAN), \
+    STATE_FIELD(T, f.chosen, FIELD_INT, -1, FL_CANDIDATES - 1)
 
 /* A RegressorIdentifier (regressor_identifier.h); anchor_unit and batch_age
  * below p + 2 and batch_samples are the model's check_restored's. */

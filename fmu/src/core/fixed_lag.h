@@ -1,0 +1,83 @@
+/* Derivatives of measured positions at a fixed lag behind the newest sample,
+ * zero-phase within a symmetric window, for the identifier's regression.
+ *
+ * Why: parameters are constant or slow, so their estimate may lag by a window,
+ * while a causal derivative's own lag biases every regressor on a coarse or fast
+ * log (a resonance near fs/9 is not tracked by any causal observer at that rate).
+ * The window smooths the samples with a low-pass kernel K (a Blackman-windowed
+ * sinc of cut-off f_c, half-length FL_CYCLES / f_c samples) and differentiates
+ * the smooth curve it defines, q^(t) = sum_i y_i K(t - t_i): its velocity and
+ * acceleration are exact derivatives of one function, and the inputs pass the
+ * same K, so that a linear equation holds between the smoothed signals as it
+ * does between the measured ones.  The coefficients are normalized so that
+ * constants, ramps and parabolas come out exact.
+ *
+ * The cut-off is chosen from the measurement noise: candidates FL_CANDIDATES
+ * from FL_HIGHEST_FRACTION of the sample rate, each half the one before.  From
+ * the start, every candidate's acceleration mean square is accumulated, and the
+ * noise's, measured as what a kernel of cut-off FL_PROBE_FRACTION leaves of the
+ * positions (mechanical motion rarely reaches that band; the bank's estimate
+ * would include its members' tracking error where the nominal model misses
+ * the dynamics, a resonance).  fl_choose takes the widest band in which that
+ * noise, white, is at most FL_NOISE_SHARE of the acceleration's mean square
+ * (the errors-in-variables bias of an acceleration's coefficient is about that
+ * share), else the narrowest.
+ * Plain C, no allocation, no FMI types. */
+#ifndef FIXED_LAG_H
+#define FIXED_LAG_H
+
+#include "tuning.h"
+
+#define FL_MAX_SIGNALS 14 /* positions then inputs */
+#define FL_MAX_HALF 240 /* ceil(FL_CYCLES / FL_HIGHEST_FRACTION) 2^(FL_CANDIDATES - 1) */
+#define FL_RING (2 * FL_MAX_HALF + 1)
+#define FL_PROBE_HALF 15 /* ceil(FL_CYCLES / FL_PROBE_FRACTION) */
+
+typedef struct {
+    int coordinates, signals; /* positions, then inputs up to signals */
+    double h;
+    int half[FL_CANDIDATES];  /* samples on each side of the centre */
+    /* coefficient of the sample j steps after the centre, j = 0 .. half (k1 is odd:
+     * -k1[j] before the centre; k0 and k2 even), in units of h^-derivative */
+    double k0[FL_CANDIDATES][FL_MAX_HALF + 1], k1[FL_CANDIDATES][FL_MAX_HALF + 1],
+        k2[FL_CANDIDATES][FL_MAX_HALF + 1];
+    double noise_gain[FL_CANDIDATES]; /* acceleration variance per unit noise variance */
+    double probe[FL_PROBE_HALF + 1];  /* the noise probe's kernel (k0's form) ... */
+    double probe_gain;                /* ... its residual's variance per unit noise variance */
+    /* each signal's last FL_RING samples, written twice (at j and j + FL_RING) so that
+     * every window is contiguous: the newest at ring[s][newest + FL_RING] */
+    double ring[FL_MAX_SIGNALS][2 * FL_RING];
+    int newest, filled;       /* ring index of the newest sample; samples held */
+    double square[FL_CANDIDATES][FL_MAX_SIGNALS]; /* sums of each candidate's squared */
+    double squares[FL_CANDIDATES];                /* accelerations, and their count */
+    double noise_square[FL_MAX_SIGNALS];          /* sums of the probe's squared residuals */
+    double noise_squares;                         /* and their count */
+    int chosen;               /* the candidate in use; -1 before fl_choose */
+} FixedLag;
+
+/* The coefficients of the candidates at step h [s]. Returns 0, or -1 for more
+ * signals than FL_MAX_SIGNALS or a step that is not positive and finite. */
+int fl_init(FixedLag *f, int coordinates, int inputs, double h);
+
+/* Takes a sample (the positions y, the inputs u) and, until the choice, accumulates
+ * the mean square of every candidate's acceleration whose window is full and the
+ * noise probe's. */
+void fl_push(FixedLag *f, const double y[], const double u[]);
+
+/* Chooses the cut-off from the statistics so far. Returns the candidate. */
+int fl_choose(FixedLag *f);
+
+/* Coordinate i's measurement noise standard deviation, as the probe measures it. */
+double fl_noise_std(const FixedLag *f, int i);
+
+/* The chosen candidate's window is full: fl_at_lag has a sample. */
+int fl_ready(const FixedLag *f);
+
+/* The smoothed positions, velocities, accelerations and inputs at the chosen
+ * candidate's centre, half[chosen] samples behind the newest. */
+void fl_at_lag(const FixedLag *f, double q[], double qd[], double qdd[], double u[]);
+
+/* The chosen candidate's cut-off [Hz] (0 before fl_choose). */
+double fl_cutoff(const FixedLag *f);
+
+#endif

@@ -1,0 +1,106 @@
+/* Unit tests of the fixed-lag derivatives (fmu/src/core/fixed_lag.h): run as
+ * `test_fixed_lag CASE` (check.h). */
+#include <math.h>
+#include <stdint.h>
+
+#include "check.h"
+
+#include "fixed_lag.h"
+
+#define H 1e-3
+#define PI 3.14159265358979323846
+
+static FixedLag window; /* 60 kB: not on the stack */
+
+/* A parabola's velocity and acceleration and a ramp input come out exact at the lag,
+ * whatever the candidate; its value within 1e-5 (a low-pass smooths a curvature by the
+ * kernel's second moment, which the windowed sinc keeps small). */
+static int polynomials_are_exact(void)
+{
+    int failed = 0;
+    for (int c = 0; c < FL_CANDIDATES; ++c) {
+        fl_init(&window, 1, 1, H);
+        const int samples = 2 * window.half[c] + 1 + 17;
+        for (int k = 0; k < samples; ++k) {
+            const double t = k * H, y = 1.0 + 2.0 * t - 3.0 * t * t, u = 5.0 * t;
+            fl_push(&window, &y, &u);
+        }
+        window.chosen = c;
+        double q, qd, qdd, u;
+        fl_at_lag(&window, &q, &qd, &qdd, &u);
+        const double t = (samples - 1 - window.half[c]) * H;
+        const double exact = fmax(fmax(fabs(qd - (2.0 - 6.0 * t)) / 2.0, fabs(qdd + 6.0) / 6.0),
+                                  fabs(u - 5.0 * t));
+        const double value = fabs(q - (1.0 + 2.0 * t - 3.0 * t * t));
+        failed += check(exact < 1e-9 && value < 1e-5, "candidate %d (half %d): a parabola's "
+                        "velocity and acceleration and a ramp input at the lag, worst error "
+                        "%.2e (expected < 1e-9); the parabola's value %.2e (expected < 1e-5)",
+                        c, window.half[c], exact, value);
+    }
+    return failed;
+}
+
+/* A sine well inside the band: its derivatives within 0.5 %, at the centre. */
+static int a_sine_in_the_band_keeps_its_derivatives(void)
+{
+    fl_init(&window, 1, 0, H);
+    const double w = 2.0 * PI * 30.0; /* 30 Hz against the widest band's 200 Hz */
+    int k = 0;
+    for (; k < 200; ++k) {
+        const double y = sin(w * k * H);
+        fl_push(&window, &y, NULL);
+    }
+    window.chosen = 0;
+    double q, qd, qdd;
+    fl_at_lag(&window, &q, &qd, &qdd, NULL);
+    const double t = (k - 1 - window.half[0]) * H;
+    const double error = fmax(fabs(qd - w * cos(w * t)) / w, fabs(qdd + w * w * sin(w * t)) / (w * w));
+    return check(error < 5e-3, "30 Hz sine through the 200 Hz window: velocity and "
+                 "acceleration within %.2e of their amplitudes (expected < 5e-3)", error);
+}
+
+/* Reproducible white noise in [-sqrt 3, sqrt 3]: unit variance. */
+static double noise(uint64_t *state)
+{
+    *state = *state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return ((double)(*state >> 11) / 9007199254740992.0 - 0.5) * 2.0 * sqrt(3.0);
+}
+
+/* The probe measures white noise on a slow motion within 10 %, and the choice
+ * narrows the band as the noise grows. */
+static int the_band_follows_the_noise(void)
+{
+    int failed = 0, previous = -1;
+    const double levels[] = {0.0, 1e-7, 1e-5, 1e-3};
+    for (size_t n = 0; n < sizeof levels / sizeof levels[0]; ++n) {
+        uint64_t state = 7;
+        fl_init(&window, 1, 0, H);
+        for (int k = 0; k < 4000; ++k) {
+            const double t = k * H;
+            const double y = 0.1 * sin(2.0 * PI * 2.0 * t) + levels[n] * noise(&state);
+            fl_push(&window, &y, NULL);
+        }
+        const double measured = fl_noise_std(&window, 0);
+        const int chosen = fl_choose(&window);
+        if (levels[n] > 0.0)
+            failed += check(fabs(measured / levels[n] - 1.0) < 0.1, "noise %g: the probe "
+                            "measures %g (expected within 10 %%)", levels[n], measured);
+        failed += check(chosen >= previous, "noise %g: candidate %d (cut-off %g Hz), no wider "
+                        "than at less noise (%d)", levels[n], chosen, fl_cutoff(&window),
+                        previous);
+        previous = chosen;
+    }
+    failed += check(previous == FL_CANDIDATES - 1, "the loudest noise takes the narrowest "
+                    "band: candidate %d (expected %d)", previous, FL_CANDIDATES - 1);
+    return failed;
+}
+
+int main(int argc, char **argv)
+{
+    static const TestCase cases[] = {
+        {"polynomials_are_exact", polynomials_are_exact},
+        {"a_sine_in_the_band_keeps_its_derivatives", a_sine_in_the_band_keeps_its_derivatives},
+        {"the_band_follows_the_noise", the_band_follows_the_noise},
+    };
+    return run_cases("test_fixed_lag", cases, sizeof cases / sizeof cases[0], argc, argv);
+}
