@@ -236,8 +236,11 @@ def build_fmu(model: Model, destination: Path, fmi_version: int = 2,
         program = compile_program(model)
     except ProgramError as error:
         raise ExportError(str(error)) from None
-    if identifier is not None:
-        program = program.replace("\nentry ", f"\nidentifier {identifier}\nentry ", 1)
+    options = [f"identifier {identifier}"] if identifier is not None else []
+    if model.input_timing == "held":  # the window's input kernel takes the hold
+        options.append("inputs_held 1")
+    if options:
+        program = program.replace("\nentry ", "\n" + "\n".join(options) + "\nentry ", 1)
     source = template or template_fmu(fmi_version)
     with zipfile.ZipFile(source) as fmu:
         xml = model_description(model, fmu.read("modelDescription.xml"), fmi_version,

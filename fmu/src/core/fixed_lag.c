@@ -65,7 +65,21 @@ static double coefficients(double fraction, int half, double h, double k0[], dou
 
 _Static_assert(FL_CANDIDATES >= 1 && FL_CANDIDATES <= 8, "candidates halve the band");
 
-int fl_init(FixedLag *f, int coordinates, int inputs, double h)
+/* The held input's kernel of cut-off `fraction`: K at m + 1/2, normalized to sum 1
+ * over the 2 (half + 1) samples it weighs. */
+static void held_kernel(double fraction, int half, double held[])
+{
+    double sum = 0.0;
+    for (int m = 0; m <= half; ++m) {
+        double K[3];
+        kernel(2.0 * PI * fraction, half + 1.0, m + 0.5, K);
+        held[m] = K[0];
+        sum += 2.0 * K[0];
+    }
+    for (int m = 0; m <= half; ++m) held[m] /= sum;
+}
+
+int fl_init(FixedLag *f, int coordinates, int inputs, int inputs_held, double h)
 {
     if (coordinates < 0 || inputs < 0 || coordinates + inputs > FL_MAX_SIGNALS ||
         !(h > 0.0) || !isfinite(h))
@@ -74,11 +88,13 @@ int fl_init(FixedLag *f, int coordinates, int inputs, double h)
     f->coordinates = coordinates;
     f->signals = coordinates + inputs;
     f->h = h;
+    f->inputs_held = inputs_held != 0;
     f->chosen = -1;
     double fraction = FL_HIGHEST_FRACTION;
     for (int c = 0; c < FL_CANDIDATES; ++c, fraction *= 0.5) {
         f->half[c] = (int)fmin(ceil(FL_CYCLES / fraction - 1e-9), FL_MAX_HALF);
         f->noise_gain[c] = coefficients(fraction, f->half[c], h, f->k0[c], f->k1[c], f->k2[c]);
+        held_kernel(fraction, f->half[c], f->held[c]);
     }
     double d1[FL_PROBE_HALF + 1], d2[FL_PROBE_HALF + 1];
     coefficients(FL_PROBE_FRACTION, FL_PROBE_HALF, h, f->probe, d1, d2);
@@ -155,7 +171,7 @@ int fl_choose(FixedLag *f)
 
 int fl_ready(const FixedLag *f)
 {
-    return f->chosen >= 0 && f->filled >= 2 * f->half[f->chosen] + 1;
+    return f->chosen >= 0 && f->filled >= 2 * f->half[f->chosen] + 1 + f->inputs_held;
 }
 
 void fl_at_lag(const FixedLag *f, double q[], double qd[], double qdd[], double u[])
@@ -175,8 +191,16 @@ void fl_at_lag(const FixedLag *f, double q[], double qd[], double qdd[], double 
         qd[i] = velocity;
         qdd[i] = acceleration;
     }
-    for (int s = f->coordinates; s < f->signals; ++s)
-        u[s - f->coordinates] = even(f, half, k0, s);
+    for (int s = f->coordinates; s < f->signals; ++s) {
+        if (!f->inputs_held) {
+            u[s - f->coordinates] = even(f, half, k0, s);
+            continue;
+        }
+        const double *w = centre(f, half, s), *held = f->held[c];
+        double sum = 0.0;
+        for (int m = 0; m <= half; ++m) sum += held[m] * (w[m] + w[-m - 1]);
+        u[s - f->coordinates] = sum;
+    }
 }
 
 double fl_cutoff(const FixedLag *f)

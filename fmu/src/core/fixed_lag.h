@@ -10,7 +10,9 @@
  * acceleration are exact derivatives of one function, and the inputs pass the
  * same K, so that a linear equation holds between the smoothed signals as it
  * does between the measured ones.  The coefficients are normalized so that
- * constants, ramps and parabolas come out exact.
+ * constants, ramps and parabolas come out exact.  An input held over each sample
+ * (a zero-order hold) is the staircase it draws: sample u_i acts from t_i to
+ * t_i + h, so its weight is K at the middle of that interval.
  *
  * The cut-off is chosen from the measurement noise: candidates FL_CANDIDATES
  * from FL_HIGHEST_FRACTION of the sample rate, each half the one before.  From
@@ -30,17 +32,20 @@
 
 #define FL_MAX_SIGNALS 14 /* positions then inputs */
 #define FL_MAX_HALF 240 /* ceil(FL_CYCLES / FL_HIGHEST_FRACTION) 2^(FL_CANDIDATES - 1) */
-#define FL_RING (2 * FL_MAX_HALF + 1)
+#define FL_RING (2 * FL_MAX_HALF + 2) /* a held input's window reaches one sample further */
 #define FL_PROBE_HALF 15 /* ceil(FL_CYCLES / FL_PROBE_FRACTION) */
 
 typedef struct {
     int coordinates, signals; /* positions, then inputs up to signals */
+    int inputs_held;          /* the inputs act until the next sample */
     double h;
     int half[FL_CANDIDATES];  /* samples on each side of the centre */
     /* coefficient of the sample j steps after the centre, j = 0 .. half (k1 is odd:
      * -k1[j] before the centre; k0 and k2 even), in units of h^-derivative */
     double k0[FL_CANDIDATES][FL_MAX_HALF + 1], k1[FL_CANDIDATES][FL_MAX_HALF + 1],
         k2[FL_CANDIDATES][FL_MAX_HALF + 1];
+    double held[FL_CANDIDATES][FL_MAX_HALF + 1]; /* a held input's kernel: the samples m
+                                                  * after and m + 1 before the centre */
     double noise_gain[FL_CANDIDATES]; /* acceleration variance per unit noise variance */
     double probe[FL_PROBE_HALF + 1];  /* the noise probe's kernel (k0's form) ... */
     double probe_gain;                /* ... its residual's variance per unit noise variance */
@@ -55,9 +60,10 @@ typedef struct {
     int chosen;               /* the candidate in use; -1 before fl_choose */
 } FixedLag;
 
-/* The coefficients of the candidates at step h [s]. Returns 0, or -1 for more
- * signals than FL_MAX_SIGNALS or a step that is not positive and finite. */
-int fl_init(FixedLag *f, int coordinates, int inputs, double h);
+/* The coefficients of the candidates at step h [s], the inputs held over each
+ * sample or not. Returns 0, or -1 for more signals than FL_MAX_SIGNALS or a step
+ * that is not positive and finite. */
+int fl_init(FixedLag *f, int coordinates, int inputs, int inputs_held, double h);
 
 /* Takes a sample (the positions y, the inputs u) and, until the choice, accumulates
  * the mean square of every candidate's acceleration whose window is full and the

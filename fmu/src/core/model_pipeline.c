@@ -39,7 +39,7 @@ int mp_init(ModelPipeline *p, const TermProgram *program, const double alpha1[],
     if (p->regression != MP_REGRESSION_OBSERVER && p->regression != MP_REGRESSION_WINDOW)
         return refuse(error, error_size, "regression = %d: 0 (the observer's velocities) or 1 "
                       "(a fixed-lag window)", p->regression);
-    if (fl_init(&p->window, n, program->m, p->h))
+    if (fl_init(&p->window, n, program->m, program->inputs_held, p->h))
         return refuse(error, error_size, "the fixed-lag window refused h = %g", p->h);
     if (!(p->tau_identifier >= 0.0) || !isfinite(p->tau_identifier) ||
         !(p->statistics_interval >= 0.0) || !isfinite(p->statistics_interval))

@@ -227,6 +227,10 @@ int tp_parse(TermProgram *p, const char *text, size_t length, char *error, size_
     if (strcmp(c.token, "identifier") == 0) {
         if (read_int(&c, "identifier", 0, 2, &p->identifier) || next_word(&c)) return -1;
     }
+    p->inputs_held = 0;
+    if (strcmp(c.token, "inputs_held") == 0) {
+        if (read_int(&c, "inputs_held", 0, 1, &p->inputs_held) || next_word(&c)) return -1;
+    }
     const int entries = p->n * (p->p + 1);
     for (int e = 0; e < entries; ++e) {
         if (e > 0 && next_word(&c)) return -1;

@@ -21,6 +21,8 @@
  *                           file's units; -inf, inf for an open end), the nominal inside
  *     identifier K          optional: the identifier the model asks for (1 LSM, the
  *                           default; 2 MFF for time-varying parameters; 0 none)
+ *     inputs_held H         optional: 1 when each input sample acts until the next (a
+ *                           zero-order hold: the model file's [log] inputs = "held")
  *     entry I K L  op arg .. op arg     L (op, arg) pairs; K = P: r_I
  * with one entry for every I < N and K <= P.  Ops (term_program.c, TpOp)
  * push a constant (arg: its index) or a measured value (arg: the coordinate
@@ -60,6 +62,7 @@ typedef struct {
     int bounded;                   /* some parameter has a range */
     double coordinate_scale[TP_MAX_COORDINATES];
     int identifier;
+    int inputs_held;               /* each input sample acts until the next */
     int op[TP_MAX_TOKENS], arg[TP_MAX_TOKENS];
     /* entry (i, k), k <= p (k = p: r_i): tokens start[i][k] .. start[i][k] + length[i][k] - 1 */
     int start[TP_MAX_COORDINATES][TP_MAX_PARAMETERS + 1];

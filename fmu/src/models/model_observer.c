@@ -274,6 +274,10 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
         log->log(log->context, MODEL_ERROR, "%s", error);
         return MODEL_ERROR;
     }
+    if (d->program.inputs_held && d->pipe.identifier && d->pipe.regression != MP_REGRESSION_WINDOW)
+        log->log(log->context, MODEL_WARNING, "the model file declares its inputs held over each "
+                 "sample; regression = %d takes them as samples (only the fixed-lag window, "
+                 "regression = 1, takes the hold)", d->pipe.regression);
     d->reset_seen = d->identifier_reset;
     double values[IC_MAX_VALUES];
     const int count = measured(d, values);

@@ -19,7 +19,7 @@ static int polynomials_are_exact(void)
 {
     int failed = 0;
     for (int c = 0; c < FL_CANDIDATES; ++c) {
-        fl_init(&window, 1, 1, H);
+        fl_init(&window, 1, 1, 0, H);
         const int samples = 2 * window.half[c] + 1 + 17;
         for (int k = 0; k < samples; ++k) {
             const double t = k * H, y = 1.0 + 2.0 * t - 3.0 * t * t, u = 5.0 * t;
@@ -43,7 +43,7 @@ static int polynomials_are_exact(void)
 /* A sine well inside the band: its derivatives within 0.5 %, at the centre. */
 static int a_sine_in_the_band_keeps_its_derivatives(void)
 {
-    fl_init(&window, 1, 0, H);
+    fl_init(&window, 1, 0, 0, H);
     const double w = 2.0 * PI * 30.0; /* 30 Hz against the widest band's 200 Hz */
     int k = 0;
     for (; k < 200; ++k) {
@@ -74,7 +74,7 @@ static int the_band_follows_the_noise(void)
     const double levels[] = {0.0, 1e-7, 1e-5, 1e-3};
     for (size_t n = 0; n < sizeof levels / sizeof levels[0]; ++n) {
         uint64_t state = 7;
-        fl_init(&window, 1, 0, H);
+        fl_init(&window, 1, 0, 0, H);
         for (int k = 0; k < 4000; ++k) {
             const double t = k * H;
             const double y = 0.1 * sin(2.0 * PI * 2.0 * t) + levels[n] * noise(&state);
@@ -95,12 +95,37 @@ static int the_band_follows_the_noise(void)
     return failed;
 }
 
+/* An input held over each sample is the staircase it draws: a held ramp's samples
+ * smooth to the ramp half a sample earlier, where sampled they give the ramp. */
+static int a_held_input_is_a_staircase(void)
+{
+    int failed = 0;
+    for (int held = 0; held <= 1; ++held) {
+        fl_init(&window, 1, 1, held, H);
+        const int samples = 2 * window.half[1] + 2 + 9;
+        for (int k = 0; k < samples; ++k) {
+            const double y = 0.0, u = 3.0 * k * H;
+            fl_push(&window, &y, &u);
+        }
+        window.chosen = 1;
+        double q, qd, qdd, u;
+        fl_at_lag(&window, &q, &qd, &qdd, &u);
+        const double t = (samples - 1 - window.half[1]) * H;
+        const double expected = 3.0 * (t - (held ? 0.5 * H : 0.0));
+        failed += check(fl_ready(&window) && fabs(u - expected) < 1e-12, "inputs held %d: the "
+                        "ramp 3 t smoothed at t = %g: %.15g (expected %.15g)", held, t, u,
+                        expected);
+    }
+    return failed;
+}
+
 int main(int argc, char **argv)
 {
     static const TestCase cases[] = {
         {"polynomials_are_exact", polynomials_are_exact},
         {"a_sine_in_the_band_keeps_its_derivatives", a_sine_in_the_band_keeps_its_derivatives},
         {"the_band_follows_the_noise", the_band_follows_the_noise},
+        {"a_held_input_is_a_staircase", a_held_input_is_a_staircase},
     };
     return run_cases("test_fixed_lag", cases, sizeof cases / sizeof cases[0], argc, argv);
 }
