@@ -30,6 +30,8 @@ OP = {name: code for code, name in enumerate(OPS)}
 #: The core's limits (term_program.h).
 MAX_COORDINATES, MAX_INPUTS, MAX_PARAMETERS = 7, 7, 32
 MAX_TOKENS, MAX_CONSTANTS, MAX_STACK = 4096, 512, 32
+#: the longest parameter name the FMU's messages take, plus one (TP_NAME_SIZE)
+NAME_SIZE = 32
 
 _FUNCTIONS = {sympy.sin: "sin", sympy.cos: "cos", sympy.tan: "tan", sympy.tanh: "tanh",
               sympy.exp: "exp", sympy.log: "log", sympy.sign: "sign", sympy.Abs: "abs",
@@ -129,6 +131,8 @@ def compile_program(model: Model) -> str:
     if any(q.bounded for q in model.parameters):
         header.append("bounds " + " ".join(f"{q.lower!r} {q.upper!r}"
                                            for q in model.parameters))
+    if all(len(q.name) < NAME_SIZE for q in model.parameters):  # for the FMU's messages
+        header.append("names " + " ".join(q.name for q in model.parameters))
     return "\n".join(header + lines) + "\n"
 
 

@@ -1,5 +1,6 @@
 #include "term_program.h"
 
+#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
@@ -69,6 +70,22 @@ static int expect_word(Cursor *c, const char *word)
     if (next_word(c)) return -1;
     if (strcmp(c->token, word) != 0)
         return fail(c, "expected '%s', found '%s'", word, c->token);
+    return 0;
+}
+
+/* A parameter's name: a letter, then letters, digits or _, shorter than TP_NAME_SIZE
+ * (it goes into messages as it is). */
+static int read_name(Cursor *c, char name[TP_NAME_SIZE])
+{
+    if (next_word(c)) return -1;
+    const size_t size = strlen(c->token);
+    int valid = size < TP_NAME_SIZE && isalpha((unsigned char)c->token[0]);
+    for (size_t j = 0; valid && j < size; ++j)
+        valid = isalnum((unsigned char)c->token[j]) || c->token[j] == '_';
+    if (!valid)
+        return fail(c, "parameter name '%s' is not a name of at most %d letters, digits or _",
+                    c->token, TP_NAME_SIZE - 1);
+    memcpy(name, c->token, size + 1);
     return 0;
 }
 
@@ -223,6 +240,12 @@ int tp_parse(TermProgram *p, const char *text, size_t length, char *error, size_
     }
     if (strcmp(c.token, "bounds") == 0) {
         if (read_bounds(&c, p) || next_word(&c)) return -1;
+    }
+    for (int k = 0; k < p->p; ++k) snprintf(p->names[k], TP_NAME_SIZE, "theta_%d", k + 1);
+    if (strcmp(c.token, "names") == 0) {
+        for (int k = 0; k < p->p; ++k)
+            if (read_name(&c, p->names[k])) return -1;
+        if (next_word(&c)) return -1;
     }
     if (strcmp(c.token, "identifier") == 0) {
         if (read_int(&c, "identifier", 0, 2, &p->identifier) || next_word(&c)) return -1;

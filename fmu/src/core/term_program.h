@@ -19,6 +19,8 @@
  *     coordinate_scale c_1 .. c_N   optional: each coordinate's unit in SI (default 1)
  *     bounds l_1 u_1 .. l_P u_P     optional: each parameter's declared range (the
  *                           file's units; -inf, inf for an open end), the nominal inside
+ *     names n_1 .. n_P      optional: the parameters' names, for messages (letters,
+ *                           digits and _, at most TP_NAME_SIZE - 1; default theta_k)
  *     identifier K          optional: the identifier the model asks for (1 LSM, the
  *                           default; 2 MFF for time-varying parameters; 0 none)
  *     inputs_held H         optional: 1 when each input sample acts until the next (a
@@ -39,6 +41,7 @@
 #define TP_MAX_COORDINATES 7
 #define TP_MAX_INPUTS 7
 #define TP_MAX_PARAMETERS 32
+#define TP_NAME_SIZE 32
 #define TP_MAX_TOKENS 4096
 #define TP_MAX_CONSTANTS 512
 #define TP_MAX_STACK 32
@@ -61,6 +64,7 @@ typedef struct {
     double lower[TP_MAX_PARAMETERS], upper[TP_MAX_PARAMETERS];
     int bounded;                   /* some parameter has a range */
     double coordinate_scale[TP_MAX_COORDINATES];
+    char names[TP_MAX_PARAMETERS][TP_NAME_SIZE]; /* of the parameters, for messages */
     int identifier;
     int inputs_held;               /* each input sample acts until the next */
     int op[TP_MAX_TOKENS], arg[TP_MAX_TOKENS];

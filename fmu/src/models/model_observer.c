@@ -329,9 +329,9 @@ static void log_held(ModelData *d, double t, const ModelLogger *log)
         while (!d->held[k]) ++k;
         log->log(log->context, MODEL_WARNING,
                  "t = %g: %d parameter(s) held at an end of the range the model file declares "
-                 "since t = %g, theta_%d at its %s end %g: the identifier's least squares lie "
+                 "since t = %g, %s at its %s end %g: the identifier's least squares lie "
                  "outside the range (a model term missing, or a parameter the log does not "
-                 "excite yet)", t, d->parameters_held, d->held_since, k + 1,
+                 "excite yet)", t, d->parameters_held, d->held_since, d->program.names[k],
                  d->held[k] < 0 ? "lower" : "upper", d->theta[k]);
         d->held_logged = d->parameters_held;
     }
@@ -389,9 +389,9 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
     }
     for (int k = 0; k < d->program.p; ++k) {
         if (!isfinite(d->theta[k]) || !isfinite(d->theta_std[k])) {
-            log->log(log->context, MODEL_ERROR, "identifier diverged at t = %g: theta_%d = %g "
+            log->log(log->context, MODEL_ERROR, "identifier diverged at t = %g: %s = %g "
                      "(a non-finite entry of the equations: an input or measurement out of "
-                     "range of the model's functions?)", t, k + 1, d->theta[k]);
+                     "range of the model's functions?)", t, d->program.names[k], d->theta[k]);
             return MODEL_ERROR;
         }
     }

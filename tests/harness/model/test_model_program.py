@@ -11,6 +11,7 @@ import pytest
 from harness.model import read_model
 from harness.model.program import (
     MAX_STACK,
+    NAME_SIZE,
     OPS,
     ProgramError,
     compile_program,
@@ -98,3 +99,21 @@ def test_the_core_refuses_a_damaged_program():
     q, qd, qdd, u = random_log(model, samples=3)
     with pytest.raises(ProgramError, match="entry column = 9"):
         evaluate_program(text, q, qd, qdd, u)
+
+
+def test_the_parameters_names_reach_the_core_for_its_messages(tmp_path):
+    """Names shorter than the core's TP_NAME_SIZE are written; a longer one leaves them all
+    out (the FMU then says theta_k), and the core refuses a name that is not one."""
+    header = (REPO / "fmu/src/core/term_program.h").read_text()
+    assert int(re.search(r"#define TP_NAME_SIZE (\d+)", header).group(1)) == NAME_SIZE
+    model = read_model(REPO / "examples" / "emps" / "emps.toml")
+    text = compile_program(model)
+    assert "\nnames M Fv Fc OF\n" in text
+    q, qd, qdd, u = random_log(model, samples=3)
+    evaluate_program(text, q, qd, qdd, u)  # the core reads it
+    with pytest.raises(ProgramError, match="parameter name 'F-v' is not a name"):
+        evaluate_program(text.replace("names M Fv", "names M F-v"), q, qd, qdd, u)
+    long = tmp_path / "long.toml"
+    long.write_text((REPO / "examples" / "emps" / "emps.toml").read_text(encoding="utf-8")
+                    .replace("Fv", "F" * NAME_SIZE), encoding="utf-8")
+    assert "\nnames " not in compile_program(read_model(long))

@@ -180,6 +180,7 @@ def test_the_fmu_keeps_the_range_as_identify_does(oscillator, capfd, version):
     assert result["k"][-1] == 35.0 and result["k_std"][-1] == 0.0
     assert result["observer.parameters_held"][-1] == 1
     assert "held at an end of the range the model file declares" in messages
+    assert "k at its upper end 35" in messages  # the parameter by its name
     offline = folder / "narrow_offline"
     main(["identify", str(log), "--model", str(model), "--out", str(offline), "--refine",
           "none"])
