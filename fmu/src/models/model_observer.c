@@ -316,15 +316,23 @@ static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
     mp_run(&d->pipe, &d->program, d->y, d->u, start_time, k, k_end);
 }
 
+/* How long `value` has stood unchanged at communication point t [s]: the time
+ * since it last changed (seen: the value at the last point, since: that time). */
+static double standing(int value, double t, int *seen, double *since)
+{
+    if (value != *seen) *since = t;
+    *seen = value;
+    return t - *since;
+}
+
 /* A warning each time more parameters have been held at their ranges' ends for
  * MP_WARNING_DELAY, naming the first: the log pushes the estimate outside what the
  * file declares (the transient's first estimates often are, briefly). */
 static void log_held(ModelData *d, double t, const ModelLogger *log)
 {
-    if (d->parameters_held != d->held_seen) d->held_since = t;
-    d->held_seen = d->parameters_held;
+    const double stood = standing(d->parameters_held, t, &d->held_seen, &d->held_since);
     if (d->parameters_held < d->held_logged) d->held_logged = d->parameters_held;
-    if (d->parameters_held > d->held_logged && t - d->held_since >= MP_WARNING_DELAY) {
+    if (d->parameters_held > d->held_logged && stood >= MP_WARNING_DELAY) {
         int k = 0;
         while (!d->held[k]) ++k;
         log->log(log->context, MODEL_WARNING,
@@ -341,14 +349,13 @@ static void log_held(ModelData *d, double t, const ModelLogger *log)
  * (once per episode; the transient's first estimates often do, briefly). */
 static void log_damping(ModelData *d, double t, const ModelLogger *log)
 {
+    const double stood = standing(d->negative_damping, t, &d->energy_seen, &d->energy_since);
     if (!d->negative_damping) {
-        d->damping_logged = d->energy_seen = 0;
+        d->damping_logged = 0;
         return;
     }
-    if (!d->energy_seen) d->energy_since = t;
-    d->energy_seen = 1;
     MdDamping damping;
-    const int which = !d->damping_logged && t - d->energy_since >= MP_WARNING_DELAY
+    const int which = !d->damping_logged && stood >= MP_WARNING_DELAY
                           ? creates_energy(d, &damping)
                           : 0;
     if (which) {
