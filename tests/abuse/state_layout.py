@@ -10,12 +10,12 @@ field set.
 from __future__ import annotations
 
 import functools
-import os
 import subprocess
 import tempfile
 from pathlib import Path
 
 from tools.abuse.abuse_fmi import CLOCK_SIZE, HEADER_SIZE, REPO
+from tools.abuse.state_format import compiler
 
 # model identifier -> (model file, name of its data struct)
 DATA_TYPES = {
@@ -26,16 +26,6 @@ DATA_TYPES = {
     "TwistingController": ("twisting_controller.c", "ControllerData"),
 }
 DATA_OFFSET = HEADER_SIZE + CLOCK_SIZE  # the model data follows the header and the clock
-
-
-def _compiler() -> str:
-    """The C compiler of the FMUs' CMake build (CMAKE_C_COMPILER), else $CC or cc."""
-    cache = REPO / "build" / "cmake" / "CMakeCache.txt"
-    if cache.is_file():
-        for line in cache.read_text(errors="replace").splitlines():
-            if line.startswith("CMAKE_C_COMPILER:"):
-                return line.partition("=")[2].strip()
-    return os.environ.get("CC", "cc")
 
 
 @functools.cache
@@ -51,7 +41,7 @@ def _layout(model: str, fields: tuple[str, ...]) -> dict[str, tuple[int, int]]:
     with tempfile.TemporaryDirectory() as tmp:
         program, binary = Path(tmp) / "layout.c", Path(tmp) / "layout"
         program.write_text("\n".join(lines) + "\n")
-        subprocess.run([_compiler(), "-std=c11", "-O0", "-w", "-o", str(binary),
+        subprocess.run([compiler(), "-std=c11", "-O0", "-w", "-o", str(binary),
                         str(program), *cores, "-lm"], check=True, capture_output=True)
         out = subprocess.run([str(binary)], check=True, capture_output=True, text=True).stdout
     return {field: (DATA_OFFSET + int(a), int(b))

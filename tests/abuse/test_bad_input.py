@@ -41,6 +41,7 @@ from tools.abuse.abuse_fmi import (
     normal_run,
     parameter_offset,
 )
+from tools.abuse.state_format import offset
 
 NAN, INF = float("nan"), float("inf")
 OBS, PEN, CTL, ROBOT, *_ = MODELS
@@ -553,17 +554,17 @@ def flip(offset, bit=0):
 for m in MODELS:
     for id, mutate, words in (
             ("truncated-by-1", lambda d: d[:-1], "fmi2DeSerializeFMUstate: wrong size"),
-            ("truncated-to-header", lambda d: d[:HEADER_SIZE], "wrong size 40"),
+            ("truncated-to-header", lambda d: d[:HEADER_SIZE], f"wrong size {HEADER_SIZE}"),
             ("empty", lambda d: b"", "wrong size 0"),
             ("oversized-by-1", lambda d: d + b"\0", "wrong size"),
             ("oversized-x2", lambda d: d + d, "wrong size"),
             ("flip-magic", flip(0), "not a serialized FMU state (bad magic)"),
-            ("flip-version", flip(8, 3), "format version 10, expected 2"),
-            ("flip-size-field", flip(16, 1), "state of another FMU or build"),
-            ("flip-guid-hash", flip(24, 7), "state of another FMU or build"),
-            ("flip-checksum", flip(32), "checksum mismatch (corrupted state)"),
-            ("flip-clock-state", flip(HEADER_SIZE, 2), "checksum mismatch"),
-            ("flip-clock-steps", flip(HEADER_SIZE + 8, 5), "checksum mismatch"),
+            ("flip-version", flip(offset("version"), 3), "format version 10, expected 2"),
+            ("flip-size-field", flip(offset("size"), 1), "state of another FMU or build"),
+            ("flip-guid-hash", flip(offset("guid_hash"), 7), "state of another FMU or build"),
+            ("flip-checksum", flip(offset("checksum")), "checksum mismatch (corrupted state)"),
+            ("flip-clock-state", flip(offset("state"), 2), "checksum mismatch"),
+            ("flip-clock-steps", flip(offset("steps"), 5), "checksum mismatch"),
             ("flip-first-data-byte", flip(HEADER_SIZE + CLOCK_SIZE, 6), "checksum mismatch"),
             ("flip-last-byte", flip(-1, 7), "checksum mismatch"),
             ("zeros", lambda d: bytes(len(d)), "bad magic"),
@@ -783,7 +784,7 @@ def test_forged_state_with_inconsistent_clock_is_rejected(model):
         f = Raw(model)
         assert f.initialize() == OK
         data = bytearray(serialized(f))
-        struct.pack_into("<d", data, HEADER_SIZE + 32, 1e9)  # Clock.comm_time
+        struct.pack_into("<d", data, offset("comm_time"), 1e9)
         status, state = f.deserialize(forge(bytes(data)))
         if status == OK:
             raise AssertionError("forged state with comm_time = 1e9 (steps unchanged) accepted: a "

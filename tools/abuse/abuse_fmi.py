@@ -27,6 +27,7 @@ from fmpy.fmi2 import (
     fmi2CallbackLoggerTYPE,
 )
 
+from tools.abuse import state_format
 from tools.fmu_models import models
 
 REPO = Path(__file__).resolve().parents[2]
@@ -248,24 +249,15 @@ def assert_usable_after_reset(fmu: Raw):
 
 # ---- serialized states ---------------------------------------------------------------------
 
-# fmu/src/instance/instance.c: magic[8] u32 version u32 reserved u64 size u64 guid hash u64 checksum,
-# then the Snapshot (Clock, model data); the checksum covers everything after the header.
-HEADER_SIZE = 40
-CHECKSUM_OFFSET = 32
-CLOCK_SIZE = 40  # u32 state, u32 stop_time_defined, u64 steps, double start, stop, comm_time
-
-
-def fnv1a(data: bytes) -> int:
-    h = 14695981039346656037
-    for byte in data:
-        h = ((h ^ byte) * 1099511628211) & 0xFFFFFFFFFFFFFFFF
-    return h
+# fmu/src/instance/state_format.h: a header, the clock, then the model data
+HEADER_SIZE = state_format.header_size()
+CLOCK_SIZE = state_format.clock_size()
 
 
 def forge(serialized: bytes) -> bytes:
     """The same bytes with a checksum that matches them: what anyone can compute."""
     data = bytearray(serialized)
-    struct.pack_into("<Q", data, CHECKSUM_OFFSET, fnv1a(bytes(data[HEADER_SIZE:])))
+    struct.pack_into("<Q", data, state_format.offset("checksum"), state_format.checksum(serialized))
     return bytes(data)
 
 

@@ -16,6 +16,7 @@
 
 #include "fmi2Functions.h"
 #include "model_interface.h"
+#include "state_format.h"
 
 #define MD MODEL_DESCRIPTOR
 
@@ -138,24 +139,16 @@ static inline int step_is_affordable(fmi2Component c, double H)
     return !(h > 0.0) || H / h <= FUZZ_MAX_STEPS || H / h >= 9007199254740992.0;
 }
 
-/* ---- serialized states (instance.c's layout) ----------------------------------- */
+/* ---- serialized states (state_format.h) --------------------------------------- */
 
-#define STATE_HEADER_SIZE 40
-#define STATE_CHECKSUM_OFFSET 32
-
-static inline uint64_t fnv1a(const uint8_t *p, size_t n)
-{
-    uint64_t h = 14695981039346656037ull;
-    for (size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
-    return h;
-}
+#define STATE_HEADER_SIZE sizeof(StateHeader)
 
 /* A checksum that matches the (changed) payload: what anyone can compute. */
 static inline void forge_checksum(uint8_t *state, size_t size)
 {
     if (size < STATE_HEADER_SIZE) return;
-    const uint64_t sum = fnv1a(state + STATE_HEADER_SIZE, size - STATE_HEADER_SIZE);
-    memcpy(state + STATE_CHECKSUM_OFFSET, &sum, sizeof sum);
+    const uint64_t sum = state_checksum(state, size);
+    memcpy(state + offsetof(StateHeader, checksum), &sum, sizeof sum);
 }
 
 /* ---- decoding the fuzz input ------------------------------------------------------ */

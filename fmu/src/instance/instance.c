@@ -5,6 +5,7 @@
 #define __USE_MINGW_ANSI_STDIO 1 /* C99 printf (%zu) on Windows too */
 #endif
 #include "instance.h"
+#include "state_format.h"
 
 #include <float.h>
 #include <math.h>
@@ -14,12 +15,6 @@
 #include <string.h>
 
 #define MD MODEL_DESCRIPTOR
-
-/* An FMU state: a snapshot of the clock and the model data block. */
-struct Snapshot {
-    Clock clock;
-    unsigned char data[]; /* MODEL_DESCRIPTOR.data_size bytes */
-};
 
 /* ---- logging ------------------------------------------------------------ */
 
@@ -785,27 +780,6 @@ Status instance_free_state(Instance *inst, const char *function, void **state)
     return instance_fail(inst, "%s: not a state of this instance", function);
 }
 
-/* Serialized layout (native byte order; valid for the same binary):
- *   magic[8] (the API's) | u32 version | u32 reserved | u64 total size |
- *   u64 hash of the GUID | u64 checksum of everything after it | Clock | model data */
-#define STATE_VERSION 2u /* 2: the work budget variables in every model */
-typedef struct {
-    char magic[8];
-    uint32_t version;
-    uint32_t reserved;
-    uint64_t size;
-    uint64_t guid_hash;
-    uint64_t checksum;
-} StateHeader;
-
-static uint64_t fnv1a(const void *bytes, size_t n, uint64_t hash)
-{
-    const unsigned char *p = bytes;
-    for (size_t i = 0; i < n; ++i) hash = (hash ^ p[i]) * 1099511628211ull;
-    return hash;
-}
-#define FNV_OFFSET 14695981039346656037ull
-
 static size_t serialized_size(void) { return sizeof(StateHeader) + snapshot_size(); }
 
 Status instance_serialized_size(Instance *inst, const char *function, const void *state,
@@ -830,8 +804,8 @@ Status instance_serialize(Instance *inst, const char *function, const void *stat
     memcpy(header.magic, inst->api->state_magic, sizeof header.magic);
     header.version = STATE_VERSION;
     header.size = size;
-    header.guid_hash = fnv1a(MD.guid, strlen(MD.guid), FNV_OFFSET);
-    header.checksum = fnv1a(state, snapshot_size(), FNV_OFFSET);
+    header.guid_hash = state_fnv1a(MD.guid, strlen(MD.guid), STATE_FNV_OFFSET);
+    header.checksum = state_fnv1a(state, snapshot_size(), STATE_FNV_OFFSET);
     memcpy(bytes, &header, sizeof header);
     memcpy(bytes + sizeof header, state, snapshot_size());
     return STATUS_OK;
@@ -1032,10 +1006,11 @@ Status instance_deserialize(Instance *inst, const char *function, const unsigned
     if (header.version != STATE_VERSION)
         return instance_fail(inst, "%s: format version %u, expected %u", function,
                              (unsigned)header.version, STATE_VERSION);
-    if (header.size != size || header.guid_hash != fnv1a(MD.guid, strlen(MD.guid), FNV_OFFSET))
+    if (header.size != size ||
+        header.guid_hash != state_fnv1a(MD.guid, strlen(MD.guid), STATE_FNV_OFFSET))
         return instance_fail(inst, "%s: state of another FMU or build", function);
     const unsigned char *payload = bytes + sizeof header;
-    if (header.checksum != fnv1a(payload, snapshot_size(), FNV_OFFSET))
+    if (header.checksum != state_checksum(bytes, size))
         return instance_fail(inst, "%s: checksum mismatch (corrupted state)", function);
     if (header.reserved != 0)
         return instance_fail(inst, "%s: reserved header field %u is not 0", function,
