@@ -26,6 +26,7 @@ from fmpy.fmi2 import (
     fmi2CallbackFunctions,
     fmi2CallbackLoggerTYPE,
 )
+from fmpy.model_description import ModelDescription
 
 from tools.abuse import state_format
 from tools.fmu_models import models
@@ -49,10 +50,10 @@ def fmu_path(model: str) -> Path:
 
 
 _extracted: dict[Path, str] = {}
-_descriptions: dict[Path, object] = {}
+_descriptions: dict[Path, ModelDescription] = {}
 
 
-def unzipped(model: str) -> tuple[object, str]:
+def unzipped(model: str) -> tuple[ModelDescription, str]:
     path = fmu_path(model)
     if path not in _extracted:
         _descriptions[path] = read_model_description(str(path))
@@ -67,7 +68,8 @@ def fmi_unescape(message: str) -> tuple[str, str | None]:
     message has a lone '%' (a conversion: a printf-style logger reads arguments
     that are not there, and crashes) or a lone '#' (a variable reference, which
     this project's FMUs never write), else None."""
-    out, i = [], 0
+    out: list[str] = []
+    i = 0
     while i < len(message):
         c = message[i]
         if c in "%#":
@@ -85,7 +87,7 @@ class Callbacks:
     The text is the message as an FMI logger shows it (fmi_unescape); a
     message that is not escaped for the logger goes to ``escaping_errors``."""
 
-    def __init__(self, logger=True, memory=True):
+    def __init__(self, logger: bool = True, memory: bool = True) -> None:
         self.log: list[tuple[int, str, str]] = []
         self.escaping_errors: list[str] = []
         self.struct = fmi2CallbackFunctions()

@@ -28,11 +28,13 @@ def write(folder: Path, data: bytes) -> None:
 
 
 def states(model: str) -> list[bytes]:
-    parameters = {"SuperTwistingObserver": {"identifier": 1, "identifier_start": 0},
-                  "Pendulum": {"damping": 1, "disturbance": 1},
-                  "TwistingController": {},
-                  "RobotObserver": {"f_plus[1]": 1000.0, "f_plus[2]": 1000.0},
-                  "ModelObserver": {"t_id": 0.0}}[model]
+    per_model: dict[str, dict[str, float]] = {
+        "SuperTwistingObserver": {"identifier": 1, "identifier_start": 0},
+        "Pendulum": {"damping": 1, "disturbance": 1},
+        "TwistingController": {},
+        "RobotObserver": {"f_plus[1]": 1000.0, "f_plus[2]": 1000.0},
+        "ModelObserver": {"t_id": 0.0}}
+    parameters = per_model[model]
     f = Raw(model, "seed")
     assert f.initialize(parameters) == OK, f.messages()
     out = []

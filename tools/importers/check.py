@@ -204,12 +204,14 @@ def judged(comparison: Comparison, tolerance: float, seconds: float, extra: str 
     return Outcome(ok, cell, detail, seconds)
 
 
-def evaluate(ref: mr.Reference | str, times, columns: dict, step: float, tolerance: float,
+def evaluate(ref: mr.Reference | str, times, columns: dict, step: float | None, tolerance: float,
              seconds: float, extra: str = "") -> Outcome:
     """Compare with the reference, or (no reference: ``ref`` is why) fail after a good run."""
     if isinstance(ref, str):
         detail = f"ran to the end, but there is nothing to compare with: {ref}"
         return Outcome(False, "ran, NO REF", f"{detail}\n{extra}".strip(), seconds)
+    # check_fmu passes a Reference only with a stepSize (without one, ``ref`` says so)
+    assert step is not None, "a reference, but no stepSize to match its time points with"
     return judged(compare(ref, times, columns, step, tolerance), tolerance, seconds, extra)
 
 
@@ -268,7 +270,7 @@ class External(threading.Thread):
         self.seconds = time.time() - t0
 
 
-def finish(name: str, job: External, out: Path, ref: mr.Reference | str, step: float,
+def finish(name: str, job: External, out: Path, ref: mr.Reference | str, step: float | None,
            tolerance: float) -> Outcome:
     job.join()
     if job.timed_out:
@@ -294,7 +296,9 @@ def lenient_step(fmu: Path) -> float | None:
     try:
         with zipfile.ZipFile(fmu) as archive:
             root = ET.fromstring(archive.read("modelDescription.xml"))
-        return float(root.find("DefaultExperiment").get("stepSize"))
+        experiment = root.find("DefaultExperiment")
+        step = experiment.get("stepSize") if experiment is not None else None
+        return float(step) if step is not None else None
     except Exception:  # noqa: BLE001
         return None
 
@@ -303,6 +307,8 @@ def check_fmu(fmu: Path, workdir: Path, tolerance: float) -> FmuReport:
     report = FmuReport(fmu)
     report.outcomes["fmpy validate"] = run_fmpy_validate(fmu)
     desc: mr.Description | None = None
+    step: float | None  # None: no stepSize even in the lenient reading
+    every: int | None   # output interval in steps, None: the importer's default
     try:
         desc = mr.read_description(fmu)
         step, every = desc.experiment.step, desc.experiment.decimation

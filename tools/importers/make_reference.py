@@ -44,7 +44,11 @@ import tempfile
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 from xml.etree import ElementTree as ET
+
+if TYPE_CHECKING:  # numpy loads on first use, not with the module
+    import numpy as np
 
 LS_REF_DIR = "extra/org.fmi-standard.fmi-ls-ref"
 MANIFEST = f"{LS_REF_DIR}/fmi-ls-manifest.xml"
@@ -279,11 +283,11 @@ def make_reference(fmu: Path, csv_out: Path | None = None) -> str:
 class Reference:
     source: str
     header: list[str]
-    times: object           # numpy array
-    columns: dict[str, object]
+    times: np.ndarray                # float, one per row
+    columns: dict[str, np.ndarray]   # column name -> its float values, one per row
 
 
-def parse_csv(text: str, origin: str):
+def parse_csv(text: str, origin: str) -> tuple[list[str], np.ndarray, dict[str, np.ndarray]]:
     """(header, times, {name: values}) of a CSV whose first column is time; true/false -> 1/0."""
     import numpy as np
 
