@@ -27,8 +27,8 @@ list(REMOVE_DUPLICATES STO_CORE_SOURCES)
 # The model-independent instance core under every FMI version.
 set(STO_INSTANCE_SOURCES instance/instance.c)
 # Headers every FMU ships beside its sources (fmpy compile rebuilds from them).
-set(STO_SHIPPED_HEADERS instance/instance.h instance/model_interface.h models/state_fields.h
-    models/input_cadence_outputs.h)
+set(STO_SHIPPED_HEADERS instance/instance.h instance/model_interface.h instance/state_format.h
+    models/state_fields.h models/input_cadence_outputs.h)
 
 # The FMUs: model identifier, its model file, its core group, the folder of its
 # committed modelDescription.xml (FMI 2; FMI 3 in <folder>/fmi3/) and the files of

@@ -6,15 +6,14 @@
  * "type ax ay az x y z roll pitch yaw m mx my mz Ixx Ixy Iyy Ixz Iyz Izz fv fc",
  * then p and the p base columns.  The trajectory is a sine per joint at 10 kHz,
  * its torques from the model's inverse dynamics (computed before the clock
- * starts), the settings the FMU's defaults (tau 0.01 s, f_plus 10, rho 1e-6, MFF
- * R = 0.1).  Prints nanoseconds per sample. */
+ * starts), the settings the FMU's defaults (rp_default_settings) at h = 0.1 ms.
+ * Prints nanoseconds per sample. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
-#include "gains.h"
 #include "robot_pipeline.h"
 
 static int read_model(const char *path, RigidBodyModel *model, int *p, int columns[])
@@ -52,12 +51,12 @@ int main(int argc, char **argv)
     static RobotRegression regression;
     static RegressorIdentifier identifier;
     static StatisticsJob statistics;
-    int p = 0, columns[RB_MAX_PARAMETERS];
-    if (read_model(argv[1], &model, &p, columns) != 0) return 2;
+    RobotSettings settings = rp_default_settings(RB_MAX_JOINTS);
+    if (read_model(argv[1], &model, &settings.p, settings.columns) != 0) return 2;
     const int n = model.n;
     const long steps = atol(argv[2]);
     if (steps < 1) return 2;
-    const double h = 1e-4, tau = 0.01;
+    const double h = 1e-4;
     double *y = malloc((size_t)steps * (size_t)n * sizeof *y);
     double *u = malloc((size_t)steps * (size_t)n * sizeof *u);
     if (!y || !u) return 2;
@@ -75,17 +74,11 @@ int main(int argc, char **argv)
         rb_friction(&model, qd, friction);
         for (int i = 0; i < n; ++i) u[k * n + i] += friction[i];
     }
-    double alpha1[RB_MAX_JOINTS], alpha2[RB_MAX_JOINTS], zero[RB_MAX_JOINTS] = {0.0};
-    for (int i = 0; i < n; ++i) {
-        alpha1[i] = alpha2[i] = 0.0;
-        if (gains_complete(10.0, 0.5, &alpha1[i], &alpha2[i]) != 0) return 2;
-    }
-    ro_init(&observer, n, h, alpha1, alpha2, tau, 0.05, y, zero);
-    if (ro_regression_init(&regression, &model, h, tau, 0.05, 0.02) != 0 ||
-        rri_init(&identifier, mff ? RRI_MFF : RRI_LSM, n, p, columns, NULL, h, 1e-6, 0.1, NULL) != 0)
-        return 2;
-    sj_init(&statistics, p, sj_interval_steps(0.1, h), SJ_BUDGET);
+    settings.n = n;
+    settings.h = h;
+    settings.identifier = mff ? IDENTIFIER_MFF : IDENTIFIER_LSM;
     const RobotPipeline pipeline = {&observer, &regression, &identifier, &statistics};
+    if (rp_init(&pipeline, &model, &settings, y, NULL) != RP_OK) return 2;
     struct timespec start, stop;
     clock_gettime(CLOCK_MONOTONIC, &start);
     rp_run(&pipeline, &model, y, u, n, steps, 0);

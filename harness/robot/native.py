@@ -25,7 +25,6 @@ def load() -> ctypes.CDLL:
     dll = load_library()
     dll.rn_model_size.restype = ctypes.c_size_t
     dll.rn_max_joints.restype = ctypes.c_int
-    dll.rn_defaults.argtypes = [ctypes.POINTER(ctypes.c_double)]
     dll.rn_load.restype = ctypes.c_int
     dll.rn_load.argtypes = [ctypes.c_void_p, ctypes.c_int, _int_p, _double_p, _double_p,
                             _double_p, _double_p, _double_p, _double_p, ctypes.c_double]
@@ -53,14 +52,45 @@ def load() -> ctypes.CDLL:
                                         _double_p, _double_p, _double_p, _double_p,
                                         ctypes.c_void_p]
     dll.rn_robot_run_size.restype = ctypes.c_size_t
+    dll.rn_settings_size.restype = ctypes.c_size_t
+    if dll.rn_settings_size() != ctypes.sizeof(RobotSettings):
+        raise RuntimeError("the native library's RobotSettings (fmu/src/core/robot_pipeline.h) "
+                           "does not match harness/robot/native.py's: rebuild the library")
+    dll.rn_default_settings.argtypes = [ctypes.c_int, ctypes.POINTER(RobotSettings)]
     dll.rn_robot_observe.restype = ctypes.c_long
     dll.rn_robot_observe.argtypes = [
-        ctypes.c_void_p, ctypes.c_void_p, count, ctypes.c_double, _double_p, _double_p, _double_p,
-        ctypes.c_double, _double_p, _double_p, _double_p, _double_p, ctypes.c_int, ctypes.c_int,
-        _int_p, _double_p, ctypes.c_double, ctypes.c_double, ctypes.c_double, ctypes.c_double,
-        count, ctypes.c_double, _double_p, _double_p, _double_p, _double_p, _double_p,
-        _double_p]
+        ctypes.c_void_p, ctypes.c_void_p, ctypes.POINTER(RobotSettings), count, count,
+        _double_p, _double_p, _double_p, _double_p, _double_p, _double_p, _double_p, _double_p,
+        _double_p, _double_p]
     return dll
+
+
+_JOINTS = 7  # RB_MAX_JOINTS, checked against the library by the Structure's size
+_PARAMETERS = 12 * _JOINTS  # RRI_MAX_PARAMETERS
+
+
+class RobotSettings(ctypes.Structure):
+    """fmu/src/core/robot_pipeline.h's RobotSettings, field for field: how the robot
+    pipeline is set up (the RobotObserver FMU's parameters)."""
+
+    _fields_ = [
+        ("n", ctypes.c_int), ("identifier", ctypes.c_int), ("p", ctypes.c_int),
+        ("columns", ctypes.c_int * _PARAMETERS),
+        ("h", ctypes.c_double), ("tau", ctypes.c_double),
+        ("convergence_window", ctypes.c_double), ("gain_exponent", ctypes.c_double),
+        ("rho", ctypes.c_double), ("R", ctypes.c_double),
+        ("min_speed", ctypes.c_double), ("reversal_margin", ctypes.c_double),
+        ("statistics_interval", ctypes.c_double),
+        ("f_plus", ctypes.c_double * _JOINTS), ("alpha1", ctypes.c_double * _JOINTS),
+        ("alpha2", ctypes.c_double * _JOINTS), ("torque_scale", ctypes.c_double * _JOINTS),
+    ]
+
+
+def default_settings(n: int) -> RobotSettings:
+    """The C core's defaults (fmu/src/core/tuning.h) for n joints, nothing identified."""
+    settings = RobotSettings()
+    load().rn_default_settings(n, ctypes.byref(settings))
+    return settings
 
 
 @dataclass(frozen=True)
@@ -77,10 +107,9 @@ class CoreDefaults:
 @lru_cache(maxsize=1)
 def core_defaults() -> CoreDefaults:
     """The defaults of the native library in use."""
-    dll = load()
-    values = (ctypes.c_double * 3)()
-    dll.rn_defaults(values)
-    return CoreDefaults(values[0], values[1], values[2], int(dll.rn_max_joints()))
+    settings = default_settings(1)
+    return CoreDefaults(settings.min_speed, settings.reversal_margin,
+                        settings.statistics_interval, int(load().rn_max_joints()))
 
 
 @dataclass
@@ -214,12 +243,13 @@ class RigidBody:
         return {"delta": delta, "std_error": std, "gamma_trace": stats[0],
                 "excitation": stats[1]}
 
-    def observe(self, q, u, h: float, f_plus, tau: float = 0.01, alpha1=0.0, alpha2=0.0,
+    def observe(self, q, u, h: float, f_plus, tau: float | None = None, alpha1=0.0, alpha2=0.0,
                 identify: dict | None = None) -> dict:
         """Run the model-based observer of robot_observer.c over positions q and torques u
         (count, n) sampled every h, as the RobotObserver FMU does: f_plus (per joint)
         bounds the model's acceleration error, gains alpha1, alpha2 left at 0 follow from
-        it by Theorem 3.1 (p = 0.5); tau is the injection's and the regression's filter.
+        it by Theorem 3.1 (p = 0.5); tau is the injection's and the regression's filter
+        (default the FMU's).
 
         Returns {"velocity": the estimate at each sample, "prediction": for the end of
         the interval starting at each sample, "model_failures": samples at which M was
@@ -227,9 +257,9 @@ class RigidBody:
         equations in the regression, "acceleration": the observer's q'' at each sample
         (the last sample's of both NaN)}.  With identify =
         {"columns", "kind" ("lsm"/"mff"), "rho", "R", "torque_scale", "start" (sample
-        index), "min_speed", "reversal_margin"} the online identifier runs too, adding
-        "delta" (base parameters minus the nominal ones), "std_error", "gamma_trace" and
-        "excitation" at the end, and "published": what the FMU publishes after the last
+        index), "min_speed", "reversal_margin"} (defaults the FMU's) the online identifier
+        runs too, adding "delta" (base parameters minus the nominal ones), "std_error",
+        "gamma_trace" and "excitation" at the end, and "published": what the FMU publishes after the last
         sample (identify's "statistics_interval", default core_defaults(): the
         solves with standard errors spread over the samples after each snapshot,
         fmu/src/core/statistics_job.h) as {"delta", "std_error", "gamma_trace",
@@ -238,30 +268,38 @@ class RigidBody:
         seconds after (default core_defaults()); both 0: every equation is used."""
         dll = load()
         q, u = _samples(q, self.n), _samples(u, self.n)
-        gains = [np.ascontiguousarray(np.broadcast_to(np.asarray(a, float), (self.n,)))
-                 for a in (alpha1, alpha2, f_plus)]
+        n = self.n
+        settings = default_settings(n)
+        settings.h = h
+        if tau is not None:
+            settings.tau = tau
+        for name, value in (("alpha1", alpha1), ("alpha2", alpha2), ("f_plus", f_plus)):
+            getattr(settings, name)[:n] = np.broadcast_to(np.asarray(value, float), (n,)).tolist()
         velocity, prediction = np.empty_like(q), np.empty_like(q)
         weight, acceleration = np.empty_like(q), np.empty_like(q)
         options = dict(identify or {})
-        defaults = core_defaults()
-        rule = (float(options.get("min_speed", defaults.min_speed)),
-                float(options.get("reversal_margin", defaults.reversal_margin)))
+        for name in ("min_speed", "reversal_margin", "statistics_interval", "rho", "R"):
+            if name in options:
+                setattr(settings, name, float(options[name]))
         columns = np.ascontiguousarray(options.get("columns", [0]), dtype=np.int32)
+        if len(columns) > _PARAMETERS:
+            raise ValueError(f"{len(columns)} base columns: the identifier takes at most "
+                             f"{_PARAMETERS}")
+        settings.p = len(columns)
+        settings.columns[:len(columns)] = columns.tolist()
         scale = options.get("torque_scale")
-        scale = np.ascontiguousarray(np.ones(self.n) if scale is None else scale, dtype=float)
+        if scale is not None:
+            settings.torque_scale[:n] = np.broadcast_to(np.asarray(scale, float), (n,)).tolist()
+        settings.identifier = {"lsm": 1, "mff": 2}[options.get("kind", "lsm")] if identify else 0
         delta, std, stats = np.zeros(len(columns)), np.zeros(len(columns)), np.zeros(2)
         published = np.zeros(2 * len(columns) + 2)
-        kind = {"lsm": 1, "mff": 2}[options.get("kind", "lsm")] if identify else 0
         run = ctypes.create_string_buffer(dll.rn_robot_run_size())
         failures = dll.rn_robot_observe(
-            self._buffer, run, len(q), h, *gains, tau, q, u, velocity, prediction, kind,
-            len(columns), columns, scale, options.get("rho", 1e-6), options.get("R", 0.1),
-            *rule, int(options.get("start", 0)),
-            float(options.get("statistics_interval", defaults.statistics_interval)), delta, std,
-            stats,
-            published, weight, acceleration)
+            self._buffer, run, ctypes.byref(settings), len(q), int(options.get("start", 0)), q, u,
+            velocity, prediction, weight, acceleration, delta, std, stats, published)
+        rule = (settings.min_speed, settings.reversal_margin)
         if failures == -2:
-            raise ValueError(f"no observer gains for f_plus {gains[2].tolist()}")
+            raise ValueError(f"no observer gains for f_plus {list(settings.f_plus[:n])}")
         if failures == -3:
             raise ValueError("the observer diverged (estimates not finite): the model's "
                              "acceleration error exceeds what the gains correct; raise f_plus")

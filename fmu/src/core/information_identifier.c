@@ -16,7 +16,6 @@ void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, 
     memset(id, 0, sizeof *id);
     const StoTuning t = tuning ? *tuning : sto_default_tuning();
     id->tuning = t.identifier;
-    id->gap_memory = t.leave_out.gap_memory;
     id->rows = rows;
     id->m = m;
     id->drift = drift && kind == IDENTIFIER_MFF && 2 * m <= ID_MAX_REGRESSORS;
@@ -27,11 +26,8 @@ void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, 
     id->batch_gain = -expm1(-h / t.identifier.batch_window);
     id->power_gain = -expm1(-h * INFO_STD_INTERVAL / t.identifier.power_window);
     id->forgetting_rate = kind == IDENTIFIER_MFF ? -log(R) : 0.0;
-    id->reference_lambda = pow(id->lambda, 1.0 / t.leave_out.reference_memory);
-    id->reference_pull = (1.0 - id->reference_lambda) * rho;
-    id->rest_lambda = pow(id->lambda, 1.0 / t.leave_out.rest_memory);
-    id->rest_pull = (1.0 - id->rest_lambda) * rho;
-    id->skip_threshold = t.leave_out.skip_share * m * (1.0 - id->reference_lambda) / h;
+    leave_out_init(&id->leave_out, &t.leave_out, id->lambda, rho,
+                   kind == IDENTIFIER_MFF ? R : 1.0, m / h); /* q leaves h out */
     /* LSM takes its scores' block increments every 32 samples */
     const double interval = id->forgetting_rate > 0.0
                                 ? t.identifier.anchor_forgetting / (h * id->forgetting_rate)
@@ -60,7 +56,7 @@ void info_reset(InformationIdentifier *id)
     memset(id->reference, 0, sizeof id->reference);
     memset(id->reference_factor, 0, sizeof id->reference_factor);
     id->used_mean = 1.0;
-    id->gap_time = 0.0;
+    id->leave_out.gap_time = 0.0;
     const int n = dimension(id);
     for (int k = 0; k < id->m; ++k) {
         id->reference[k][k] = id->rho;
@@ -137,10 +133,10 @@ KERNEL mff_accumulate_n(InformationIdentifier *id, const double z[], const doubl
     }
 }
 
-/* Adds the sample to the long-run inflow Pref and tells whether it is
- * informative: q = h phi^T Pref^-1 phi (with the factor of the last anchor
- * refresh) at least INFO_SKIP_SHARE of its share of Pref. */
-INLINED int informative(InformationIdentifier *id, const double phi[], const int m)
+/* Adds the sample to the long-run inflow Pref and tells whether it is used,
+ * by the rule of leave_out.h with q = phi^T Pref^-1 phi (with the factor of the
+ * last anchor refresh; the threshold holds h). */
+INLINED int leave_out_rule(InformationIdentifier *id, const double phi[], const int m)
 {
     double y[ID_MAX_REGRESSORS], q = 0.0;
     UNROLL for (int i = 0; i < m; ++i) { /* y = L^-1 phi */
@@ -149,18 +145,16 @@ INLINED int informative(InformationIdentifier *id, const double phi[], const int
         y[i] = s / id->reference_factor[i][i];
         q += y[i] * y[i];
     }
-    const int used = q >= id->skip_threshold;
-    /* over a rest Pref forgets slower, so that an isolated pulse (an encoder
-     * step of a creeping plant) stays small against it */
-    const double lambda = used ? id->reference_lambda : id->rest_lambda, h = id->h;
-    const double pull = used ? id->reference_pull : id->rest_pull;
+    double lambda, pull;
+    const double h = id->h;
+    const int use = leave_out_decide(&id->leave_out, q, h, &lambda, &pull);
     UNROLL for (int j = 0; j < m; ++j) {
         const double hj = h * phi[j];
         UNROLL for (int k = j; k < m; ++k) id->reference[j][k] = lambda * id->reference[j][k] + hj * phi[k];
         id->reference[j][j] += pull;
     }
-    id->used_mean += (1.0 - id->lambda) * ((double)used - id->used_mean);
-    return used;
+    id->used_mean += (1.0 - id->lambda) * ((double)(use > 0) - id->used_mean);
+    return use;
 }
 
 KERNEL mff_accumulate(InformationIdentifier *id, const double z[], const double phi[], const int m,
@@ -168,15 +162,13 @@ KERNEL mff_accumulate(InformationIdentifier *id, const double z[], const double 
 {
     const int drift = id->drift && 2 * m <= ID_MAX_REGRESSORS; /* (the second test removes
                                                                  * the impossible large-m copies) */
-    if (!informative(id, phi, m)) {
-        /* a short gap (a velocity zero) forgets and extrapolates as before,
-         * without the sample's data; a longer one (a rest) freezes the sums */
-        if ((id->gap_time += id->h) * id->forgetting_rate >= id->gap_memory) return;
+    const int use = leave_out_rule(id, phi, m);
+    if (use < 0) return; /* a rest: the sums frozen */
+    if (use == 0) { /* a short gap (a velocity zero) forgets and extrapolates as before,
+                     * without the sample's data */
         static const double none[ID_MAX_ROWS + ID_MAX_REGRESSORS] = {0};
         z = none;
         phi = none;
-    } else {
-        id->gap_time = 0.0;
     }
     if (drift) {
         recentre(id, m);

@@ -28,26 +28,10 @@
  *   time, free of the lag for a linear drift.  Without data the slope Delta1
  *   is forgotten toward 0 (not toward itself), so the estimate does not keep
  *   extrapolating its last trend.  Needs 2 m <= 8 regressors.
- * - Uninformative samples are left out (MFF): a sample whose information
- *   q = h phi^T Pref^-1 phi is below INFO_SKIP_SHARE of its share
- *   m (1 - lambda_ref) of the long-run inflow Pref (the information with the
- *   longer memory INFO_REFERENCE_MEMORY / |ln R|) does not add to the sums.
- *   A gap of such samples up to INFO_GAP_MEMORY memories long (a velocity
- *   zero) forgets and extrapolates the drift as before; a longer one (a
- *   rest) freezes the sums, and the drift model's clock stands still.
- *   Without that, a motion that stops or decays to a crawl, where
- *   quantization, static friction and discretization dominate the data, is
- *   fitted with a Gamma that has grown to its bound 1/rho: measured on the
- *   6.3 pendulum after 50 s of excitation (bench/no_excitation.py), the
- *   estimate moved 160-600 % in the 3 s ring-down with a 12-bit encoder,
- *   and up to 850 % over 60 s at rest on explicit-Euler plant data, whose
- *   velocity keeps alternating.  Over left-out samples Pref forgets with the
- *   10x longer memory INFO_REST_MEMORY / |ln R|, so that an isolated pulse
- *   after a long rest (an encoder step of a creeping plant) stays small
- *   against it, while a lasting smaller excitation is taken up again.  At
- *   steady excitation only the samples around velocity zeros are left out,
- *   which carry little information on any parameter whose regressor
- *   vanishes with the velocity. */
+ * - Uninformative samples are left out (MFF), the rule of leave_out.h, a sample's
+ *   information being q = h phi^T Pref^-1 phi with Pref's full m x m form (the
+ *   Cholesky factor of the last anchor refresh); in a rest the drift model's clock
+ *   stands still as well. */
 #ifndef INFORMATION_IDENTIFIER_H
 #define INFORMATION_IDENTIFIER_H
 
@@ -55,13 +39,13 @@
 
 #include "block_scores.h"
 #include "identifier.h"
+#include "leave_out.h"
 
 typedef struct {
     int rows, m;          /* m: the identified regressors; the sums have 2m with drift */
     int drift;            /* drift model on (MFF only) */
     double h, rho;
     IdentifierTuning tuning; /* the windows of its statistics (tuning.h) */
-    double gap_memory;    /* MFF's leave-out rule: memories of a gap that freeze the sums */
     double lambda;        /* R^h per step (MFF), 1 (LSM) */
     double one_minus_lambda_rho;
     double forgetting_rate;  /* |ln R| per second (MFF) */
@@ -79,11 +63,8 @@ typedef struct {
      * its Cholesky factor from the last anchor refresh */
     double reference[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
     double reference_factor[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
-    double reference_lambda, reference_pull; /* lambda^(1/INFO_REFERENCE_MEMORY), its rho pull */
-    double rest_lambda, rest_pull; /* the same over left-out samples: lambda^(1/INFO_REST_MEMORY) */
-    double skip_threshold; /* INFO_SKIP_SHARE m (1 - reference_lambda) / h */
+    LeaveOut leave_out;    /* its constants and gap clock */
     double used_mean;      /* fraction of the samples used, over the memory */
-    double gap_time;       /* time since the last sample used [s] */
     double gamma_trace;   /* trace(P^-1), from the last solve */
     /* Standard errors of Delta_hat (sandwich form, correlated residuals
      * included), from the scores' low-frequency spectral density.  LSM: the

@@ -33,7 +33,7 @@ int mp_init(ModelPipeline *p, const TermProgram *program, const double alpha1[],
     if (p->scheme != STO_SCHEME_IMPLICIT && p->scheme != STO_SCHEME_ADAPTIVE)
         return refuse(error, error_size, "scheme = %d: 2 (implicit) or 3 (noise-adaptive)",
                       p->scheme);
-    if (p->identifier != 0 && p->identifier != RRI_LSM && p->identifier != RRI_MFF)
+    if (p->identifier != 0 && p->identifier != IDENTIFIER_LSM && p->identifier != IDENTIFIER_MFF)
         return refuse(error, error_size, "identifier = %d: 0 (off), 1 (LSM) or 2 (MFF)",
                       p->identifier);
     if (p->regression != MP_REGRESSION_OBSERVER && p->regression != MP_REGRESSION_WINDOW)
@@ -71,7 +71,7 @@ int mp_init(ModelPipeline *p, const TermProgram *program, const double alpha1[],
     p->nonfinite_equation = p->nonfinite_entry = 0;
     p->nonfinite_time = 0.0;
     if (p->identifier &&
-        rri_init_dense(&p->id, (RriKind)p->identifier, n, program->p, NULL, p->h, p->rho, p->R,
+        rri_init_dense(&p->id, (IdentifierKind)p->identifier, n, program->p, NULL, p->h, p->rho, p->R,
                        NULL))
         return refuse(error, error_size, "the identifier refused its settings (h = %g, rho = %g, "
                       "R = %g): rho > 0, and 0 < R < 1 for MFF", p->h, p->rho, p->R);

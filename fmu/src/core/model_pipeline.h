@@ -54,7 +54,7 @@ typedef struct {
     /* configuration */
     double h, tau_identifier, rho, R, t_id, statistics_interval;
     int scheme;                 /* STO_SCHEME_IMPLICIT or STO_SCHEME_ADAPTIVE */
-    int identifier;             /* 0 off, RRI_LSM, RRI_MFF */
+    int identifier;             /* 0 off, IDENTIFIER_LSM, IDENTIFIER_MFF */
     int nominal_model;          /* 1: F from the nominal parameters; 0: F = 0 */
     int regression;             /* MpRegression */
     /* derived at initialization */

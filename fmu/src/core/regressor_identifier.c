@@ -9,13 +9,13 @@
 static void anchor_snapshot(RegressorIdentifier *id);
 
 /* The settings shared by both layouts; the columns and runs are set by the caller. */
-static int init_settings(RegressorIdentifier *id, RriKind kind, int rows, int p,
+static int init_settings(RegressorIdentifier *id, IdentifierKind kind, int rows, int p,
                          const double torque_scale[], double h, double rho, double R,
                          const LeaveOutTuning *leave_out)
 {
     if (!(h > 0.0) || !isfinite(h) || !(rho > 0.0) || !isfinite(rho)) return -1;
-    if (kind == RRI_MFF && !(R > 0.0 && R < 1.0)) return -1;
-    if (kind != RRI_LSM && kind != RRI_MFF) return -1;
+    if (kind == IDENTIFIER_MFF && !(R > 0.0 && R < 1.0)) return -1;
+    if (kind != IDENTIFIER_LSM && kind != IDENTIFIER_MFF) return -1;
     for (int i = 0; i < rows; ++i) {
         const double s = torque_scale ? torque_scale[i] : 1.0;
         if (!(s > 0.0) || !isfinite(s)) return -1;
@@ -25,23 +25,18 @@ static int init_settings(RegressorIdentifier *id, RriKind kind, int rows, int p,
     id->p = p;
     id->h = h;
     id->rho = rho;
-    id->lambda = kind == RRI_MFF ? pow(R, h) : 1.0;
+    id->lambda = kind == IDENTIFIER_MFF ? pow(R, h) : 1.0;
     id->one_minus_lambda_rho = (1.0 - id->lambda) * rho;
     /* an int: a tiny h (below RRI_BATCH_TIME / RRI_MAX_BATCH_SAMPLES) gets shorter batches */
     id->batch_samples = (int)fmin(ceil(RRI_BATCH_TIME / h), RRI_MAX_BATCH_SAMPLES);
     id->batch_lambda = pow(id->lambda, 2.0 * id->batch_samples); /* variances forget twice as fast */
     const LeaveOutTuning t = leave_out ? *leave_out : sto_default_tuning().leave_out;
-    id->reference_lambda = pow(id->lambda, 1.0 / t.reference_memory);
-    id->reference_pull = (1.0 - id->reference_lambda) * rho;
-    id->rest_lambda = pow(id->lambda, 1.0 / t.rest_memory);
-    id->rest_pull = (1.0 - id->rest_lambda) * rho;
-    id->skip_threshold = t.skip_share * p * (1.0 - id->reference_lambda);
-    id->gap_limit = kind == RRI_MFF ? t.gap_memory / -log(R) : 0.0;
+    leave_out_init(&id->leave_out, &t, id->lambda, rho, kind == IDENTIFIER_MFF ? R : 1.0, p);
     rri_reset(id);
     return 0;
 }
 
-int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int columns[],
+int rri_init(RegressorIdentifier *id, IdentifierKind kind, int rows, int p, const int columns[],
              const double torque_scale[], double h, double rho, double R,
              const LeaveOutTuning *leave_out)
 {
@@ -73,7 +68,7 @@ int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int c
     return init_settings(id, kind, rows, p, torque_scale, h, rho, R, leave_out);
 }
 
-int rri_init_dense(RegressorIdentifier *id, RriKind kind, int rows, int p,
+int rri_init_dense(RegressorIdentifier *id, IdentifierKind kind, int rows, int p,
                    const double torque_scale[], double h, double rho, double R,
                    const LeaveOutTuning *leave_out)
 {
@@ -101,7 +96,7 @@ void rri_reset(RegressorIdentifier *id)
         id->P[k][k] = id->reference[k] = id->rho;
         id->reference_inverse[k] = 1.0 / id->rho;
     }
-    id->gap_time = 0.0;
+    id->leave_out.gap_time = 0.0;
     id->batch_age = 0;
     anchor_snapshot(id);
     id->active_time = 0.0;
@@ -178,9 +173,9 @@ static void anchor_slice(RegressorIdentifier *id)
     anchor_snapshot(id);
 }
 
-/* MFF's leave-out rule (regressor_identifier.h): adds the sample's inflow to the
- * diagonal of Pref and tells whether the sample is used (1), left out within a short
- * gap, which forgets (0), or left out in a rest, which freezes the sums (-1). */
+/* MFF's leave-out rule (leave_out.h) with q = h sum_i w_i sum_k y_ik^2 / Pref_kk:
+ * adds the sample's inflow to the diagonal of Pref and tells whether the sample is
+ * used (1), left out within a short gap (0) or left out in a rest (-1). */
 static int leave_out_rule(RegressorIdentifier *id, const RbRegressor *Y)
 {
     double inflow[RRI_MAX_PARAMETERS] = {0};
@@ -194,18 +189,10 @@ static int leave_out_rule(RegressorIdentifier *id, const RbRegressor *Y)
     }
     double q = 0.0;
     for (int k = 0; k < id->p; ++k) q += inflow[k] * id->reference_inverse[k];
-    const int used = q >= id->skip_threshold;
-    /* over left-out samples Pref forgets slower, so that a pulse after a long rest
-     * stays small against it, while a lasting smaller excitation is taken up again */
-    const double lambda = used ? id->reference_lambda : id->rest_lambda;
-    const double pull = used ? id->reference_pull : id->rest_pull;
+    double lambda, pull;
+    const int use = leave_out_decide(&id->leave_out, q, id->h, &lambda, &pull);
     for (int k = 0; k < id->p; ++k) id->reference[k] = lambda * id->reference[k] + pull + inflow[k];
-    if (used) {
-        id->gap_time = 0.0;
-        return 1;
-    }
-    id->gap_time += id->h;
-    return id->gap_time > id->gap_limit ? -1 : 0;
+    return use;
 }
 
 void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)

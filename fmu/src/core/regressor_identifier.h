@@ -25,17 +25,11 @@
  *   than a batch (filtered signals) are accounted for;
  * - trust outputs: trace(Gamma) and the excitation (smallest eigenvalue of the
  *   information per unit time);
- * - uninformative samples left out (MFF), the rule of information_identifier.h: a
- *   sample whose information q = h sum_i w_i sum_k y_ik^2 / Pref_kk, the trace
- *   tr(D^-1 Y^T W Y) with D the diagonal of the long-run inflow Pref (memory
- *   INFO_REFERENCE_MEMORY / |ln R|), is below INFO_SKIP_SHARE of its share
- *   p (1 - lambda_ref) of Pref does not add to the sums; a gap of such samples up to
- *   INFO_GAP_MEMORY memories forgets as before, a longer one (a rest: the joint
- *   equations weighted 0 below min_speed, the filter decayed) freezes the sums, so
- *   that Gamma stays where the excitation left it instead of growing to I / rho, and
- *   a later short or wrong pulse cannot move the estimate far.  Over left-out samples
- *   Pref forgets with the memory INFO_REST_MEMORY / |ln R|, so that a lasting smaller
- *   excitation is taken up again.  The diagonal, not Pref^-1: one multiply-add per
+ * - uninformative samples left out (MFF), the rule of leave_out.h, a sample's
+ *   information being q = h sum_i w_i sum_k y_ik^2 / Pref_kk, the trace
+ *   tr(D^-1 Y^T W Y) with D the diagonal of the long-run inflow Pref; a rest is the
+ *   joint equations weighted 0 below min_speed, the filter decayed.
+ *   The diagonal, not Pref^-1: one multiply-add per
  *   regressor entry read instead of n p^2 / 2 (a forward substitution per row, 11 k
  *   for the Panda arm, about the whole rank-n update again); what the rule must tell
  *   apart is rows of the excitation's size from rows that have collapsed (weight 0,
@@ -48,6 +42,8 @@
 #ifndef REGRESSOR_IDENTIFIER_H
 #define REGRESSOR_IDENTIFIER_H
 
+#include "identifier.h"
+#include "leave_out.h"
 #include "tuning.h"
 
 #include "rigid_body.h"
@@ -90,26 +86,20 @@ typedef struct {
     /* MFF's leave-out rule: the diagonal of the long-run inflow Pref, its inverse
      * from the last anchor refresh, and the rule's constants */
     double reference[RRI_MAX_PARAMETERS], reference_inverse[RRI_MAX_PARAMETERS];
-    double reference_lambda, reference_pull; /* lambda^(1/INFO_REFERENCE_MEMORY), its rho pull */
-    double rest_lambda, rest_pull;   /* the same over left-out samples (INFO_REST_MEMORY) */
-    double skip_threshold;           /* INFO_SKIP_SHARE p (1 - reference_lambda) */
-    double gap_limit;                /* INFO_GAP_MEMORY / |ln R| [s] */
-    double gap_time;                 /* since the last sample used [s] */
+    LeaveOut leave_out;
 } RegressorIdentifier;
-
-typedef enum { RRI_LSM = 1, RRI_MFF = 2 } RriKind;
 
 /* columns[p]: the base columns of the full regressor (0..12n-1, distinct);
  * torque_scale[rows]: per-joint torque scales s_i > 0 (NULL: 1); leave_out: MFF's rule
  * (NULL: tuning.h's).
  * Returns 0, or -1 for sizes, columns, h, rho or R out of range. */
-int rri_init(RegressorIdentifier *id, RriKind kind, int rows, int p, const int columns[],
+int rri_init(RegressorIdentifier *id, IdentifierKind kind, int rows, int p, const int columns[],
              const double torque_scale[], double h, double rho, double R,
              const LeaveOutTuning *leave_out);
 
 /* The same over a dense regressor of any model (a model file's, model_pipeline.h):
  * Y's columns 0..p-1 are the parameters and every row may reach every column. */
-int rri_init_dense(RegressorIdentifier *id, RriKind kind, int rows, int p,
+int rri_init_dense(RegressorIdentifier *id, IdentifierKind kind, int rows, int p,
                    const double torque_scale[], double h, double rho, double R,
                    const LeaveOutTuning *leave_out);
 

@@ -63,6 +63,13 @@
 #define FEEDBACK_SIGMAS 2.0 /* a correction of this many standard errors enters at 4/5 */
 
 /* ---- robots: regression and identifier (robot_observer.h, regressor_identifier.h) --- */
+#define RO_STEP 1e-3               /* [s] the robot observer's default internal step */
+#define RO_TAU 0.01                /* [s] default of its injection's and regression's filter */
+#define RO_CONVERGENCE_WINDOW 0.05 /* [s] default of its switching-rate test's window */
+#define RO_F_PLUS 10.0             /* [rad/s2] default bound of the model's acceleration error */
+#define RO_GAIN_EXPONENT 0.5       /* default p of Theorem 3.1 */
+#define RO_RHO 1e-6                /* default regularization of its identifier */
+#define RO_R 0.1                   /* [1/s] default forgetting factor of its identifier (MFF) */
 #define RO_MIN_SPEED 0.05          /* [rad/s or m/s] default of the regression's min_speed */
 #define RO_REVERSAL_MARGIN 0.02    /* [s] default of its reversal_margin */
 #define RO_STATISTICS_INTERVAL 0.1 /* [s] default of the FMU's statistics_interval */

@@ -103,7 +103,7 @@ static const ModelVariable VARIABLES[] = {
      .description = "2: the implicit super-twisting observer; 3: beside it, linear observers "
                     "that adapt to the measurement noise (the velocity of the one that fits)")},
     {.name = "identifier", .vr = 5, .type = TYPE_INTEGER, PARAM(.offset = OFF(pipe.identifier),
-     .start = RRI_LSM, .min = 0, .max = 2,
+     .start = IDENTIFIER_LSM, .min = 0, .max = 2,
      .description = "Parameter identifier: 0 off, 1 least squares (constant parameters), "
                     "2 matrix forgetting factor (time-varying)")},
     {.name = "statistics_interval", .vr = 11, .type = TYPE_REAL,

@@ -88,30 +88,30 @@ static const double GRAVITY_START[3] = {0.0, 0.0, -9.81};
 static const double COLUMN_STARTS[MAX_P] = {20, 21, 22, 23};
 
 static const ModelVariable VARIABLES[] = {
-    {.name = "h", .vr = 1, .type = TYPE_REAL, PARAM(.offset = OFF(h), .start = 1e-3, .min = 0.0,
+    {.name = "h", .vr = 1, .type = TYPE_REAL, PARAM(.offset = OFF(h), .start = RO_STEP, .min = 0.0,
      .max = 1.0, .min_exclusive = true, .unit = "s",
      .description = "Fixed internal step (the sampling period of q and u)")},
     {.name = "n", .vr = 2, .type = TYPE_INTEGER, PARAM(.offset = OFF(n), .start = 2, .min = 1,
      .max = MAX_N, .description = "Number of joints (active rows of the joint arrays)")},
     {.name = "identifier", .vr = 3, .type = TYPE_INTEGER, PARAM(.offset = OFF(identifier),
-     .start = RRI_LSM, .min = 0, .max = 2,
+     .start = IDENTIFIER_LSM, .min = 0, .max = 2,
      .description = "Base-parameter identifier: 0 off, 1 least squares, 2 matrix forgetting "
                     "factor")},
     {.name = "base_count", .vr = 4, .type = TYPE_INTEGER, PARAM(.offset = OFF(base_count),
      .start = 4, .min = 1, .max = MAX_P,
      .description = "Number of identified base parameters (entries of base_columns)")},
-    {.name = "tau", .vr = 5, .type = TYPE_REAL, PARAM(.offset = OFF(tau), .start = 0.01,
+    {.name = "tau", .vr = 5, .type = TYPE_REAL, PARAM(.offset = OFF(tau), .start = RO_TAU,
      .min = 0.0, .max = NAN, .unit = "s",
      .description = "Time constant of the filter of the injection and of the regression "
                     "(the regressor Y(q, q', q'') and the torque residual); 0: none")},
     {.name = "convergence_window", .vr = 6, .type = TYPE_REAL,
-     PARAM(.offset = OFF(convergence_window), .start = 0.05, .min = 0.0, .max = NAN,
-     .min_exclusive = true, .unit = "s",
+     PARAM(.offset = OFF(convergence_window), .start = RO_CONVERGENCE_WINDOW, .min = 0.0,
+     .max = NAN, .min_exclusive = true, .unit = "s",
      .description = "Time constant of the convergence test (rate of sign switching of e)")},
-    {.name = "rho", .vr = 7, .type = TYPE_REAL, PARAM(.offset = OFF(rho), .start = 1e-6,
+    {.name = "rho", .vr = 7, .type = TYPE_REAL, PARAM(.offset = OFF(rho), .start = RO_RHO,
      .min = 0.0, .max = NAN, .min_exclusive = true,
      .description = "Regularization of the identifier: Gamma <= I/rho")},
-    {.name = "R", .vr = 8, .type = TYPE_REAL, PARAM(.offset = OFF(R), .start = 0.1, .min = 0.0,
+    {.name = "R", .vr = 8, .type = TYPE_REAL, PARAM(.offset = OFF(R), .start = RO_R, .min = 0.0,
      .max = 1.0, .min_exclusive = true, .max_exclusive = true,
      .description = "MFF forgetting factor per second")},
     {.name = "t_id", .vr = 9, .type = TYPE_REAL, PARAM(.offset = OFF(t_id), .start = 0.2,
@@ -128,8 +128,8 @@ static const ModelVariable VARIABLES[] = {
      PARAM(.offset = OFF(coulomb_velocity), .start = 0.0, .min = 0.0, .max = NAN,
      .unit = "rad/s",
      .description = "Coulomb friction f_c sat(q'/v) below this velocity v; 0: f_c sign(q')")},
-    {.name = "p", .vr = 13, .type = TYPE_REAL, PARAM(.offset = OFF(p), .start = 0.5, .min = 0.0,
-     .max = 1.0, .min_exclusive = true, .max_exclusive = true,
+    {.name = "p", .vr = 13, .type = TYPE_REAL, PARAM(.offset = OFF(p), .start = RO_GAIN_EXPONENT,
+     .min = 0.0, .max = 1.0, .min_exclusive = true, .max_exclusive = true,
      .description = "Constant p of condition (6) for the gains computed from f_plus")},
     {.name = "gravity", .vr = 14, .rows = 3, .type = TYPE_REAL,
      PARAM(.offset = OFF(gravity), .starts = GRAVITY_START, UNBOUNDED, .unit = "m/s2",
@@ -165,7 +165,7 @@ static const ModelVariable VARIABLES[] = {
      PARAM(.offset = OFF(friction), .start = 0.0, .min = 0.0, .max = NAN,
      .description = "Nominal joint friction: viscous [N.m.s/rad], Coulomb [N.m]")},
     {.name = "f_plus", .vr = 220, .rows = MAX_N, .type = TYPE_REAL,
-     PARAM(.offset = OFF(f_plus), .start = 10.0, .min = 0.0, .max = NAN, .unit = "rad/s2",
+     PARAM(.offset = OFF(f_plus), .start = RO_F_PLUS, .min = 0.0, .max = NAN, .unit = "rad/s2",
      .description = "Bound f+ on the model's acceleration error (gains by Theorem 3.1)")},
     {.name = "alpha1", .vr = 230, .rows = MAX_N, .type = TYPE_REAL,
      PARAM(.offset = OFF(alpha1), .start = 0.0, .min = 0.0, .max = NAN, .unit = "rad/s2",
@@ -316,20 +316,55 @@ static ModelStatus check_columns(const RobotData *d, const ModelLogger *log)
     return MODEL_OK;
 }
 
-static ModelStatus complete_gains(RobotData *d, const ModelLogger *log)
+/* The pipeline's settings from the parameters. */
+static RobotSettings settings_of(const RobotData *d)
 {
-    for (int i = 0; i < d->n; ++i) {
-        double a1 = d->alpha1[i], a2 = d->alpha2[i];
-        if (gains_complete(d->f_plus[i], d->p, &a1, &a2) != 0) {
-            log->log(log->context, MODEL_ERROR,
-                     "joint %d: no gains from f_plus[%d] = %g, alpha1[%d] = %g, alpha2[%d] = %g "
-                     "(a gain left at 0 needs f_plus > 0, and alpha1 > f_plus, by Theorem 3.1)",
-                     i + 1, i + 1, d->f_plus[i], i + 1, d->alpha1[i], i + 1, d->alpha2[i]);
-            return MODEL_ERROR;
-        }
-        d->alpha1_used[i] = a1;
-        d->alpha2_used[i] = a2;
+    RobotSettings s = rp_default_settings(d->n);
+    s.identifier = d->identifier;
+    s.p = d->base_count;
+    memcpy(s.columns, d->base_columns, sizeof d->base_columns);
+    s.h = d->h;
+    s.tau = d->tau;
+    s.convergence_window = d->convergence_window;
+    s.gain_exponent = d->p;
+    s.rho = d->rho;
+    s.R = d->R;
+    s.min_speed = d->min_speed;
+    s.reversal_margin = d->reversal_margin;
+    s.statistics_interval = d->statistics_interval;
+    memcpy(s.f_plus, d->f_plus, sizeof d->f_plus);
+    memcpy(s.alpha1, d->alpha1, sizeof d->alpha1);
+    memcpy(s.alpha2, d->alpha2, sizeof d->alpha2);
+    memcpy(s.torque_scale, d->torque_scale, sizeof d->torque_scale);
+    return s;
+}
+
+/* Sets the pipeline up, saying which setting it refuses. */
+static ModelStatus init_pipeline(RobotData *d, const ModelLogger *log)
+{
+    const RobotSettings settings = settings_of(d);
+    const RobotPipeline pipeline = {&d->obs, &d->regression, &d->id, &d->statistics};
+    int i = 0;
+    switch (rp_init(&pipeline, &d->model, &settings, d->q, &i)) {
+    case RP_OK:
+        break;
+    case RP_NO_GAINS:
+        log->log(log->context, MODEL_ERROR,
+                 "joint %d: no gains from f_plus[%d] = %g, alpha1[%d] = %g, alpha2[%d] = %g "
+                 "(a gain left at 0 needs f_plus > 0, and alpha1 > f_plus, by Theorem 3.1)",
+                 i + 1, i + 1, d->f_plus[i], i + 1, d->alpha1[i], i + 1, d->alpha2[i]);
+        return MODEL_ERROR;
+    case RP_BAD_REGRESSION:
+        log->log(log->context, MODEL_ERROR, "min_speed = %g and reversal_margin = %g must be "
+                 "finite and >= 0", d->min_speed, d->reversal_margin);
+        return MODEL_ERROR;
+    case RP_BAD_IDENTIFIER:
+        log->log(log->context, MODEL_ERROR, "the identifier refused its settings (h = %g, rho = "
+                 "%g, R = %g)", d->h, d->rho, d->R);
+        return MODEL_ERROR;
     }
+    memcpy(d->alpha1_used, d->obs.alpha1, (size_t)d->n * sizeof d->alpha1_used[0]);
+    memcpy(d->alpha2_used, d->obs.alpha2, (size_t)d->n * sizeof d->alpha2_used[0]);
     return MODEL_OK;
 }
 
@@ -379,24 +414,9 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
 {
     (void)start_time;
     RobotData *d = data;
-    if (load_model(d, log) != MODEL_OK || complete_gains(d, log) != MODEL_OK) return MODEL_ERROR;
+    if (load_model(d, log) != MODEL_OK) return MODEL_ERROR;
     if (d->identifier && check_columns(d, log) != MODEL_OK) return MODEL_ERROR;
-    const double zero[MAX_N] = {0};
-    ro_init(&d->obs, d->n, d->h, d->alpha1_used, d->alpha2_used, d->tau, d->convergence_window,
-            d->q, zero);
-    if (ro_regression_init(&d->regression, &d->model, d->h, d->tau, d->min_speed,
-                           d->reversal_margin) != 0) {
-        log->log(log->context, MODEL_ERROR, "min_speed = %g and reversal_margin = %g must be "
-                 "finite and >= 0", d->min_speed, d->reversal_margin);
-        return MODEL_ERROR;
-    }
-    memset(&d->id, 0, sizeof d->id);
-    if (d->identifier && rri_init(&d->id, (RriKind)d->identifier, d->n, d->base_count,
-                                  d->base_columns, d->torque_scale, d->h, d->rho, d->R, NULL) != 0) {
-        log->log(log->context, MODEL_ERROR, "the identifier refused its settings (h = %g, rho = "
-                 "%g, R = %g)", d->h, d->rho, d->R);
-        return MODEL_ERROR;
-    }
+    if (init_pipeline(d, log) != MODEL_OK) return MODEL_ERROR;
     memset(d->base_std, 0, sizeof d->base_std);
     memset(d->base_estimate, 0, sizeof d->base_estimate);
     d->gamma_trace = d->identifier ? d->id.gamma_trace : 0.0;
@@ -404,8 +424,6 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     d->identifier_active = 0;
     d->reset_seen = d->identifier_reset;
     d->failures_seen = 0.0;
-    sj_init(&d->statistics, d->identifier ? d->base_count : 1,
-            sj_interval_steps(d->statistics_interval, d->h), SJ_BUDGET);
     d->statistics_seen = 0.0;
     double values[IC_MAX_VALUES];
     const int count = measured(d, values);

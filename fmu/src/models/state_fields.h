@@ -55,6 +55,12 @@
     STATE_FIELD(T, f.square, FIELD_REAL, 0.0, NAN), STATE_FIELD(T, f.squares, FIELD_REAL, 0.0, NAN), \
     STATE_FIELD(T, f.chosen, FIELD_INT, -1, FL_CANDIDATES - 1)
 
+/* A LeaveOut rule (leave_out.h): its constants; the gap clock is a real. */
+#define LEAVE_OUT_STATE_FIELDS(T, rule)                                                          \
+    DERIVED_FIELD(T, rule.reference_lambda), DERIVED_FIELD(T, rule.reference_pull),              \
+    DERIVED_FIELD(T, rule.rest_lambda), DERIVED_FIELD(T, rule.rest_pull),                        \
+    DERIVED_FIELD(T, rule.skip_threshold), DERIVED_FIELD(T, rule.gap_limit)
+
 /* A RegressorIdentifier (regressor_identifier.h); anchor_unit and batch_age
  * below p + 2 and batch_samples are the model's check_restored's. */
 #define RRI_STATE_FIELDS(T, id)                                                                  \
@@ -66,10 +72,7 @@
     STATE_FIELD(T, id.anchor_unit, FIELD_INT, 0, RRI_MAX_PARAMETERS + 2),                        \
     STATE_FIELD(T, id.anchor_failed, FIELD_INT, 0, 1), DERIVED_FIELD(T, id.batch_samples),       \
     STATE_FIELD(T, id.batch_age, FIELD_INT, 0, RRI_MAX_BATCH_SAMPLES),                           \
-    DERIVED_FIELD(T, id.batch_lambda), DERIVED_FIELD(T, id.reference_lambda),                    \
-    DERIVED_FIELD(T, id.reference_pull), DERIVED_FIELD(T, id.rest_lambda),                       \
-    DERIVED_FIELD(T, id.rest_pull), DERIVED_FIELD(T, id.skip_threshold),                         \
-    DERIVED_FIELD(T, id.gap_limit)
+    DERIVED_FIELD(T, id.batch_lambda), LEAVE_OUT_STATE_FIELDS(T, id.leave_out)
 
 /* A StatisticsJob (statistics_job.h); its index below the stage's limit is the
  * model's check_restored's (statistics_job_valid). */

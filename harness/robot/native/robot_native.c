@@ -30,15 +30,6 @@ void rn_layout(int out[5])
     out[4] = RB_COULOMB;
 }
 
-/* The core's defaults that the harness shares (tuning.h): the regression's
- * min_speed and reversal_margin, the statistics' interval. */
-void rn_defaults(double out[3])
-{
-    out[0] = RO_MIN_SPEED;
-    out[1] = RO_REVERSAL_MARGIN;
-    out[2] = RO_STATISTICS_INTERVAL;
-}
-
 int rn_load(RigidBodyModel *model, int n, const int type[], const double axis[], const double xyz[],
             const double rpy[], const double link[], const double friction[],
             const double gravity[3], double coulomb_velocity)
@@ -124,7 +115,7 @@ int rn_identify(const RigidBodyModel *model, RegressorIdentifier *identifier, in
 {
     RegressorIdentifier *id = identifier;
     const int n = model->n;
-    if (rri_init(id, (RriKind)kind, n, p, columns, torque_scale, h, rho, R, NULL) != 0)
+    if (rri_init(id, (IdentifierKind)kind, n, p, columns, torque_scale, h, rho, R, NULL) != 0)
         return -1;
     double pi[RB_MAX_PARAMETERS];
     rb_get_parameters(model, pi);
@@ -201,52 +192,49 @@ typedef struct {
 
 size_t rn_robot_run_size(void) { return sizeof(RobotRun); }
 
-/* y, u: count x n.  Gains alpha1, alpha2 (n; an entry 0 is computed from
- * f_plus by Theorem 3.1 with p = 0.5, as the FMU does); tau: the injection and
- * regression filter.  Outputs per sample: velocity (the estimate at the
- * sample) and prediction (for the end of the interval that starts there, an
- * FMU's output at the next communication point).  With kind 1 or 2 the
- * identifier (columns, torque_scale, rho, R) runs from sample `start` on and
- * delta, std_error, stats = (trace of Gamma, excitation) are solved at the
- * end, and `published` (2 p + 2) holds what the FMU publishes after the last
- * sample under the same schedule (statistics_job.h: a snapshot every
- * statistics_interval seconds, its work spread over the following samples):
- * the estimate Delta (the fresher of the running solution and the last
- * completed solve), the standard errors, trace of Gamma and the excitation of
- * the last completed solve (before any: 0, p / rho and 0).  min_speed and reversal_margin: the rule of the joint equations left out
- * (robot_observer.h); weight (count x n): the weight of each sample's joint
- * equations, acceleration (count x n): the observer's q'' at each sample (the
- * last sample's of both: NaN, not known yet).  Returns the number of
- * samples at which M was not positive definite, -1 for bad identifier settings,
- * -2 for gains that cannot be computed, -3 if the identifier's information is not
- * positive definite at the end (the observer diverged), -4 for a negative or
- * non-finite min_speed or reversal_margin. */
-long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, long count, double h,
-                      const double alpha1_given[], const double alpha2_given[],
-                      const double f_plus[], double tau,
-                      const double y[], const double u[], double velocity[], double prediction[],
-                      int kind, int p, const int columns[], const double torque_scale[],
-                      double rho, double R, double min_speed, double reversal_margin,
-                      long start, double statistics_interval, double delta[],
-                      double std_error[], double stats[2], double published[],
-                      double weight[], double acceleration[])
+/* The settings' size and tuning.h's defaults for n joints (robot_pipeline.h), so
+ * that the harness's ctypes Structure is checked against them and keeps no defaults. */
+size_t rn_settings_size(void) { return sizeof(RobotSettings); }
+
+void rn_default_settings(int n, RobotSettings *settings) { *settings = rp_default_settings(n); }
+
+/* y, u: count x n, the pipeline set up by `settings` (robot_pipeline.h; gains left at
+ * 0 computed from f_plus by Theorem 3.1, as the FMU does).  Outputs per sample:
+ * velocity (the estimate at the sample) and prediction (for the end of the interval
+ * that starts there, an FMU's output at the next communication point).  With an
+ * identifier the identifier runs from sample `start` on and delta, std_error,
+ * stats = (trace of Gamma, excitation) are solved at the end, and `published`
+ * (2 p + 2) holds what the FMU publishes after the last sample under the same
+ * schedule (statistics_job.h: a snapshot every statistics_interval seconds, its work
+ * spread over the following samples): the estimate Delta (the fresher of the running
+ * solution and the last completed solve), the standard errors, trace of Gamma and the
+ * excitation of the last completed solve (before any: 0, p / rho and 0).  weight
+ * (count x n): the weight of each sample's joint equations, acceleration (count x n):
+ * the observer's q'' at each sample (the last sample's of both: NaN, not known yet).
+ * Returns the number of samples at which M was not positive definite, -1 for bad
+ * identifier settings, -2 for gains that cannot be computed, -3 if the identifier's
+ * information is not positive definite at the end (the observer diverged), -4 for a
+ * negative or non-finite min_speed or reversal_margin. */
+long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, const RobotSettings *settings,
+                      long count, long start, const double y[], const double u[],
+                      double velocity[], double prediction[], double weight[],
+                      double acceleration[], double delta[], double std_error[],
+                      double stats[2], double published[])
 {
-    const int n = model->n;
-    double zero[RB_MAX_JOINTS] = {0}, alpha1[RB_MAX_JOINTS], alpha2[RB_MAX_JOINTS];
-    for (int i = 0; i < n; ++i) {
-        alpha1[i] = alpha1_given[i];
-        alpha2[i] = alpha2_given[i];
-        if (gains_complete(f_plus[i], 0.5, &alpha1[i], &alpha2[i]) != 0) return -2;
-    }
-    ro_init(&run->observer, n, h, alpha1, alpha2, tau, 0.05, y, zero);
-    if (ro_regression_init(&run->regression, model, h, tau, min_speed, reversal_margin) != 0)
-        return -4;
-    if (kind && rri_init(&run->identifier, (RriKind)kind, n, p, columns, torque_scale, h, rho,
-                         R, NULL) != 0)
-        return -1;
-    if (kind) sj_init(&run->statistics, p, sj_interval_steps(statistics_interval, h), SJ_BUDGET);
+    const int n = model->n, kind = settings->identifier, p = settings->p;
+    if (n != settings->n) return -1;
     const RobotPipeline pipeline = {&run->observer, &run->regression, &run->identifier,
-                                     &run->statistics};
+                                    &run->statistics};
+    switch (rp_init(&pipeline, model, settings, y, NULL)) {
+    case RP_OK:
+        break;
+    case RP_NO_GAINS:
+        return -2;
+    case RP_BAD_REGRESSION:
+        return -4;
+    case RP_BAD_IDENTIFIER:
+        return -1;
+    }
     for (long k = 0; k < count; ++k) {
         const int identifying = kind && k >= start;
         rp_run(&pipeline, model, y + k * n, u + k * n, 0, 1,
@@ -268,7 +256,7 @@ long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, long count, do
         const int solved = job->completed > 0.0;
         memcpy(published, sj_freshest_estimate(job, &run->identifier), (size_t)p * sizeof(double));
         for (int k = 0; k < p; ++k) published[p + k] = solved ? job->std_error[k] : 0.0;
-        published[2 * p] = solved ? job->gamma_trace : p / rho;
+        published[2 * p] = solved ? job->gamma_trace : p / settings->rho;
         published[2 * p + 1] = solved ? job->excitation : 0.0;
         if (rri_solve(&run->identifier) != 0) return -3;
         rri_statistics(&run->identifier);

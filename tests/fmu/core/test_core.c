@@ -623,9 +623,9 @@ static int rri_mff_pulses_and_resumption(void)
     const double h = 1e-3, delta[4] = {1.0, 2.0, -1.0, 0.5}, doubled[4] = {2.0, 4.0, -2.0, 1.0};
     for (int rule = 1; rule >= 0; --rule) {
         RegressorIdentifier id;
-        if (rri_init(&id, RRI_MFF, 2, 4, RRI_TEST_COLUMNS, NULL, h, 1e-3, 0.1, NULL) != 0)
+        if (rri_init(&id, IDENTIFIER_MFF, 2, 4, RRI_TEST_COLUMNS, NULL, h, 1e-3, 0.1, NULL) != 0)
             return check(0, "rri_init refused the test's settings");
-        if (!rule) id.skip_threshold = 0.0;
+        if (!rule) id.leave_out.skip_threshold = 0.0;
         RbRegressor Y;
         double z[2];
         for (long k = 0; k < 20000; ++k) {
@@ -819,12 +819,12 @@ static int statistics_job_equals_full_solve(void)
     static RegressorIdentifier id, snapshot;
     static StatisticsJob job;
     int failures = 0;
-    for (int kind = RRI_LSM; kind <= RRI_MFF; ++kind) {
+    for (int kind = IDENTIFIER_LSM; kind <= IDENTIFIER_MFF; ++kind) {
         const int rows = 7, p = RRI_PARAMETERS_OF(7);
         int columns[RRI_MAX_PARAMETERS];
         for (int k = 0; k < p; ++k) columns[k] = k;
         const double h = 1e-3;
-        if (rri_init(&id, (RriKind)kind, rows, p, columns, NULL, h, 1e-6, 0.5, NULL) != 0) return 1;
+        if (rri_init(&id, (IdentifierKind)kind, rows, p, columns, NULL, h, 1e-6, 0.5, NULL) != 0) return 1;
         sj_init(&job, p, 700.0, 2000.0);
         unsigned long state = 12345;
         int jobs = 0, sliced = 0;
@@ -862,7 +862,7 @@ static int statistics_job_equals_full_solve(void)
             most_iterations = fmax(most_iterations, job.iterations);
             if (jobs > 1) least_iterations = fmin(least_iterations, job.iterations);
         }
-        const char *name = kind == RRI_LSM ? "LSM" : "MFF";
+        const char *name = kind == IDENTIFIER_LSM ? "LSM" : "MFF";
         failures += check(jobs == 9 && sliced == jobs, "%s: %d jobs completed, %d over several "
                           "steps (expected 9, each sliced)", name, jobs, sliced);
         failures += check(worst <= 1e-12, "%s: Delta_hat, standard errors, trace(Gamma) of the "
@@ -885,11 +885,11 @@ static int anchor_solve_spread(void)
 {
     static RegressorIdentifier id, snapshot;
     int failures = 0;
-    for (int kind = RRI_LSM; kind <= RRI_MFF; ++kind) {
+    for (int kind = IDENTIFIER_LSM; kind <= IDENTIFIER_MFF; ++kind) {
         const int rows = 7, p = 57;
         int columns[RRI_MAX_PARAMETERS];
         for (int k = 0; k < p; ++k) columns[k] = k + 12;
-        if (rri_init(&id, (RriKind)kind, rows, p, columns, NULL, 1e-4, 1e-6, 0.5, NULL) != 0)
+        if (rri_init(&id, (IdentifierKind)kind, rows, p, columns, NULL, 1e-4, 1e-6, 0.5, NULL) != 0)
             return 1;
         snapshot = id;
         unsigned long state = 777;
@@ -912,7 +912,7 @@ static int anchor_solve_spread(void)
             before_snapshot = 0;
             snapshot = id;
         }
-        const char *name = kind == RRI_LSM ? "LSM" : "MFF";
+        const char *name = kind == IDENTIFIER_LSM ? "LSM" : "MFF";
         failures += check(installs == 39 && worst <= 1e-12, "%s: %d anchors installed, each the "
                           "solve of P and b %d samples before: worst relative difference %.3g "
                           "(bound 1e-12)", name, installs, RRI_ANCHOR_INTERVAL, worst);
@@ -1223,10 +1223,10 @@ static int tuning_groups(void)
     t.leave_out.skip_share = 2.0 * defaults.leave_out.skip_share;
     info_init(&id[0], IDENTIFIER_MFF, 1, 2, h, 1e-3, 0.9, 0, NULL);
     info_init(&id[1], IDENTIFIER_MFF, 1, 2, h, 1e-3, 0.9, 0, &t);
-    failed += check(fabs(id[1].skip_threshold - 2.0 * id[0].skip_threshold) <=
-                        1e-15 * id[0].skip_threshold,
-                    "twice the skip share, twice the threshold (%g, %g)", id[0].skip_threshold,
-                    id[1].skip_threshold);
+    failed += check(fabs(id[1].leave_out.skip_threshold - 2.0 * id[0].leave_out.skip_threshold) <=
+                        1e-15 * id[0].leave_out.skip_threshold,
+                    "twice the skip share, twice the threshold (%g, %g)", id[0].leave_out.skip_threshold,
+                    id[1].leave_out.skip_threshold);
     failed += check(fabs(id[1].batch_gain + expm1(-h / t.identifier.batch_window)) < 1e-18 &&
                         id[1].batch_gain < id[0].batch_gain,
                     "the batch window honoured (gain %g, default %g)", id[1].batch_gain,

@@ -44,7 +44,7 @@ static ModelPipeline *new_pipeline(int scheme)
     p->regression = MP_REGRESSION_OBSERVER;
     p->h = 1e-3;
     p->scheme = scheme;
-    p->identifier = RRI_LSM;
+    p->identifier = IDENTIFIER_LSM;
     p->nominal_model = 1;
     p->tau_identifier = MP_TAU_IDENTIFIER;
     p->rho = MP_RHO;
