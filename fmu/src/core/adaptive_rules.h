@@ -1,6 +1,6 @@
 /* The noise-adaptive bank's selection rules (noise_adaptive.h describes the bank),
  * one function per rule over the bank's statistics, so that each is read and
- * tested alone (tests/fmu/core/test_core.c, case adaptive_rules).  Header-only;
+ * tested alone (tests/fmu/core/test_noise_adaptive.c, case adaptive_rules).  Header-only;
  * noise_adaptive.c applies them after every step. */
 #ifndef ADAPTIVE_RULES_H
 #define ADAPTIVE_RULES_H
