@@ -25,10 +25,11 @@ set(STO_CORE_SOURCES ${STO_CORE_OBSERVER} ${STO_CORE_ROBOT} ${STO_CORE_MODEL}
 list(REMOVE_DUPLICATES STO_CORE_SOURCES)
 
 # The model-independent instance core under every FMI version.
-set(STO_INSTANCE_SOURCES instance/instance.c)
+set(STO_INSTANCE_SOURCES instance/instance.c instance/instance_log.c instance/instance_variables.c
+    instance/instance_states.c)
 # Headers every FMU ships beside its sources (fmpy compile rebuilds from them).
-set(STO_SHIPPED_HEADERS instance/instance.h instance/model_interface.h instance/state_format.h
-    models/state_fields.h models/input_cadence_outputs.h)
+set(STO_SHIPPED_HEADERS instance/instance.h instance/instance_internal.h instance/model_interface.h
+    instance/state_format.h models/state_fields.h models/input_cadence_outputs.h)
 
 # The FMUs: model identifier, its model file, its core group, the folder of its
 # committed modelDescription.xml (FMI 2; FMI 3 in <folder>/fmi3/) and the files of

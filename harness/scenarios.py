@@ -67,7 +67,7 @@ class Scenario:
 PLANT_START = {"theta_start": 0.1, "omega_start": 0.5}
 # The paper's method exactly: explicit Euler observer and identifier, raw
 # regressor, identification from t_id.  The FMU's defaults are the improved
-# method (issue 4); `improved` below switches a scenario to them.
+# method; `improved` below switches a scenario to them.
 PAPER_METHOD = {"scheme": 1, "identifier_form": 1, "filter_regressor": False,
                 "identifier_start": 0, "identify_b": False}
 # The improved method keeps the scenario's t_id as a lower bound on the start:

@@ -1,4 +1,4 @@
-"""Serial robots (issue 11): identification from joint logs against the field's baselines.
+"""Serial robots: identification from joint logs against the field's baselines.
 
     .venv/bin/python -m bench.reports.robots [--rates 1000,10000] [--seconds 20] [--robots ...]
         [--methods ...] [--model-left-out ROBOT@RATE,...] [--out FILE.md]

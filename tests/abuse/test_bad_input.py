@@ -87,7 +87,7 @@ def run_case(case: Case):
     if case.words is not None:
         log = fmu.errors() if case.expect >= ERROR else fmu.messages()
         assert case.words in log, f"{case.words!r} not logged; the log: {fmu.messages()!r}"
-    fmu.assert_escaped()  # every message, of every case (issue 13)
+    fmu.assert_escaped()  # every message, of every case
     if fmu.saved is not None:  # back to the saved state, then one step from it
         assert fmu.call("fmi2SetFMUstate", fmu.saved) == OK, fmu.messages()
         assert fmu.do_step(0.0, NORMAL_STEP) == OK, fmu.messages()
@@ -274,7 +274,7 @@ init_with(OBS, {"alpha2[1]": 5.0}, "alpha2[1] = 5 violates (6)", expect=WARNING)
 def diverge(model, parameters, inputs, words, id, steps=1):
     """Parameters (and inputs) that make the model's state or outputs non-finite:
     refused at fmi2ExitInitializationMode or by an fmi2DoStep within ``steps``
-    steps, with a message that names the cause (issue 13: not the integrator
+    steps, with a message that names the cause (not the integrator
     for an overflowing term, not "f_plus > 0" for a huge f_plus)."""
     def action(f: Raw) -> int:
         status = f.initialize(parameters)

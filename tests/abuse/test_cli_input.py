@@ -1,4 +1,4 @@
-"""Bad input to identify, reproduce, compare and soak.py, as a user types it (issue 13).
+"""Bad input to identify, reproduce, compare and soak.py, as a user types it.
 
 Every case must end with a clear message naming the problem and a nonzero
 exit status -- never a traceback -- and write nothing it should not; the

@@ -1,4 +1,4 @@
-"""fmi2LastSuccessfulTime after a failed fmi2DoStep (issue 13, item 8).
+"""fmi2LastSuccessfulTime after a failed fmi2DoStep.
 
 Whatever makes a step fail -- the model diverging inside it, a step the FMU
 refuses up front (bad size, wrong time, past stopTime, over the work limit)

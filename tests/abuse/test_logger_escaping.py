@@ -1,4 +1,4 @@
-"""Every message reaches the FMI logger escaped (issue 13, item 1).
+"""Every message reaches the FMI logger escaped.
 
 The FMI 2 logger reads its message as a printf format in which "#<type><vr>#"
 names a variable (FMI 2.0 section 2.1.5); the FMI Library and many C

@@ -1,4 +1,4 @@
-"""A rising edge of identifier_reset is never lost (issue 13, item 7).
+"""A rising edge of identifier_reset is never lost.
 
 The observer used to read identifier_reset only in communication steps that
 reach an internal grid point, so with H < h (or H not a multiple of h) a

@@ -1,4 +1,4 @@
-"""The work of one fmi2DoStep is bounded (issue 13, item 2).
+"""The work of one fmi2DoStep is bounded.
 
 FMI 2 gives an importer no way to cancel a synchronous fmi2DoStep, so a
 step that needs more internal steps than the parameter max_internal_steps

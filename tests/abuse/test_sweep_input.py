@@ -1,4 +1,4 @@
-"""harness sweep against bad specs, bad options, concurrent writers and kills (issue 13).
+"""harness sweep against bad specs, bad options, concurrent writers and kills.
 
 Specs: every number is checked (NaN, Infinity, huge, non-integral or wrapped
 Integers, bad seeds, a NaN transient) and a spec of more than MAX_RUNS runs

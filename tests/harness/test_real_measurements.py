@@ -1,4 +1,4 @@
-"""The defaults on measurements as users have them (issue 10): noisy, quantized, from a
+"""The defaults on measurements as users have them: noisy, quantized, from a
 plant integrated differently from the observer, with a nominal input gain 10 % off.
 
 Small and fast cases; the full grid is bench/reports/real_measurements.py.  The data are a

@@ -351,49 +351,97 @@ static int recentre(AdaptiveBank *bank, int i, int centre, int selected)
     return selected;
 }
 
+/* What a DOF's run carries from sample to sample: the selected member, the
+ * perturbation's source, the published observer and the running members (bits). */
+typedef struct {
+    int selected, source, published;
+    unsigned running;
+} AdaptiveChoice;
+
+/* One sample of DOF i once its members run: the super-twisting observer's and the
+ * members' statistics, the secants at a stride's start, and there the ranking and
+ * the selection (adaptive_rules.h). */
+static inline void step_started(SuperTwistingObserver *o, AdaptiveBank *bank, int i, int k,
+                                double y, StoAcceleration a, const StoTrace *trace,
+                                AdaptiveChoice *c)
+{
+    const double h = o->h, h2 = o->h_squared, gain = bank->gain;
+    const unsigned age = bank->age[i]++;
+    const double x2 = trace->velocity[i][k];
+    bank->sta_saturation[i] += gain * (trace->saturated[i][k] - bank->sta_saturation[i]);
+    const double a_sta = sto_acceleration(a, x2, trace->velocity_sign[i][k]);
+    weigh(&bank->sta[i].mean_square, &bank->sta[i].samples,
+          trace->innovation[i][k] * trace->innovation[i][k], gain);
+    const int stride_start = age % (unsigned)bank->stride == 0;
+    const unsigned tick = age / (unsigned)bank->stride;
+    AdaptiveMeasured measured = {0.0, 0.0};
+    if (stride_start) {
+        measured = measure_strides(&bank->secant[i], bank, tick, y, h);
+        track_strides(&bank->sta[i], bank, tick, measured, x2, trace->z_filtered[i][k]);
+    }
+    integrate_nominal(&bank->secant[i], a_sta, h, h2);
+    step_members(bank, i, c->running, y, a, h, h2, o->filter_gain,
+                 stride_start ? &measured : NULL, tick);
+    if (!stride_start || age < bank->tuning.min_samples) return;
+    const int centre = adaptive_new_centre(bank, i);
+    if (centre >= 0) c->selected = recentre(bank, i, centre, c->selected);
+    const AdaptiveSelection choice = adaptive_select(bank, i, c->selected, c->source);
+    c->selected = choice.selected;
+    if (choice.source != c->source) { /* its reach runs from now on */
+        const unsigned was_running = adaptive_running_mask(bank, i);
+        c->source = bank->perturbation[i] = choice.source;
+        wake(bank, i, was_running);
+    }
+    c->running = adaptive_running_mask(bank, i);
+}
+
+/* What sample k of DOF i publishes: the velocity and position of the published
+ * observer, and in the trace the regressors' velocity (the centre member's) and the
+ * perturbation of its source. */
+static inline void publish_sample(AdaptiveBank *bank, int i, int k, StoTrace *trace,
+                                  AdaptiveChoice *c)
+{
+    const AdaptiveMember *members = bank->member[i];
+    const int follow = bank->follow;
+    trace->z_identify[i][k] =
+        follow == ADAPTIVE_SUPER_TWISTING ? trace->z_eq[i][k] : members[follow].xi;
+    c->published = adaptive_stand_in(bank, i, c->selected, trace->saturated[i][k]);
+    bank->velocity[i] = c->published == ADAPTIVE_SUPER_TWISTING
+                            ? trace->velocity[i][k]
+                            : adaptive_member_at(bank, i, c->published)->x2_now;
+    bank->position[i] = c->published == ADAPTIVE_SUPER_TWISTING
+                            ? trace->position[i][k]
+                            : adaptive_member_at(bank, i, c->published)->z1;
+    if (c->selected != ADAPTIVE_SUPER_TWISTING) {
+        /* the published velocity: the selected member's; the regressors' (the
+         * trace): the centre's, the member the identifier follows (with the
+         * selected one's, a zoom member or the centre's neighbour, velocity and xi
+         * came from different members and b's standard error was 1.55 times its
+         * spread over noise seeds) */
+        const int v = bank->center[i] >= 0 ? bank->center[i] : c->selected;
+        const AdaptiveMember *m = adaptive_member_at(bank, i, v);
+        const AdaptiveGains *gs = adaptive_gains_at(bank, i, v);
+        trace->velocity[i][k] = m->x2_now;
+        trace->velocity_sign[i][k] = expected_sign(
+            m->x2_now, gs->velocity_std * sqrt(m->stats.mean_square / gs->innovation_variance));
+    }
+    if (c->source != ADAPTIVE_SUPER_TWISTING) {
+        trace->z_eq[i][k] = members[c->source].xi;
+        trace->z_filtered[i][k] = members[c->source].published;
+    }
+}
+
 void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[],
                   const StoAcceleration a[], int count, StoTrace *trace)
 {
-    const double h = o->h, h2 = o->h_squared, g = o->filter_gain, gain = bank->gain;
     implicit_run(o, y, a, count, trace);
     for (int i = 0; i < o->n; ++i) {
-        AdaptiveMember *members = bank->member[i];
-        int selected = bank->selected[i], source = bank->perturbation[i];
-        int published = bank->published[i];
-        const int follow = bank->follow;
         /* which members run changes only with the rules (and the follow, between runs) */
-        unsigned running = adaptive_running_mask(bank, i);
+        AdaptiveChoice c = {bank->selected[i], bank->perturbation[i], bank->published[i],
+                            adaptive_running_mask(bank, i)};
         for (int k = 0; k < count; ++k) {
             if (bank->started[i]) {
-                const unsigned age = bank->age[i]++;
-                const double x2 = trace->velocity[i][k];
-                bank->sta_saturation[i] += gain * (trace->saturated[i][k] - bank->sta_saturation[i]);
-                const double a_sta = sto_acceleration(a[i], x2, trace->velocity_sign[i][k]);
-                weigh(&bank->sta[i].mean_square, &bank->sta[i].samples,
-                      trace->innovation[i][k] * trace->innovation[i][k], gain);
-                const int stride_start = age % (unsigned)bank->stride == 0;
-                const unsigned tick = age / (unsigned)bank->stride;
-                AdaptiveMeasured measured = {0.0, 0.0};
-                if (stride_start) {
-                    measured = measure_strides(&bank->secant[i], bank, tick, y[i], h);
-                    track_strides(&bank->sta[i], bank, tick, measured, x2,
-                                  trace->z_filtered[i][k]);
-                }
-                integrate_nominal(&bank->secant[i], a_sta, h, h2);
-                step_members(bank, i, running, y[i], a[i], h, h2, g,
-                             stride_start ? &measured : NULL, tick);
-                if (stride_start && age >= bank->tuning.min_samples) {
-                    const int centre = adaptive_new_centre(bank, i);
-                    if (centre >= 0) selected = recentre(bank, i, centre, selected);
-                    const AdaptiveSelection choice = adaptive_select(bank, i, selected, source);
-                    selected = choice.selected;
-                    if (choice.source != source) { /* its reach runs from now on */
-                        const unsigned was_running = adaptive_running_mask(bank, i);
-                        source = bank->perturbation[i] = choice.source;
-                        wake(bank, i, was_running);
-                    }
-                    running = adaptive_running_mask(bank, i);
-                }
+                step_started(o, bank, i, k, y[i], a[i], trace, &c);
             } else if (trace->switching_rate[i][k] >= STO_CONVERGED_RATE ||
                        ++bank->waited[i] >= bank->start_limit) {
                 /* The members start once the super-twisting observer has
@@ -401,42 +449,16 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
                  * linear transient.  On quantized data it may not converge
                  * for seconds (12-bit, 10 kHz: 1.3 s, velocity error 0.2): the
                  * members start after the tuning's start_time then. */
-                for (int j = 0; j < bank->count; ++j) start_member(&members[j], trace, i, k, a[i]);
+                for (int j = 0; j < bank->count; ++j)
+                    start_member(&bank->member[i][j], trace, i, k, a[i]);
                 memset(&bank->sta[i], 0, sizeof bank->sta[i]);
                 bank->started[i] = 1;
             }
-            trace->z_identify[i][k] =
-                follow == ADAPTIVE_SUPER_TWISTING ? trace->z_eq[i][k] : members[follow].xi;
-            published = adaptive_stand_in(bank, i, selected, trace->saturated[i][k]);
-            bank->velocity[i] = published == ADAPTIVE_SUPER_TWISTING
-                                    ? trace->velocity[i][k]
-                                    : adaptive_member_at(bank, i, published)->x2_now;
-            bank->position[i] = published == ADAPTIVE_SUPER_TWISTING
-                                    ? trace->position[i][k]
-                                    : adaptive_member_at(bank, i, published)->z1;
-            if (selected != ADAPTIVE_SUPER_TWISTING) {
-                /* the published velocity: the selected member's; the
-                 * regressors' (the trace): the centre's, the member the
-                 * identifier follows (with the selected one's, a zoom member
-                 * or the centre's neighbour, velocity and xi came from
-                 * different members and b's standard error was 1.55 times
-                 * its spread over noise seeds) */
-                const int v = bank->center[i] >= 0 ? bank->center[i] : selected;
-                const AdaptiveMember *m = adaptive_member_at(bank, i, v);
-                const AdaptiveGains *gs = adaptive_gains_at(bank, i, v);
-                trace->velocity[i][k] = m->x2_now;
-                trace->velocity_sign[i][k] =
-                    expected_sign(m->x2_now, gs->velocity_std * sqrt(m->stats.mean_square /
-                                                                     gs->innovation_variance));
-            }
-            if (source != ADAPTIVE_SUPER_TWISTING) {
-                trace->z_eq[i][k] = members[source].xi;
-                trace->z_filtered[i][k] = members[source].published;
-            }
+            publish_sample(bank, i, k, trace, &c);
         }
-        bank->selected[i] = selected;
-        bank->published[i] = published;
-        bank->perturbation[i] = source;
+        bank->selected[i] = c.selected;
+        bank->published[i] = c.published;
+        bank->perturbation[i] = c.source;
         if (count > 0) bank->z_filtered[i] = trace->z_filtered[i][count - 1];
     }
 }
