@@ -36,7 +36,7 @@ _EXPORTS = {
     "ModelFileError": "harness.model",
     "build_fmu": "harness.model.fmu_export",
     "read_urdf": "harness.robot.urdf",
-    "read_log": "harness.robot.pipeline",
+    "read_log": "harness.robot.joint_log",
     "identify_robot": "harness.robot.pipeline",
     "fmu_parameters": "harness.robot.fmu",
 }
@@ -53,7 +53,8 @@ if TYPE_CHECKING:
     from harness.model.fmu_export import build_fmu
     from harness.paths import default_fmu_dir
     from harness.robot.fmu import fmu_parameters
-    from harness.robot.pipeline import identify_robot, read_log
+    from harness.robot.joint_log import read_log
+    from harness.robot.pipeline import identify_robot
     from harness.robot.urdf import read_urdf
     from harness.scenarios import SCENARIOS, run_scenario
     from harness.sweep import run_sweep

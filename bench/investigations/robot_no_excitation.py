@@ -44,8 +44,9 @@ from bench.reports.robot_trajectories import multisine, quantize, simulate
 from bench.reports.robots import pinocchio_truth, truth_of
 from harness.robot.base_parameters import base_parameters
 from harness.robot.examples import example_urdf
+from harness.robot.joint_log import JointLog
 from harness.robot.layout import ParameterLayout
-from harness.robot.pipeline import JointLog, identify_robot
+from harness.robot.pipeline import identify_robot
 from harness.robot.urdf import read_urdf
 
 RATE = 1000.0

@@ -26,8 +26,9 @@ from bench.reports.robots import pinocchio_truth, prediction_error, truth_of
 from harness.robot.base_parameters import base_parameters
 from harness.robot.examples import example_urdf
 from harness.robot.filtered_regression import low_pass
+from harness.robot.joint_log import JointLog
 from harness.robot.layout import ParameterLayout
-from harness.robot.pipeline import JointLog, identify_robot
+from harness.robot.pipeline import identify_robot
 from harness.robot.urdf import read_urdf
 
 # (alpha1, alpha2) tuned by bench/reports/robots.py at 1e4f058, noise-free and 17 bit (kept so that

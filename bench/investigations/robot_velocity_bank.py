@@ -17,8 +17,9 @@ from bench.reports.realdata.baselines import kalman, tune_log10
 from bench.reports.robot_trajectories import quantize, simulate
 from bench.reports.robots import pinocchio_truth, truth_of
 from harness.robot.examples import example_urdf
+from harness.robot.joint_log import JointLog
 from harness.robot.native import observe_adaptive
-from harness.robot.pipeline import JointLog, savitzky_golay
+from harness.robot.smoothing import savitzky_golay
 from harness.robot.urdf import read_urdf
 
 GAINS = {"double_pendulum": (50.0, 5.0), "ur5": (400.0, 40.0), "panda": (200.0, 20.0)}

@@ -31,9 +31,9 @@ REPO = Path(__file__).resolve().parents[2]
 # what the command imports before it reads the log, and with what the reader (pandas)
 # and the plot (matplotlib) import on the way
 IMPORTS = {
-    "the command": "import harness.cli, harness.robot.cli, harness.robot.pipeline; "
+    "the command": "import harness.cli, harness.robot.cli, harness.robot.pipeline, harness.robot.results; "
                    "harness.cli.build_parser()",
-    "all it imports": "import harness.cli, harness.robot.cli, harness.robot.pipeline, pandas, "
+    "all it imports": "import harness.cli, harness.robot.cli, harness.robot.pipeline, harness.robot.results, pandas, "
                       "matplotlib; matplotlib.use('Agg'); import matplotlib.pyplot; "
                       "harness.cli.build_parser()",
 }

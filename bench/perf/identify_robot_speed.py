@@ -47,7 +47,8 @@ def write_log(name: str, samples: int, path: Path) -> str:
 
 def least_squares_seconds(urdf: str, path: Path) -> float:
     from harness.robot.base_parameters import base_parameters
-    from harness.robot.pipeline import JointLog, savitzky_golay
+    from harness.robot.joint_log import JointLog
+    from harness.robot.smoothing import savitzky_golay
 
     robot = read_urdf(urdf)
     data = pd.read_csv(path).to_numpy()

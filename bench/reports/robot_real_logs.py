@@ -59,9 +59,10 @@ from bench.reports.robot_trajectories import multisine, quantize, simulate
 from bench.reports.robots import COULOMB_VELOCITY, pinocchio_truth, truth_of
 from harness.robot.base_parameters import base_parameters
 from harness.robot.examples import example_urdf
+from harness.robot.joint_log import JointLog
 from harness.robot.joint_terms import SIDECAR_NAME, JointTerms, Sidecar, parse_terms, read_sidecar
 from harness.robot.layout import core_layout
-from harness.robot.pipeline import JointLog, savitzky_golay
+from harness.robot.smoothing import savitzky_golay
 from harness.robot.urdf import Robot, read_urdf
 from harness.robot.validate import filtered_friction_columns, scoring_window, torque_errors
 

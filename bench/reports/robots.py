@@ -51,8 +51,10 @@ from bench.reports.robot_trajectories import quantize, simulate
 from harness.model.fit import fit as least_squares
 from harness.robot.base_parameters import base_parameters
 from harness.robot.examples import example_urdf
+from harness.robot.joint_log import JointLog
 from harness.robot.layout import ParameterLayout
-from harness.robot.pipeline import JointLog, identify_robot, savitzky_golay
+from harness.robot.pipeline import identify_robot
+from harness.robot.smoothing import savitzky_golay
 from harness.robot.urdf import read_urdf
 
 REPO = Path(__file__).resolve().parents[2]

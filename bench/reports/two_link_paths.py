@@ -59,8 +59,9 @@ from harness.model.selection import CrossValidation
 from harness.model.simulation import Dynamics
 from harness.model.zero_phase import ZeroPhase, regression
 from harness.robot.base_parameters import base_parameters
+from harness.robot.joint_log import JointLog
 from harness.robot.native import core_defaults
-from harness.robot.pipeline import JointLog, savitzky_golay
+from harness.robot.smoothing import savitzky_golay
 from harness.robot.urdf import read_urdf
 
 REPO = Path(__file__).resolve().parents[2]

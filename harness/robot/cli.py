@@ -79,7 +79,7 @@ def _joint_names(text: str) -> tuple[str, ...]:
 def unmeasured_indices(names: tuple[str, ...] | None, robot) -> list[int]:
     """The 0-based joints --unmeasured names; UrdfError for a name the robot's chain lacks
     or a repeat, LogError for every joint."""
-    from .pipeline import LogError
+    from .joint_log import LogError
     from .urdf import joint_indices
     if names is None:
         return []
@@ -162,7 +162,7 @@ def column_mapping(text: str, command: str) -> dict[str, str] | None:
 def robot_and_log(args, mapping: dict[str, str]):
     """The robot of --robot (with --lock) and its log in SI units (--columns mapped, the
     unit options applied): what identify and validate --robot both read first."""
-    from .pipeline import LogError, read_log
+    from .joint_log import LogError, read_log
     from .urdf import read_urdf
     if args.sample_rate is not None and args.time_unit is not None:
         raise LogError("--sample-rate and --time-unit: with a sample rate no time column is "
@@ -185,10 +185,12 @@ def robot_and_log(args, mapping: dict[str, str]):
 def identify_command(args) -> int:
     from ..outputs import Outputs
     from .consistency import ProjectionError
+    from .joint_log import LogError
     from .joint_terms import JointTermsError, parse_terms
     from .layout import ParameterLayout
     from .log_units import UnitError
-    from .pipeline import OUTPUT_NAMES, LogError, identify_robot, write_results
+    from .pipeline import identify_robot
+    from .results import OUTPUT_NAMES, write_results
     from .urdf import UrdfError
     mapping = column_mapping(args.columns, "identify")
     if mapping is None:

@@ -20,9 +20,9 @@ import numpy as np
 
 from ..names import plain
 from .base_parameters import base_parameters
+from .joint_log import JointLog
 from .layout import ParameterLayout
 from .native import core_defaults
-from .pipeline import JointLog
 from .urdf import Robot
 
 INTEGERS = {"n", "identifier", "base_count", "joint_type", "base_columns", "max_internal_steps"}

@@ -259,9 +259,10 @@ class RigidBody:
         {"columns", "kind" ("lsm"/"mff"), "rho", "R", "torque_scale", "start" (sample
         index), "min_speed", "reversal_margin"} (defaults the FMU's) the online identifier
         runs too, adding "delta" (base parameters minus the nominal ones), "std_error",
-        "gamma_trace" and "excitation" at the end, and "published": what the FMU publishes after the last
-        sample (identify's "statistics_interval", default core_defaults(): the
-        solves with standard errors spread over the samples after each snapshot,
+        "gamma_trace" and "excitation" at the end, and "published": what the FMU
+        publishes after the last sample (identify's "statistics_interval", default
+        core_defaults(): the solves with standard errors spread over the samples after
+        each snapshot,
         fmu/src/core/statistics_job.h) as {"delta", "std_error", "gamma_trace",
         "excitation"}.  Joint i's equation weighs 0 where |q_i'| < min_speed
         (rad/s or m/s, default core_defaults()), where q_i' reverses, and for reversal_margin

@@ -24,17 +24,12 @@ here; what a URDF cannot hold goes to DIR/joint_terms.csv.
 """
 from __future__ import annotations
 
-import csv
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
-from scipy.signal import savgol_filter
 
-from ..json_files import write_json
-from ..log_signals import Column, LogSignalsError, header_of, read_signals
 from ..model.fit import Fit, expanded
 from ..model.fit import fit as least_squares
 from ..model.friction_rows import joint_friction_rows
@@ -44,143 +39,31 @@ from .consistency import (
     DEFAULT_URDF_TOLERANCE,
     Projection,
     consistent_parameters,
-    write_identified_urdf,
 )
 from .filtered_regression import filtered_regression, low_pass
+from .joint_log import JointLog, LogError
 from .joint_terms import (
     COULOMB_NEGATIVE,
     COULOMB_POSITIVE,
-    SIDECAR_NAME,
     JointTerms,
     check_directions,
-    write_sidecar,
 )
 from .layout import ParameterLayout
-from .log_units import LogUnits
 from .model_class import TermsChoice, choose_joint_terms
 from .native import core_defaults
-from .smoothing import SHORTEST_REGRESSION_WINDOW, adaptive_velocities, regression_window
+from .smoothing import (
+    SHORTEST_REGRESSION_WINDOW,
+    adaptive_velocities,
+    observer_velocities,
+    regression_window,
+    savitzky_golay,
+    smooth_column,
+)
 from .urdf import Robot
 
 # a joint keeping fewer of its equations than this share is an error (its friction cannot
 # be identified), fewer than FEW_ROWS a warning
 TOO_FEW_ROWS, FEW_ROWS = 0.01, 0.1
-# what write_results writes into the output folder
-WRITE_ROWS = 1 << 16  # rows of velocities.csv formatted at a time
-PLOT_BINS = 4000      # stretches of a long log's velocity plot (plot_samples)
-OUTPUT_NAMES = ("velocities.csv", "parameters.csv", "identified.urdf", "summary.json",
-                "velocities.png", SIDECAR_NAME)
-
-
-#: A joint log that cannot be used; the message names the file and line or column.
-LogError = LogSignalsError
-
-
-@dataclass
-class JointLog:
-    t: np.ndarray   # (N,)
-    q: np.ndarray   # (N, n)
-    u: np.ndarray   # (N, n); 0 for a joint whose torque the log does not hold
-    resampled: str | None = None  # what was done to a log whose clock jitters (None: nothing)
-    unmeasured: tuple[int, ...] = ()  # those joints (0-based)
-
-    @property
-    def step(self) -> float:
-        """The sampling step: the mean step (robust to the rounding of epoch stamps)."""
-        return float((self.t[-1] - self.t[0]) / (len(self.t) - 1))
-
-    @property
-    def measured(self) -> np.ndarray:
-        """(n,) False for the joints whose torque the log does not hold."""
-        out = np.ones(self.q.shape[1], dtype=bool)
-        out[list(self.unmeasured)] = False
-        return out
-
-
-def read_log(path: str | Path, n: int, mapping: dict[str, str] | None = None,
-             relative_tolerance: float = 0.01, units: LogUnits | None = None,
-             sample_rate: float | None = None, unmeasured: Sequence[int] = ()) -> JointLog:
-    """Columns t, q1..qn, u1..un (or the names or 1-based column numbers `mapping` gives
-    them; a CSV file without a header row has them in that order) of a CSV, Parquet or
-    MATLAB log, read by the one log reader (harness.log_signals): a clock whose steps
-    differ from the mean step by more than `relative_tolerance` is resampled onto even
-    steps, a gap refused.  `units` (harness.robot.log_units) brings the columns to s, rad
-    or m and N.m or N (None: they are in these units).  With a `sample_rate` [Hz] no time
-    column is read: the samples are evenly spaced at it from t = 0.  The joints
-    ``unmeasured`` (0-based) have no torque column (JointLog.unmeasured)."""
-    path, mapping = Path(path), dict(mapping or {})
-    measured = [i for i in range(n) if i not in set(unmeasured)]
-    positions, torques = [f"q{i}" for i in range(1, n + 1)], [f"u{i + 1}" for i in measured]
-    wanted = ([] if sample_rate is not None else ["t"]) + positions + torques
-    if units is not None and len(units.position) != n:
-        raise ValueError(f"units for {len(units.position)} joints, the robot has {n}")
-    header, hint = header_of(path), f"; needed: {', '.join(wanted)}"
-    if header is not None:
-        if not header.present and not mapping:
-            # no header row: the columns in the roles' order, t, q1..qn, u1..un
-            if len(header) != len(wanted):
-                raise LogError(f"{path}: no header row and {len(header)} columns; a robot of "
-                               f"{n} joints needs {len(wanted)} ({', '.join(wanted)}) or "
-                               "--columns with column numbers")
-            mapping = {role: str(k + 1) for k, role in enumerate(wanted)}
-        found = [k for k in header if k.startswith("q") and k[1:].isdigit()]
-        if found and len(found) != n:
-            hint += f"; the file has {len(found)} position columns but the robot has {n} joints"
-        if len(found) > n and not mapping:
-            raise LogError(f"{path}: {len(found)} position columns for a robot of {n} joints")
-
-    def columns(roles: list[str]) -> list[Column]:
-        return [Column(role, mapping.get(role, role)) for role in roles]
-    signals = read_signals(
-        path, None if sample_rate is not None else Column("t", mapping.get("t", "t")),
-        columns(positions), columns(torques), sample_rate=sample_rate,
-        time_factor=1.0 if units is None else units.time,
-        factors=None if units is None else np.concatenate([units.position,
-                                                           units.torque[measured]]),
-        missing_hint=hint, tolerance=relative_tolerance,
-        slow_step_hint=None if units is not None and units.time_unit is not None else
-        "give --time-unit ms (--time-unit s confirms seconds)")
-    u = np.zeros((len(signals.t), n))
-    u[:, measured] = signals.inputs
-    return JointLog(signals.t, signals.q, u, signals.resampled,
-                    tuple(i for i in range(n) if i not in measured))
-
-
-def _odd(count: int) -> int:
-    return count if count % 2 else count + 1
-
-
-def savitzky_golay(log: JointLog, window: float, order: int = 4,
-                   at: np.ndarray | None = None):
-    """(q, q', q'', u) smoothed by one zero-phase Savitzky-Golay filter of `window` s,
-    at the samples `at` (None: every sample); a column at a time, so that a long log
-    needs one column's work space, not four arrays of the log's length."""
-    rows = slice(None) if at is None else at
-    out = []
-    for x, deriv in ((log.q, 0), (log.q, 1), (log.q, 2), (log.u, 0)):
-        smooth = np.empty((len(x) if at is None else len(at), x.shape[1]))
-        for i in range(x.shape[1]):
-            smooth[:, i] = smooth_column(log, x[:, i], window, order, deriv)[rows]
-        out.append(smooth)
-    return tuple(out)
-
-
-def smooth_column(log: JointLog, x: np.ndarray, window: float, order: int = 4,
-            deriv: int = 0) -> np.ndarray:
-    """One column x (N,) of the log through the Savitzky-Golay filter of `window` s."""
-    length = _odd(max(order + 2, round(window / log.step)))
-    if length > len(log.t):
-        raise LogError(f"the Savitzky-Golay window ({length} samples) is longer than the log")
-    return savgol_filter(x, length, order, deriv=deriv, delta=log.step)
-
-
-def observer_velocities(log: JointLog, acceleration_bound: np.ndarray) -> np.ndarray:
-    """Each joint's velocity by the observer FMU's default estimator without a model
-    (harness.robot.native.observe_adaptive: the implicit super-twisting observer beside
-    the noise-adaptive bank of linear observers, which estimates the encoder noise
-    itself): causal, the estimate at a sample from the positions up to it."""
-    from .native import observe_adaptive
-    return observe_adaptive(log.q, log.step, acceleration_bound).velocity
 
 
 @dataclass
@@ -443,141 +326,3 @@ def check_friction_rows(mask: np.ndarray, velocity: np.ndarray, names: list[str]
                        "; ".join(messages))
     for message in messages:
         warnings.warn(message, stacklevel=3)
-
-
-def _assessment_json(result: Identification) -> dict:
-    """summary.json's record of the training-log predictions, the consistent projection,
-    what identified.urdf holds and the warnings."""
-    out: dict = {"passive_joints": result.passive, "unmeasured_joints": result.unmeasured,
-                 "warnings": result.warnings}
-    if result.choice is not None:
-        out["training_prediction"] = {
-            **{name: p.as_json() for name, p in result.choice.predictions.items()},
-            "definition": "RMS of (predicted - measured torque) over RMS of the measured "
-                          "torque over the joint equations the regression used, per joint "
-                          "and pooled; urdf: the input URDF, estimate: the base-parameter "
-                          "least squares, consistent: the physically consistent parameters"}
-        out["identified_urdf_holds"] = result.choice.written
-    if result.projection is not None:
-        out["consistency"] = result.projection.as_json()
-    return out
-
-
-def _terms_json(result: Identification, names: list[str]) -> dict:
-    """summary.json's record of the extra joint terms and how they were chosen (none
-    asked for: nothing)."""
-    terms = result.terms
-    chosen = ({} if result.terms_choice is None else
-              {"joint_terms_choice": result.terms_choice.as_dict()})
-    if not terms.any:
-        return chosen
-    n = len(names)
-    values, errors = result.term_values(n), result.term_std_errors(n).reshape(n, -1)
-    record: dict = {
-        "terms": list(terms.kinds), "smooth_coulomb_velocity": terms.smooth_coulomb,
-        "values": {name: dict(zip(terms.kinds, values[i].tolist()))
-                   for i, name in enumerate(names)},
-        "std_errors": {name: {kind: None if np.isnan(e) else float(e)
-                              for kind, e in zip(terms.kinds, errors[i])}
-                       for i, name in enumerate(names)},
-        "written_to": SIDECAR_NAME if not result.urdf_kept else
-        "nowhere: identified.urdf keeps the URDF's values"}
-    if terms.asymmetric_coulomb:
-        record["coulomb_in_urdf"] = "the mean of coulomb_positive and coulomb_negative"
-    return {"joint_terms": record, **chosen}
-
-
-def write_results(out: Path, robot: Robot, log: JointLog, result: Identification,
-                  data_name: str) -> list[Path]:
-    """velocities.csv, parameters.csv, identified.urdf, summary.json, a plot and
-    joint_terms.csv (the extra joint terms; only its header without them or when
-    identified.urdf keeps the URDF's values, so that validate never reads an earlier
-    run's terms beside this run's URDF)."""
-    out.mkdir(parents=True, exist_ok=True)
-    names = robot.joint_names
-    velocities = out / "velocities.csv"
-    with velocities.open("w") as handle:  # in chunks: no copy of the log's length
-        header = ",".join(["t"] + [f"qd{i + 1}" for i in range(robot.n)])
-        for start in range(0, max(len(log.t), 1), WRITE_ROWS):
-            rows = slice(start, start + WRITE_ROWS)
-            np.savetxt(handle, np.column_stack([log.t[rows], result.velocity[rows]]),
-                       delimiter=",", header=header if start == 0 else "", comments="")
-    parameters = out / "parameters.csv"
-    n = robot.n
-    extra = result.terms.count(n)
-    nominal_beta = result.base.project(np.concatenate([robot.parameters(), np.zeros(extra)]))
-    consistent_beta = result.base.project(result.pi if result.projection is None
-                                          else result.projection.pi)
-    with parameters.open("w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(["parameter", "urdf", "estimate", "std_error", "consistent", "definition"])
-        for k in range(result.base.count):
-            writer.writerow([result.base.names[k], f"{nominal_beta[k]:.10g}",
-                             f"{result.fit.theta[k]:.10g}", f"{result.fit.std_error[k]:.3g}",
-                             f"{consistent_beta[k]:.10g}", result.base.description(k)])
-    urdf = out / "identified.urdf"
-    kept = result.urdf_kept
-    standard = result.standard(n)
-    layout = ParameterLayout(n, len(result.terms.kinds))
-    write_identified_urdf(robot, standard, urdf,
-                          f"the input URDF's inertials and joint dynamics, kept: the model "
-                          f"identified from {data_name} predicts it worse (summary.json)"
-                          if kept else
-                          f"inertials and joint dynamics identified from {data_name} by "
-                          f"python -m harness identify")
-    sidecar = out / SIDECAR_NAME
-    write_sidecar(sidecar, result.terms, names, [joint.kind for joint in robot.joints],
-                  None if kept or not result.terms.any else result.pi[layout.extra],
-                  result.term_std_errors(n))
-    summary = out / "summary.json"
-    write_json(summary, {
-        "joints": names,
-        "viscous": dict(zip(names, standard[layout.viscous_levels].tolist())),
-        "coulomb": dict(zip(names, standard[layout.coulomb_levels].tolist())),
-        "masses": dict(zip([j.child_link for j in robot.joints],
-                           result.pi[layout.masses].tolist())),
-        "residual_rms": dict(zip(names, result.fit.equation_rms.tolist())),
-        "condition_number": result.fit.condition,
-        "base_parameters": result.base.count,
-        "samples_used": int(len(result.used)),
-        "regression_window_s": result.window,
-        "resampled": log.resampled,
-        **_assessment_json(result),
-        **_terms_json(result, names),
-        **({} if result.velocity_window is None else
-           {"velocity_window_s": dict(zip(names, result.velocity_window.tolist()))}),
-    })
-    plot = out / "velocities.png"
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    figure, axes = plt.subplots(n, 1, sharex=True, figsize=(8, 1.6 * n + 1), squeeze=False)
-    for i in range(n):
-        shown = plot_samples(result.velocity[:, i])
-        axes[i, 0].plot(log.t[shown], result.velocity[shown, i], lw=0.8)
-        axes[i, 0].set_ylabel(f"qd{i + 1}")
-    axes[-1, 0].set_xlabel("t [s]")
-    figure.tight_layout()
-    figure.savefig(plot, dpi=90)
-    plt.close(figure)
-    return [velocities, parameters, urdf, summary, plot, sidecar]
-
-
-def plot_samples(x: np.ndarray, bins: int = PLOT_BINS) -> np.ndarray | slice:
-    """The samples of x (N,) that a line plot needs: all of a short signal; of a long
-    one, the first and last and each of `bins` stretches' smallest and largest value
-    in time order (the
-    envelope the dense line fills at the plot's resolution, for a small part of the
-    memory matplotlib takes for every point)."""
-    if len(x) <= 2 * bins:
-        return slice(None)
-    width = -(-len(x) // bins)  # samples a stretch
-    whole = len(x) // width * width
-    stretches = x[:whole].reshape(-1, width)
-    starts = np.arange(0, whole, width)[:, None]
-    extremes = [starts + np.column_stack([stretches.argmin(axis=1), stretches.argmax(axis=1)])]
-    if whole < len(x):
-        rest = x[whole:]
-        extremes.append(whole + np.array([[rest.argmin(), rest.argmax()]]))
-    ends = np.array([[0, len(x) - 1]])  # the plot's time axis as the log's
-    return np.unique(np.concatenate([ends, *extremes]))

@@ -14,6 +14,8 @@ import numpy as np
 from scipy.ndimage import convolve1d
 from scipy.signal import savgol_coeffs, savgol_filter
 
+from .joint_log import JointLog, LogError
+
 ORDER = 4      # polynomial order of the fits
 GROWTH = 1.15  # between candidate windows
 KAPPA = 2.0    # a longer window is kept while it differs from each shorter one by less
@@ -124,3 +126,40 @@ def regression_window(velocity_windows: np.ndarray) -> float:
     steps into accelerations of noise; a 17-bit encoder keeps 0.05-0.14 s."""
     longest = float(np.max(velocity_windows)) if len(velocity_windows) else 0.0
     return max(SHORTEST_REGRESSION_WINDOW, longest)
+
+
+def _odd(count: int) -> int:
+    return count if count % 2 else count + 1
+
+
+def savitzky_golay(log: JointLog, window: float, order: int = 4,
+                   at: np.ndarray | None = None):
+    """(q, q', q'', u) smoothed by one zero-phase Savitzky-Golay filter of `window` s,
+    at the samples `at` (None: every sample); a column at a time, so that a long log
+    needs one column's work space, not four arrays of the log's length."""
+    rows = slice(None) if at is None else at
+    out = []
+    for x, deriv in ((log.q, 0), (log.q, 1), (log.q, 2), (log.u, 0)):
+        smooth = np.empty((len(x) if at is None else len(at), x.shape[1]))
+        for i in range(x.shape[1]):
+            smooth[:, i] = smooth_column(log, x[:, i], window, order, deriv)[rows]
+        out.append(smooth)
+    return tuple(out)
+
+
+def smooth_column(log: JointLog, x: np.ndarray, window: float, order: int = 4,
+            deriv: int = 0) -> np.ndarray:
+    """One column x (N,) of the log through the Savitzky-Golay filter of `window` s."""
+    length = _odd(max(order + 2, round(window / log.step)))
+    if length > len(log.t):
+        raise LogError(f"the Savitzky-Golay window ({length} samples) is longer than the log")
+    return savgol_filter(x, length, order, deriv=deriv, delta=log.step)
+
+
+def observer_velocities(log: JointLog, acceleration_bound: np.ndarray) -> np.ndarray:
+    """Each joint's velocity by the observer FMU's default estimator without a model
+    (harness.robot.native.observe_adaptive: the implicit super-twisting observer beside
+    the noise-adaptive bank of linear observers, which estimates the encoder noise
+    itself): causal, the estimate at a sample from the positions up to it."""
+    from .native import observe_adaptive
+    return observe_adaptive(log.q, log.step, acceleration_bound).velocity

@@ -17,11 +17,13 @@ join the prediction when that file sits next to the URDF or --joint-terms-file n
 it; without it, the URDF's model alone."""
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
 
 from ..json_files import write_json
+from .joint_log import JointLog, LogError
 from .joint_terms import (
     COULOMB_NEGATIVE,
     COULOMB_POSITIVE,
@@ -32,8 +34,7 @@ from .joint_terms import (
     read_sidecar,
 )
 from .layout import ParameterLayout, core_layout
-from .pipeline import JointLog, LogError, savitzky_golay, smooth_column
-from .smoothing import regression_window, velocity_windows
+from .smoothing import regression_window, savitzky_golay, smooth_column, velocity_windows
 from .urdf import Robot
 
 OUTPUT_NAMES = ("validation.json", "validation.png")
@@ -165,7 +166,12 @@ def sidecar_path(urdf: str, given: str | None) -> Path | None:
     if given is not None:
         return Path(given)
     beside = Path(urdf).parent / SIDECAR_NAME
-    return beside if beside.is_file() else None
+    if beside.is_file():
+        return beside
+    if os.path.lexists(beside):  # a folder, pipe, device or broken link: never skipped unsaid
+        raise JointTermsError(f"{beside}: beside the URDF but not a regular file; move it away "
+                              "or name the joint terms with --joint-terms-file")
+    return None
 
 
 def validate_command(args) -> int:
@@ -180,7 +186,11 @@ def validate_command(args) -> int:
     mapping = column_mapping(args.columns, "validate")
     if mapping is None:
         return 2
-    terms_file = sidecar_path(args.robot, getattr(args, "joint_terms_file", None))
+    try:
+        terms_file = sidecar_path(args.robot, getattr(args, "joint_terms_file", None))
+    except JointTermsError as error:
+        print(f"harness validate: {error}", file=sys.stderr)
+        return 2
     inputs = [args.data, args.robot] + ([terms_file] if terms_file is not None else [])
     try:
         with Outputs(args.out, "validate", inputs=inputs, names=OUTPUT_NAMES) as outputs:

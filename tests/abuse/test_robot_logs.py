@@ -9,7 +9,7 @@ import pytest
 
 from harness.cli import main
 from harness.robot.examples import example_urdf
-from harness.robot.pipeline import LogError, read_log
+from harness.robot.joint_log import LogError, read_log
 from harness.robot.urdf import read_urdf
 
 pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
@@ -213,3 +213,39 @@ def test_a_log_in_ms_read_as_seconds_is_warned_of(tmp_path, arm):
     code, text = cli(["validate", str(data), "--robot", str(urdf), "--out", str(tmp_path / "w"),
                       "--time-unit", "s"])  # seconds confirmed: no warning
     assert code == 0 and "apart" not in text, text
+
+
+@pytest.mark.parametrize("command", ["identify", "validate"])
+@pytest.mark.parametrize("scale", [1e13, 1e200, 1e307])
+def test_torques_too_large_for_any_joint_exit_2_naming_the_column(tmp_path, arm, command, scale):
+    """Torques scaled far beyond any joint's (a wrong unit or gain): the regression's sums
+    would overflow (singular normal equations, non-finite whitening, a figure that cannot
+    be drawn); refused by the reader, naming the column."""
+    from cli_runner import cli, refused
+    urdf, _ = arm
+    t = np.arange(6000) * 1e-3
+    data = _log(tmp_path / "log.csv", t)
+    values = np.loadtxt(data, delimiter=",", skiprows=1)
+    values[:, 3] *= scale
+    np.savetxt(data, values, delimiter=",", header="t,q1,q2,u1,u2", comments="", fmt="%.17g")
+    out = tmp_path / "out"
+    code, text = cli([command, str(data), "--robot", str(urdf), "--out", str(out)])
+    assert code == 2, text
+    refused(code, text, "u1 reaches", "beyond 1e+12")
+    assert not out.exists()
+
+
+def test_a_joint_terms_name_beside_the_urdf_that_is_no_file_is_refused(tmp_path, arm):
+    """A folder (or a pipe, a device) named joint_terms.csv beside the URDF: validate
+    would otherwise predict with the URDF alone and say nothing."""
+    import shutil
+
+    from cli_runner import cli, refused
+    urdf, _ = arm
+    copy = tmp_path / "robot.urdf"
+    shutil.copy(urdf, copy)
+    (tmp_path / "joint_terms.csv").mkdir()
+    data = _log(tmp_path / "log.csv", np.arange(6000) * 1e-3)
+    code, text = cli(["validate", str(data), "--robot", str(copy), "--out", str(tmp_path / "o")])
+    assert code == 2, text
+    refused(code, text, "joint_terms.csv", "not a regular file")

@@ -9,8 +9,8 @@ from fmpy import simulate_fmu
 
 from harness.robot.examples import example_urdf
 from harness.robot.fmu import INTEGERS, fmu_parameters, run_fmu, start_values
+from harness.robot.joint_log import JointLog
 from harness.robot.layout import ParameterLayout
-from harness.robot.pipeline import JointLog
 from harness.robot.urdf import read_urdf
 from tests.conftest import fmu_path
 from tests.harness.robot.robot_helpers import FRICTION, multisine_log, payload_link

@@ -15,8 +15,9 @@ from robot_helpers import FRICTION, multisine_log, payload_link, random_chain_ur
 
 from harness.cli import main
 from harness.robot.examples import example_urdf
+from harness.robot.joint_log import read_log
 from harness.robot.log_units import log_units
-from harness.robot.pipeline import identify_robot, read_log
+from harness.robot.pipeline import identify_robot
 from harness.robot.urdf import read_urdf
 
 GAINS = (0.37, 2.5)  # N.m/A of the two drives

@@ -14,9 +14,11 @@ from scipy.signal import savgol_coeffs, savgol_filter
 
 from harness import csv_columns
 from harness.cli import main
-from harness.robot import pipeline, smoothing
+from harness.robot import results, smoothing
 from harness.robot.examples import example_urdf
-from harness.robot.pipeline import JointLog, plot_samples, read_log, savitzky_golay
+from harness.robot.joint_log import JointLog, read_log
+from harness.robot.results import plot_samples
+from harness.robot.smoothing import savitzky_golay
 from harness.robot.urdf import read_urdf
 
 
@@ -133,12 +135,12 @@ def test_identify_in_tiny_chunks_writes_what_large_chunks_write(tmp_path, arm, m
     command = ["identify", str(data), "--robot", str(urdf), "--unknown", "payload",
                "--velocity", velocity, "--quiet"]
     for name, value in ((csv_columns, "CHUNK_ROWS"), (smoothing, "CHUNK"),
-                        (pipeline, "WRITE_ROWS")):
+                        (results, "WRITE_ROWS")):
         monkeypatch.setattr(name, value, 1 << 30)
     assert main([*command, "--out", str(tmp_path / "whole")]) == 0
     monkeypatch.setattr(csv_columns, "CHUNK_ROWS", 11)
     monkeypatch.setattr(smoothing, "CHUNK", 13)
-    monkeypatch.setattr(pipeline, "WRITE_ROWS", 17)
+    monkeypatch.setattr(results, "WRITE_ROWS", 17)
     assert main([*command, "--out", str(tmp_path / "chunks")]) == 0
     whole, chunks = _outputs(tmp_path / "whole"), _outputs(tmp_path / "chunks")
     assert chunks["velocities.csv"] == whole["velocities.csv"]

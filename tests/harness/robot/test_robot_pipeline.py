@@ -112,7 +112,7 @@ def test_a_negative_min_speed_is_refused(tmp_path, arm, capsys):
 def _slow_joint_log(robot, peak_speed: float, seconds: float = 3.0, h: float = 1e-3):
     """Joint 1 along the helpers' multi-sine, joint 2 a sine of `peak_speed` rad/s at
     0.5 Hz: joint 2 is above a min_speed v a share 1 - 2 arcsin(v / peak) / pi of the time."""
-    from harness.robot.pipeline import JointLog
+    from harness.robot.joint_log import JointLog
     truth = robot.rigid_body(link=payload_link(robot.arrays()["link"]), friction=FRICTION)
     t, q, qd, qdd, _ = multisine_log(truth, seconds, h)
     w = 2 * np.pi * 0.5
@@ -125,7 +125,8 @@ def _slow_joint_log(robot, peak_speed: float, seconds: float = 3.0, h: float = 1
 def test_a_joint_that_never_reaches_min_speed_is_named(arm):
     """Joint 2 never exceeds 0.04 rad/s: with min_speed 0.05 it would lose every friction
     equation; the error names it and the remedy."""
-    from harness.robot.pipeline import LogError, identify_robot
+    from harness.robot.joint_log import LogError
+    from harness.robot.pipeline import identify_robot
     _, robot = arm
     log = _slow_joint_log(robot, 0.04)
     with pytest.raises(LogError, match=r"joint 'joint2' keeps 0\.0 % of its equations.*"

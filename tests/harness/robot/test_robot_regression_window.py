@@ -8,8 +8,9 @@ import pytest
 from robot_helpers import FRICTION, multisine_log, payload_link
 
 from harness.robot.examples import example_urdf
+from harness.robot.joint_log import JointLog
 from harness.robot.layout import ParameterLayout
-from harness.robot.pipeline import JointLog, identify_robot
+from harness.robot.pipeline import identify_robot
 from harness.robot.smoothing import SHORTEST_REGRESSION_WINDOW, regression_window
 from harness.robot.urdf import read_urdf
 

@@ -11,8 +11,9 @@ import pandas as pd
 import pytest
 
 from harness.robot.examples import example_urdf
+from harness.robot.joint_log import read_log
 from harness.robot.layout import ParameterLayout
-from harness.robot.pipeline import identify_robot, read_log
+from harness.robot.pipeline import identify_robot
 from harness.robot.urdf import read_urdf
 
 SECONDS, RATE, ENCODER_BITS = 30.0, 94.0, 17

@@ -14,9 +14,9 @@ from scipy.signal import lfilter, ss2tf
 
 from harness.robot.examples import example_urdf
 from harness.robot.filtered_regression import filtered_regression
+from harness.robot.joint_log import JointLog
 from harness.robot.layout import ParameterLayout
-from harness.robot.pipeline import JointLog, observer_velocities
-from harness.robot.smoothing import adaptive_velocities, noise_std
+from harness.robot.smoothing import adaptive_velocities, noise_std, observer_velocities
 from harness.robot.urdf import read_urdf
 
 H, SECONDS, SKIP = 1e-3, 6.0, 500  # the first 0.5 s (convergence) is not scored
