@@ -54,5 +54,4 @@ set(STO_ModelObserver_RESOURCES fmu/model/resources/model.txt)
 
 # The Python package's native library (ctypes): the master loop and the robot batch
 # entry points over the same core.
-set(STO_NATIVE_SOURCES harness/native/master_loop.c harness/robot/native/robot_native.c
-    harness/native/term_program.c)
+set(STO_NATIVE_SOURCES native/master_loop.c native/robot_native.c native/model_native.c)

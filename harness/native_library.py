@@ -1,7 +1,7 @@
 """The package's native library (the CMake target ``sto_native``), loaded by ctypes.
 
 It holds the native master loop (native/master_loop.c) and the robot core's batch
-entry points (robot/native/robot_native.c) over the same C objects as the FMUs.  It
+entry points (native/robot_native.c) over the same C objects as the FMUs.  It
 is compiled with the package, never at import: by ``./build.sh`` into ``harness/lib/``
 of a checkout, or by pip when the package is installed.
 """

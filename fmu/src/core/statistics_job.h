@@ -18,7 +18,7 @@
  * STATS_EIGEN_TOLERANCE (relative; at most STATS_EIGEN_ITERATIONS iterations), as
  * rri_statistics' does from its own start: the excitations agree to that
  * tolerance, the other results exactly.
- * Plain C, no allocation; the offline path (harness/robot/native) runs the same
+ * Plain C, no allocation; the offline path (native/robot_native.c) runs the same
  * schedule as the RobotObserver FMU. */
 #ifndef STATISTICS_JOB_H
 #define STATISTICS_JOB_H

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from harness.model import read_model
-from harness.model.commands import identify_model
+from harness.model.cli import identify_model
 from harness.model.log import read_log
 from harness.model.zero_phase import ZeroPhase, cutoff_for
 

@@ -20,7 +20,7 @@ from bench.cases import oscillator
 from bench.reports import fmu_agreement
 from harness.cli import main
 from harness.model import read_model
-from harness.model.commands import identify_model
+from harness.model.cli import identify_model
 from harness.model.log import read_log
 
 REPO = Path(__file__).resolve().parents[3]
