@@ -39,6 +39,9 @@ def read_text(path: str | Path, what: str = "file", limit: int = MAX_BYTES) -> s
     has a size of 0 and no end."""
     path = Path(path)
     try:
+        named = os.stat(path).st_mode
+        if stat.S_ISFIFO(named) or stat.S_ISSOCK(named):  # opening a pipe waits for a writer
+            raise InputError(f"{path}: the {what} is a pipe or a socket, not a file")
         with path.open("rb") as handle:
             mode = os.fstat(handle.fileno()).st_mode
             if stat.S_ISDIR(mode):

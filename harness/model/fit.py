@@ -10,7 +10,10 @@ inversely and leaves phi, and so every physical value, as it was.
 """
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import ParamSpec, TypeVar
 
 import numpy as np
 import scipy.optimize
@@ -26,6 +29,8 @@ RIDGE = 1e-9
 #: (model error, not white noise) are correlated over tens of ms: the standard errors of
 #: batches of 1 decimated row are up to 2.3 times smaller.
 BATCH_SAMPLES = 100
+P = ParamSpec("P")
+R = TypeVar("R")
 
 
 @dataclass(frozen=True)
@@ -73,6 +78,17 @@ def _weighted(Y: np.ndarray, weights: np.ndarray | None) -> np.ndarray:
     return Y if weights is None else Y / weights[None, :, None]
 
 
+def _overflow_unsaid(function: Callable[P, R]) -> Callable[P, R]:
+    """Values so large that the sums overflow give non-finite figures, which the callers
+    refuse by name: numpy's warnings would only repeat it."""
+    @functools.wraps(function)
+    def quiet(*args: P.args, **kwargs: P.kwargs) -> R:
+        with np.errstate(over="ignore", invalid="ignore"):
+            return function(*args, **kwargs)
+    return quiet
+
+
+@_overflow_unsaid
 def fit(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float = RIDGE,
         batch: int = BATCH_SAMPLES, mask: np.ndarray | None = None,
         bounds: tuple[np.ndarray, np.ndarray] | None = None) -> Fit:
@@ -168,6 +184,7 @@ def _condition(information: np.ndarray) -> float:
         else float("inf")
 
 
+@_overflow_unsaid
 def estimate(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, ridge: float = RIDGE,
              mask: np.ndarray | None = None,
              bounds: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:

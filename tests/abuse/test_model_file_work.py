@@ -135,6 +135,17 @@ def test_a_model_path_to_a_device_is_read_with_a_cap(tmp_path):
     refused(result.returncode, result.stderr, str(link), "larger than", "not a regular file")
 
 
+def test_a_model_path_to_a_pipe_is_refused_without_waiting(tmp_path):
+    """A named pipe: opening it would wait for a writer that never comes."""
+    pipe = tmp_path / "model.toml"
+    os.mkfifo(pipe)
+    result = subprocess.run([sys.executable, "-m", "harness", "--fmu-dir", str(FMU_DIR),
+                             "fmu", "--model", str(pipe), "--out", str(tmp_path / "out")],
+                            cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2, result.stderr[-2000:]
+    refused(result.returncode, result.stderr, str(pipe), "a pipe or a socket")
+
+
 def test_joint_terms_file_on_a_device_is_read_with_a_cap(tmp_path):
     link = tmp_path / "joint_terms.csv"
     link.symlink_to(os.devnull.replace("null", "zero"))
