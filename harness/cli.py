@@ -315,16 +315,26 @@ def global_options() -> argparse.ArgumentParser:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .scenarios import SCENARIOS
+    from .model.fmu_export import register_fmu
+    from .robot.cli import register_fmu_parameters
     from .sweep import register as register_sweep
 
     common = global_options()
     parser = argparse.ArgumentParser(prog="sto-harness", description=__doc__, parents=[common],
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for register in (register_paper_commands, register_identify, register_fmu_parameters,
+                     register_sweep, register_validate, register_fmu):
+        register(sub, parents=[common])
+    return parser
+
+
+def register_paper_commands(sub, parents) -> None:
+    """reproduce, demo and compare: the paper's section 6 in closed loop."""
+    from .scenarios import SCENARIOS
     scenario_help = "a scenario of the paper's section 6, or all (default)"
 
-    p = sub.add_parser("reproduce", parents=[common], help="run the paper's section 6 examples",
+    p = sub.add_parser("reproduce", parents=parents, help="run the paper's section 6 examples",
                        description="Runs the paper's section 6 examples in closed loop and "
                        "writes signals.csv, metrics.json and figures per scenario.")
     p.add_argument("--scenario", default="all", choices=["all", *SCENARIOS], help=scenario_help)
@@ -336,13 +346,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--python-loop", action="store_true", help="use the plain-Python master loop")
     p.set_defaults(func=cmd_reproduce)
 
-    p = sub.add_parser("demo", parents=[common], help="the closed-loop demonstration: all "
+    p = sub.add_parser("demo", parents=parents, help="the closed-loop demonstration: all "
                        "scenarios, paper method and improved defaults")
     p.add_argument("--out", default="demo", metavar="DIR",
                    help="output folder (default: ./demo)")
     p.set_defaults(func=cmd_demo)
 
-    p = sub.add_parser("compare", parents=[common],
+    p = sub.add_parser("compare", parents=parents,
                        help="paper method vs the improved defaults, with noise")
     p.add_argument("--scenario", default="all", choices=["all", *SCENARIOS], help=scenario_help)
     p.add_argument("--noise", type=_noise_list, default=(0.0, 1e-5, 1e-4),
@@ -350,7 +360,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     p.set_defaults(func=cmd_compare)
 
-    p = sub.add_parser("identify", parents=[common],
+
+def register_identify(sub, parents) -> None:
+    """identify: a log through the observer FMU, a model file (--model) or a robot (--robot)."""
+    p = sub.add_parser("identify", parents=parents,
                        help="identify from a recorded log (CSV, Parquet)",
                        description="Feeds a recorded experiment through the observer FMU and "
                        "writes estimates.csv, estimates.json and identification.png.")
@@ -412,14 +425,6 @@ def build_parser() -> argparse.ArgumentParser:
     from .robot.cli import add_arguments as add_robot_arguments
     add_robot_arguments(p)
     p.set_defaults(func=cmd_identify)
-
-    from .robot.cli import register_fmu_parameters
-    register_fmu_parameters(sub, parents=[common])
-    register_sweep(sub, parents=[common])
-    register_validate(sub, parents=[common])
-    from .model.fmu_export import register_fmu
-    register_fmu(sub, parents=[common])
-    return parser
 
 
 # The validate command: its model-file and robot paths import what they run when run
