@@ -280,8 +280,24 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
     lower = -nominal[joint[nonnegative]] / scale[nonnegative]  # pi_k >= 0
     constraints = [u[np.flatnonzero(nonnegative)] >= lower] if np.any(nonnegative) else []
     problem = cp.Problem(cp.Minimize(data + links_prior + terms_prior), constraints)
+    solution = _solve(problem, z)
+    pi = fixed + A @ z.value
+    distance = float(np.sum((whiten @ (projector @ pi - beta)) ** 2))
+    per_link = np.zeros(n)
+    for i, J0 in zip(links, priors):
+        per_link[i] = divergence(pseudo_inertia(pi[layout.link(i)]), J0)
+    deviation = (pi[joint] - nominal[joint]) / scale
+    return Projection(
+        pi, distance, float(scipy.stats.chi2.ppf(CONFIDENCE, len(beta))),
+        2 * weight * float(per_link.sum()), weight * float(deviation @ deviation), per_link,
+        tolerance, str(problem.status), _gap(solution), time.perf_counter() - started,
+        float(score(projector @ pi)) if score is not None else 0.0)
+
+
+def _solve(problem: cp.Problem, z: cp.Expression):
+    """Clarabel's own solution of the problem (it reports the dual objective), its values
+    unpacked into the variables; ProjectionError unless optimal."""
     try:
-        # through the solver's own solution, which reports the dual objective
         conic, chain, inverse = problem.get_problem_data(cp.CLARABEL,
                                                          solver_opts=dict(SOLVER_SETTINGS))
         solution = chain.solve_via_data(problem, conic, solver_opts=dict(SOLVER_SETTINGS))
@@ -296,17 +312,7 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
             f"the consistent parameters: the solver Clarabel ended with status "
             f"{problem.status!r}, not optimal (the estimate's covariance or the URDF's "
             f"values may span too many orders of magnitude): no model is written")
-    pi = fixed + A @ z.value
-    distance = float(np.sum((whiten @ (projector @ pi - beta)) ** 2))
-    per_link = np.zeros(n)
-    for i, J0 in zip(links, priors):
-        per_link[i] = divergence(pseudo_inertia(pi[layout.link(i)]), J0)
-    deviation = (pi[joint] - nominal[joint]) / scale
-    return Projection(
-        pi, distance, float(scipy.stats.chi2.ppf(CONFIDENCE, len(beta))),
-        2 * weight * float(per_link.sum()), weight * float(deviation @ deviation), per_link,
-        tolerance, str(problem.status), _gap(solution), time.perf_counter() - started,
-        float(score(projector @ pi)) if score is not None else 0.0)
+    return solution
 
 
 def _gap(solution) -> float:
