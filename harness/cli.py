@@ -34,7 +34,7 @@ from .fmus import FMUError
 from .inputs import InputError
 from .json_files import write_json
 from .messages import Console
-from .outputs import OutputError, Outputs, Terminated
+from .outputs import OutputError, Outputs, Terminated, shown
 from .paths import default_fmu_dir
 from .units import TIME_UNITS
 from .values import INT32_MAX, BadValue, argparse_type, integer, real
@@ -84,7 +84,7 @@ def cmd_reproduce(args) -> int:
             summary[name] = metrics
     for path in outputs.written:
         if path.suffix == ".png":
-            print(f"  wrote {path}")
+            print(f"  wrote {shown(path)}")
     print()
     print(summary_table(summary))
     return 0
@@ -195,6 +195,7 @@ def cmd_identify(args) -> int:
     _refuse(_given(args, ROBOT_OPTIONS), "a t, y, u log", "they go with --robot")
     from .fmus import check_parameters
     from .identify import DataError, ReadOptions, identify_file
+    from .log_columns import LogColumnError, check_column_roles
     from .recording import parse_columns
 
     fmu = _fmu_dir(args) / "SuperTwistingObserver.fmu"
@@ -202,10 +203,12 @@ def cmd_identify(args) -> int:
         "identifier": {"off": 0, "lsm": 1, "mff": 2}[args.identifier],
         **_parse_params(args.param)})
     try:
-        options = ReadOptions(columns=parse_columns(args.columns), time_unit=args.time_unit,
+        columns = parse_columns(args.columns)
+        check_column_roles(args.columns, fold_case=True)  # names are looked up without case
+        options = ReadOptions(columns=columns, time_unit=args.time_unit,
                               tolerance=args.time_tolerance,
                               resample=None if args.resample is None else args.resample)
-    except DataError as error:
+    except (DataError, LogColumnError) as error:
         print(f"harness identify: {error}", file=sys.stderr)
         return 2
     table_name = f"estimates.{args.format}"
@@ -232,7 +235,7 @@ def cmd_identify(args) -> int:
               f"internal step: h = {summary.h:g} s ({round(summary.step / summary.h)} internal "
               f"steps per sample); set it with --param h=...")
     out = outputs.folder
-    print(f"wrote {out / table_name}, {out / 'estimates.json'}, {plot}")
+    print(f"wrote {shown(out / table_name, out / 'estimates.json', plot)}")
     for name, value in summary.final.items():
         print(f"  {name} = {value:.6g} +- {summary.standard_error[name]:.2g} (1 sigma)")
     print(f"  measurement noise (estimated) = {summary.noise_std:.3g} rad")
@@ -279,7 +282,7 @@ def cmd_compare(args) -> int:
                               None if args.scenario == "all" else [args.scenario], noise,
                               quiet=True if args.quiet else None)
     print(markdown_table(rows))
-    print(f"\nwrote {Path(args.out) / 'compare.md'}, compare.csv and figures")
+    print(f"\nwrote {shown(Path(args.out) / 'compare.md')}, compare.csv and figures")
     return 0
 
 

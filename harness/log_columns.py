@@ -4,9 +4,14 @@ and the model files' logs.  The format is told by the file's extension: CSV (.cs
 row batches, so that a long log takes little more than its numbers' memory); any other
 extension is refused with a message naming the file and the formats read.  Both give
 a :class:`~harness.csv_columns.Header` (the column names) and then the chosen columns
-as floats; a problem raises :class:`LogColumnError` naming the file."""
+as floats; a problem raises :class:`LogColumnError` naming the file.  A log is read from
+a regular file only: a device, a FIFO or a folder (also through a link) is refused by its
+mode before it is opened, and a CSV file's header row must end within MAX_HEADER_BYTES
+(read with that cap), so that no log makes a reader wait or read without end."""
 from __future__ import annotations
 
+import os
+import stat
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -15,7 +20,8 @@ import numpy as np
 from . import csv_columns
 from .csv_columns import CHUNK_ROWS, Header, column_of, uneven_step
 
-__all__ = ["FORMATS", "Header", "LogColumnError", "column_of", "log_format", "mean_step",
+__all__ = ["FORMATS", "MAX_HEADER_BYTES", "Header", "LogColumnError", "check_column_roles",
+           "check_log_file", "column_of", "log_format", "mean_step",
            "note_slow_step",
            "read_columns", "read_header", "uneven_step"]
 
@@ -25,6 +31,10 @@ _NAMES = {"csv": "CSV", "parquet": "Parquet"}
 
 #: The error of every log reader (a CSV file's names its line).
 LogColumnError = csv_columns.CsvColumnError
+
+#: A CSV log's header row ends within this many bytes (thousands of column names are far
+#: less); a file whose first line runs on is refused after reading this much of it.
+MAX_HEADER_BYTES = 1 << 20
 
 #: Samples this far apart [s] or more are likely not in seconds (a robot's or a
 #: machine's log is sampled at 10 Hz or faster).
@@ -49,6 +59,28 @@ def note_slow_step(path: Path, step: float, hint: str) -> None:
              f"in milliseconds (or us, ns), {hint}")
 
 
+def check_column_roles(text: str, option: str = "--columns", fold_case: bool = False) -> None:
+    """LogColumnError when the ROLE=COLUMN items of `text` (comma-separated; items without
+    a role and a column are left to the caller's parser) give a role twice (the last one
+    would win silently: a typo in the first goes unnoticed) or map two roles to one column
+    (one signal read as two; names compared without case with `fold_case`, as the t, y, u
+    reader looks them up)."""
+    roles: dict[str, str] = {}
+    columns: dict[str, str] = {}
+    for item in filter(None, (part.strip() for part in text.split(","))):
+        role, _, column = (part.strip() for part in item.partition("="))
+        if not role or not column:
+            continue
+        if role in roles:
+            raise LogColumnError(f"{option} gives {role} twice ({role}={roles[role]}, "
+                                 f"{role}={column}); give each role once")
+        key = column.casefold() if fold_case else column
+        if key in columns:
+            raise LogColumnError(f"{option} maps {columns[key]} and {role} to the same column "
+                                 f"{column!r}; each role needs its own column")
+        roles[role], columns[key] = column, role
+
+
 def supported(others: Mapping[str, str] | None = None) -> str:
     """The formats read, for messages: "CSV (.csv, .txt), Parquet (.parquet, .pq)"."""
     kinds: dict[str, list[str]] = {}
@@ -60,14 +92,54 @@ def supported(others: Mapping[str, str] | None = None) -> str:
 def log_format(path: Path, others: Mapping[str, str] | None = None) -> str:
     """The format of the log at `path` by its extension ("csv", "parquet", or one of
     `others`: {".mat": "MATLAB"} where a reader takes more); LogColumnError for any
-    other extension, naming the file and the formats read."""
+    other extension, naming the file and the formats read, and for a path that is not
+    a regular file or a CSV file whose header row runs on (check_log_file): every log
+    reader asks this first."""
     suffix = path.suffix.lower()
     known = {**FORMATS, **(others or {})}
-    if suffix in known:
-        return known[suffix]
-    what = f"a {suffix} file" if suffix else "a file without an extension"
-    raise LogColumnError(f"{path}: {what}; logs are read as {supported(others)}: convert "
-                         "it, or rename it if it is one of these")
+    if suffix not in known:
+        what = f"a {suffix} file" if suffix else "a file without an extension"
+        raise LogColumnError(f"{path}: {what}; logs are read as {supported(others)}: "
+                             "convert it, or rename it if it is one of these")
+    check_log_file(path, csv=known[suffix] == "csv")
+    return known[suffix]
+
+
+def _not_regular(mode: int) -> str | None:
+    """What a file of this mode is when it is not a regular file ("a folder", "a
+    character device" ...); None for a regular file."""
+    kinds = ((stat.S_ISREG, None), (stat.S_ISDIR, "a folder"),
+             (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+             (stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISSOCK, "a socket"))
+    return next((kind for test, kind in kinds if test(mode)), "a special file")
+
+
+def check_log_file(path: Path, csv: bool = False) -> None:
+    """LogColumnError naming the file when `path` (a link followed) is not a regular
+    file: a device such as /dev/zero has no end, a FIFO may never give one, and neither
+    can be read twice, as the readers do.  With `csv`, also when its first line (the
+    header row) does not end within MAX_HEADER_BYTES.  A path where nothing is (or that
+    cannot be looked at) is left to the reader, which says so."""
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return
+    kind = _not_regular(mode)
+    if kind is None and csv:
+        try:
+            with open(path, "rb") as handle:  # a node swapped in since: looked at again
+                kind = _not_regular(os.fstat(handle.fileno()).st_mode)
+                head = b"" if kind else handle.read(MAX_HEADER_BYTES + 1)
+        except OSError:
+            return
+        if len(head) > MAX_HEADER_BYTES and not any(
+                end in head[:MAX_HEADER_BYTES] for end in (b"\n", b"\r")):
+            raise LogColumnError(f"{path}: the first line (the header row) does not end "
+                                 f"within {MAX_HEADER_BYTES} bytes; not a CSV log")
+    if kind is not None:
+        link = " (through a link)" if path.is_symlink() else ""
+        raise LogColumnError(f"{path}: {kind}{link}, not a regular file; a log is read "
+                             "from a file (copy the data into one)")
 
 
 def read_header(path: Path) -> Header:

@@ -145,6 +145,20 @@ def _missing(path: Path, column: Column, found: str, hint: str) -> LogSignalsErr
                            f"{found}){hint}")
 
 
+def _one_column_each(path: Path, wanted: list[Column], names: list[str]) -> None:
+    """LogSignalsError when two roles read one column (`names`: the file's column of each,
+    a number resolved to its name): one signal would be taken for two."""
+    first: dict[str, Column] = {}
+    for column, name in zip(wanted, names):
+        if name in first:
+            other = first[name]
+            given = ("" if other.column == column.column else
+                     f" (given as {other.column!r} and {column.column!r})")
+            raise LogSignalsError(f"{path}: {other.role} and {column.role} are both read from "
+                                  f"the column {name!r}{given}; each needs its own column")
+        first[name] = column
+
+
 def _read_table(path: Path, header: Header, wanted: list[Column], hint: str) -> np.ndarray:
     """The columns of a CSV or Parquet log, (N, len(wanted))."""
     names = []
@@ -155,6 +169,7 @@ def _read_table(path: Path, header: Header, wanted: list[Column], hint: str) -> 
                      else f"{len(header)} unnamed columns")
             raise _missing(path, column, found, hint)
         names.append(str(name))
+    _one_column_each(path, wanted, names)
     try:
         return read_columns(path, header, names, [c.role for c in wanted])
     except LogColumnError as error:
@@ -173,8 +188,20 @@ def _read_mat(path: Path, wanted: list[Column], hint: str) -> np.ndarray:
     except NotImplementedError:  # MATLAB v7.3 files are HDF5
         raise LogSignalsError(f"{path}: a MATLAB v7.3 (HDF5) file; save it with -v7 or as "
                               "CSV") from None
-    except (OSError, ValueError, TypeError, MatReadError) as exc:  # empty, text, truncated
+    except OSError as exc:
+        if exc.errno is not None:  # the system's (permissions ...); scipy's own OSError
+            raise LogSignalsError(f"{path}: cannot read it ({exc.strerror or exc})") from None
+        raise LogSignalsError(f"{path}: not a readable MATLAB file (it ends too early: "
+                              f"{exc})") from None
+    except MatReadError as exc:  # empty, or not MATLAB's header
         raise LogSignalsError(f"{path}: not a readable MATLAB file ({exc})") from None
+    except Exception as exc:  # noqa: BLE001 - scipy's parser fails on a file that is not
+        # MATLAB's (text, truncated, forged) in many ways: IndexError, ValueError, TypeError,
+        # struct.error, EOFError, zlib.error, MemoryError for a forged size ... each is the
+        # file's fault, not a bug to show as a traceback
+        raise LogSignalsError(f"{path}: not a readable MATLAB file ({type(exc).__name__}: "
+                              f"{exc})") from None
+    _one_column_each(path, wanted, [c.column for c in wanted])
     available = ", ".join(sorted(k for k in data if not k.startswith("__"))) or "nothing"
     columns = []
     for column in wanted:

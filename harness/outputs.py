@@ -12,7 +12,11 @@ file system) only when the whole block has finished.  An exception, Ctrl-C or
 SIGTERM, or a full or read-only disk (OSError) inside the block removes the staging
 folder: the files of an earlier run stay as they were, none is half-written.  A
 staging folder left by a killed process (SIGKILL) is removed by the next command
-writing into that folder.
+writing into that folder.  The handler of Ctrl-C and SIGTERM is set before the output
+folder is created: a signal while the folder, its lock and the staging folder are made,
+or while the block's end renames or removes them, waits until that is done (or undone:
+a folder the command created is removed) and then ends the command, so that no signal
+can leave a created folder holding only the lock.
 
 Refused with :class:`OutputError` (exit status 2), before anything is written where
 the names are known in advance, and again before any rename: an output folder that
@@ -39,6 +43,7 @@ from types import FrameType, TracebackType
 
 from filelock import FileLock, Timeout
 
+from .names import plain
 from .tempdirs import owned_temp_dir, remove_stale
 
 LOCK_NAME = ".sto-harness.lock"
@@ -69,6 +74,14 @@ def special_file(path: str | os.PathLike) -> str | None:
     if not stat.S_ISREG(mode) and not stat.S_ISDIR(mode):
         return "a special file"
     return None
+
+
+def shown(*paths: str | os.PathLike) -> str:
+    """Paths as a message or the "wrote ..." line shows them: comma-separated, each
+    control character (ESC, a carriage return, a newline ...) written as its escape
+    (harness.names.plain), so that a file's name cannot move the cursor or recolour the
+    terminal."""
+    return ", ".join(plain(str(path)) for path in paths)
 
 
 def refuse_special(path: str | os.PathLike, what: str = "output") -> None:
@@ -127,7 +140,7 @@ class Outputs:
         self.written: list[Path] = []  # the final paths, after a successful block
         self._lock: FileLock | None = None
         self._created = False
-        self._committing = False
+        self._holding = False  # a signal now waits (setting up, renaming, cleaning up)
         self._deferred: int | None = None
         self._handlers: dict[int, object] = {}
 
@@ -171,26 +184,52 @@ class Outputs:
                               + (f" (it is {kind})" if kind else ""))
         for name in self.names:
             self.check(name)  # before the folder is even created
-        self._created = not self.folder.exists()
+        # The handler first, holding signals: Ctrl-C between the folder's creation and the
+        # cleanup's being in place would leave the folder (and its lock) behind.
+        self._holding = True
+        self._catch_signals()
         try:
-            self.folder.mkdir(parents=True, exist_ok=True)
+            self._make_folder()
+            try:
+                if self.lock:
+                    self._acquire()
+                remove_stale(self.folder)  # staging folders of killed commands
+                self.staging = owned_temp_dir("partial", base=self.folder)
+            except OSError as error:
+                raise self._error(f"cannot write to {self.folder}: "
+                                  f"{error.strerror or error}") from None
+            self._holding = False  # from here a signal interrupts the block at once
+            self._raise_deferred()  # one that came while the folder was made
+            return self
+        except BaseException:
+            self._holding = True
+            self._undo()
+            raise
+
+    def _make_folder(self) -> None:
+        """Creates the output folder (and its parents); `_created` says whether this
+        command made it (and so removes it again on failure)."""
+        try:
+            self.folder.mkdir(parents=True)
+            self._created = True
+        except FileExistsError:
+            if not self.folder.is_dir():  # made a file since the check above
+                raise self._error(f"--out {self.folder} exists and is not a folder") from None
         except OSError as error:
             raise self._error(f"cannot create --out {self.folder}: "
                               f"{error.strerror or error}") from None
-        try:
-            if self.lock:
-                self._acquire()
-            remove_stale(self.folder)  # staging folders of killed commands
-            self.staging = owned_temp_dir("partial", base=self.folder)
-        except OSError as error:
-            self._release(failed=True)
-            raise self._error(f"cannot write to {self.folder}: "
-                              f"{error.strerror or error}") from None
-        except BaseException:
-            self._release(failed=True)
-            raise
-        self._catch_signals()
-        return self
+
+    def _undo(self) -> None:
+        """Removes what __enter__ made (the staging folder, the lock, a folder it created)
+        and gives the signals back."""
+        if self.staging.parts:  # set: Path() until then (never remove the working folder)
+            shutil.rmtree(self.staging, ignore_errors=True)
+        self._release(failed=True)
+        self._restore_signals()
+
+    def _raise_deferred(self) -> None:
+        if self._deferred is not None:
+            raise Terminated() if self._deferred == signal.SIGTERM else KeyboardInterrupt()
 
     def file(self, name: str) -> Path:
         """Where to write output ``name`` now (it is renamed to its place at the end)."""
@@ -201,9 +240,12 @@ class Outputs:
 
     def __exit__(self, kind: type[BaseException] | None, error: BaseException | None,
                  trace: TracebackType | None) -> None:
+        self._holding = True  # a signal waits until the outputs are in place or removed
+        committed = False
         try:
             if kind is None:
                 self._commit()
+                committed = True
             elif isinstance(error, OSError) and self._writing(error):
                 raise error
         except OSError as problem:
@@ -211,10 +253,9 @@ class Outputs:
                               f"nothing was written") from None
         finally:
             shutil.rmtree(self.staging, ignore_errors=True)
+            self._release(failed=not committed)  # a folder made for nothing is removed
             self._restore_signals()
-            self._release(failed=kind is not None)
-        if self._deferred is not None:  # a signal that came during the renames
-            raise Terminated() if self._deferred == signal.SIGTERM else KeyboardInterrupt()
+        self._raise_deferred()  # a signal that came during the renames
 
     def _writing(self, error: OSError) -> bool:
         """Whether an OSError of the block came from writing (not from reading an input)."""
@@ -226,14 +267,11 @@ class Outputs:
     def _commit(self) -> None:
         staged = sorted(p for p in self.staging.rglob("*") if p.is_file() or p.is_symlink())
         targets = [self.check(str(p.relative_to(self.staging))) for p in staged]
-        self._committing = True  # Ctrl-C waits until every file has its name
-        try:
-            for source, target in zip(staged, targets):
-                target.parent.mkdir(parents=True, exist_ok=True)
-                os.replace(source, target)
-                self.written.append(target)
-        finally:
-            self._committing = False
+        self._raise_deferred()  # Ctrl-C before the first rename: nothing is written
+        for source, target in zip(staged, targets):  # then it waits for the last one
+            target.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(source, target)
+            self.written.append(target)
 
     def final(self, staged: Path) -> Path:
         """The path a file written under :attr:`staging` gets at the end."""
@@ -278,7 +316,11 @@ class Outputs:
         self._handlers.clear()
 
     def _on_signal(self, number: int, frame: FrameType | None) -> None:
-        if self._committing:
+        # held; or run at __exit__'s first instruction, before it could say so itself
+        if self._holding or (frame is not None and frame.f_code is _EXIT_CODE):
             self._deferred = number
             return
         raise Terminated() if number == signal.SIGTERM else KeyboardInterrupt()
+
+
+_EXIT_CODE = Outputs.__exit__.__code__

@@ -188,10 +188,10 @@ def main(argv: list[str] | None = None) -> int:
                         help="whose parameters and experiment to bind (default 6.2)")
     args = parser.parse_args(argv)
     from .inputs import InputError
-    from .outputs import OutputError, Terminated
+    from .outputs import OutputError, Terminated, shown
 
     try:
-        print(f"wrote {write_ssp(Path(args.fmu_dir), Path(args.out), args.scenario)}")
+        print(f"wrote {shown(write_ssp(Path(args.fmu_dir), Path(args.out), args.scenario))}")
     except (InputError, OutputError) as error:
         print(error, file=sys.stderr)
         return 2

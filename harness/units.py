@@ -4,9 +4,11 @@ unit the computation works in (s, rad, m, N.m/A ...), its dimension checked."""
 from __future__ import annotations
 
 import math
+import numbers
 import re
+from collections.abc import Iterable
 from functools import lru_cache
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # pint loads in a quarter of a second: on first use, not with the CLI
     import pint
@@ -23,10 +25,17 @@ MAX_UNIT_EXPONENT = 12
 # What a unit string may hold: names (any letters, as pint knows "µm"), numbers, spaces
 # and the operators of a product, quotient and power; no ',' (a tuple) or anything else.
 _UNIT_CHARACTERS = re.compile(r"[\w .*/^()+\-%]*")
-# A power operator and its exponent: a small number, maybe in parentheses or a fraction.
+# A power operator, then its exponent read whole: a sign and a number token, maybe in
+# parentheses as a fraction ("^2", "**-1", "^(1/2)").  A number token is every digit,
+# letter, '_' and decimal point that follow its first digit ("1e400", "999999999",
+# "1_000", "2.5.1" are one token each: never its first digits alone), but not a '.'
+# before a name ("m^2.s" is m^2 times s); the token must then be a plain number.
 _POWER = re.compile(r"(\*\*|\^)\s*")
-_EXPONENT = re.compile(r"\(?\s*[-+]?\s*(\d{1,3}(?:\.\d{1,6})?)\s*(?:/\s*\d{1,3}\s*)?\)?")
-_EXPONENT_AFTER_POWER = re.compile(_POWER.pattern + _EXPONENT.pattern)
+_TOKEN = r"\d\w*(?:\.\d\w*)*"
+_EXPONENT = re.compile(rf"\(\s*(?P<inner>[-+]?\s*{_TOKEN})\s*(?:/\s*(?P<below>{_TOKEN})\s*)?\)"
+                       rf"|(?P<bare>[-+]?\s*{_TOKEN})")
+# A plain number: digits, maybe a decimal part (no exponent, no '_', no leading zeros).
+_PLAIN = re.compile(r"[-+]?(?:0|[1-9]\d*)(?:\.\d+)?")
 # A number that is not part of a name (m2, H2O): outside exponents only "1" ("1/s").
 _NUMBER = re.compile(r"(?<![\w.])\d[\w.]*")
 
@@ -45,6 +54,24 @@ def registry() -> pint.UnitRegistry:
     return pint.UnitRegistry()
 
 
+def _check_exponent(unit: str, exponent: re.Match[str]) -> None:
+    """ValueError unless the exponent (numerator, maybe denominator) is plain numbers and
+    at most MAX_UNIT_EXPONENT in size; the message names the unit and the exponent."""
+    numerator = "".join((exponent["inner"] or exponent["bare"]).split())
+    written = exponent.group(0).strip()
+    for number in (numerator, exponent["below"]):
+        if number is not None and not _PLAIN.fullmatch(number):
+            raise ValueError(f"'{unit}': the exponent {written} is not a plain number (a power "
+                             f"in a unit is written as m^2, s^-1, m^0.5 or m^(1/2), at most "
+                             f"{MAX_UNIT_EXPONENT} in size)")
+    below = 1.0 if exponent["below"] is None else float(exponent["below"])
+    if below == 0.0:
+        raise ValueError(f"'{unit}': the exponent {written} divides by 0")
+    if abs(float(numerator) / below) > MAX_UNIT_EXPONENT:
+        raise ValueError(f"'{unit}' raises to the power {written} (at most "
+                         f"{MAX_UNIT_EXPONENT} in size)")
+
+
 def _check_unit_text(unit: str) -> None:
     """ValueError unless ``unit`` is short, of unit characters, and its powers are small
     numbers applied once (never a power of a power)."""
@@ -55,21 +82,32 @@ def _check_unit_text(unit: str) -> None:
         bad = next(c for c in unit if not _UNIT_CHARACTERS.fullmatch(c))
         raise ValueError(f"'{unit}' has the character {bad!r}, which no unit has (names, "
                          f"numbers, spaces and * / ^ ( ) only)")
+    bases = unit
     for power in _POWER.finditer(unit):
         exponent = _EXPONENT.match(unit, power.end())
-        if exponent is None or not exponent.group(0).strip():
+        if exponent is None:
             raise ValueError(f"'{unit}': a power in a unit must be a number (m^2, s^-1)")
-        if float(exponent.group(1)) > MAX_UNIT_EXPONENT:
-            raise ValueError(f"'{unit}' raises to the power {exponent.group(0).strip()} (at "
-                             f"most {MAX_UNIT_EXPONENT} in size)")
+        _check_exponent(unit, exponent)
         if _POWER.match(unit, exponent.end()):
             raise ValueError(f"'{unit}' raises a power to a power; write one exponent")
-    bases = _POWER.sub(" ", _EXPONENT_AFTER_POWER.sub(" ", unit))
+        blank = " " * (exponent.end() - power.start())  # the bases are checked below
+        bases = bases[:power.start()] + blank + bases[exponent.end():]
     for number in _NUMBER.finditer(bases):  # pint would evaluate it exactly: 9*9*9...
         if number.group(0) != "1":
             raise ValueError(f"'{unit}' has the number {number.group(0)} outside an exponent; "
                              f"a unit is names and powers (write the factor as a prefix: "
                              f"kN, mm)")
+
+
+def _check_powers(unit: str, powers: Iterable[tuple[str, Any]], what: str) -> None:
+    """ValueError for a power that is not a finite real number (pint works an inf-th
+    power of a unit out without end): a second guard behind the exponents' check on the
+    text."""
+    for name, power in powers:
+        if not (isinstance(power, numbers.Real) and math.isfinite(power)):
+            raise ValueError(f"'{unit}' gives the {what} {name} the power {power}; a power "
+                             f"in a unit is a plain number of at most {MAX_UNIT_EXPONENT} "
+                             f"in size")
 
 
 def quantity(unit: str) -> pint.Quantity:
@@ -85,12 +123,17 @@ def quantity(unit: str) -> pint.Quantity:
     except Exception as exc:  # pint raises several unrelated types for a bad string
         raise ValueError(f"'{unit}' is not a unit pint knows ({type(exc).__name__}: {exc})") \
             from None
+    _check_powers(unit, value.unit_items(), "unit")  # pint's own reading: never m**inf
     if not value._is_multiplicative:  # degC: products and factors are meaningless
         raise ValueError(f"'{unit}' is a unit with an offset (a temperature scale's zero); "
                          f"write kelvin (K) or a difference (delta_degC)")
+    _check_powers(unit, value.dimensionality.items(), "dimension")
     try:
         magnitude = float(value.to_base_units().magnitude)
-    except (OverflowError, ValueError, ZeroDivisionError, TypeError) as exc:
+    except OverflowError:  # Qm^12: 1e360 m^12; the message of errno 34 says nothing
+        raise ValueError(f"'{unit}' in SI base units is beyond the range of float64 "
+                         f"(about 1.8e308)") from None
+    except (ValueError, ZeroDivisionError, TypeError) as exc:
         raise ValueError(f"'{unit}' is not a usable unit ({exc})") from None
     if not (math.isfinite(magnitude) and magnitude > 0.0):
         raise ValueError(f"'{unit}' is not a positive finite multiple of SI units "

@@ -27,7 +27,7 @@ import numpy as np
 from ..json_files import write_json
 from ..messages import note
 from ..names import plain
-from ..outputs import Outputs
+from ..outputs import Outputs, shown
 from .errors import ModelFileError
 from .estimates import Estimates
 from .fit import relative_errors
@@ -100,7 +100,7 @@ def identify_command(args: argparse.Namespace) -> int:
                        {**_summary(found, estimates), **scores})
     except (ModelFileError, LogFileError, NotExcitedError, NotFiniteError) as error:
         return _fail("identify", error)
-    print(f"wrote {', '.join(str(p) for p in outputs.written)}")
+    print(f"wrote {shown(*outputs.written)}")
     width = max(len(p.name) for p in model.parameters)
     print(f"  parameters by {found.method}:")
     left_out = found.model_class.left_out if found.model_class else ()
@@ -350,7 +350,7 @@ def validate_command(args: argparse.Namespace) -> int:
                             f"{100 * pooled:.2f} %")
     except (ModelFileError, LogFileError) as error:
         return _fail("validate", error)
-    print(f"wrote {', '.join(str(p) for p in outputs.written)}")
+    print(f"wrote {shown(*outputs.written)}")
     for i, e in enumerate(per, start=1):
         print(f"  equation {i}: relative error "
               + ("n/a (its known side is zero)" if e is None else f"{100 * e:.3f} %"))

@@ -261,7 +261,7 @@ def fmu_command(args) -> int:
     """``fmu --model MODEL.toml --out DIR [--fmi-version 2|3] [--identifier lsm|mff]``."""
     import sys
 
-    from ..outputs import OutputError, Outputs
+    from ..outputs import OutputError, Outputs, shown
     from .errors import ModelFileError
     from .reader import read_model
 
@@ -275,7 +275,7 @@ def fmu_command(args) -> int:
     except (ModelFileError, ExportError, OutputError) as error:
         print(f"harness fmu: {error}", file=sys.stderr)
         return 2
-    print(f"wrote {outputs.written[0]} (FMI {args.fmi_version}.0 co-simulation): inputs "
+    print(f"wrote {shown(outputs.written[0])} (FMI {args.fmi_version}.0 co-simulation): inputs "
           f"{', '.join((*model.coordinates, *model.inputs))}; outputs "
           f"{', '.join(f'der({c})' for c in model.coordinates)}, "
           f"{', '.join(p.name for p in model.parameters)} and their _std")

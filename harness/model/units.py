@@ -2,6 +2,8 @@
 the unit strings are harness.units', shared with the log readers)."""
 from __future__ import annotations
 
+import math
+
 import pint
 import sympy
 
@@ -36,7 +38,11 @@ def _dimension(expr: sympy.Expr, units: dict[sympy.Symbol, pint.Quantity]) -> pi
         if not power.is_Number:
             raise ExpressionError(f"raises '{base}' ({base_unit.dimensionality}) to the "
                                   f"non-numeric power '{power}'")
-        return base_unit ** float(power)
+        exponent = float(power)
+        if not math.isfinite(exponent):  # pint would work a power of inf out without end
+            raise ExpressionError(f"raises '{base}' ({base_unit.dimensionality}) to the "
+                                  f"power {power}, which is not a finite number")
+        return base_unit ** exponent
     if isinstance(expr, (sympy.Abs,)):
         return _dimension(expr.args[0], units)
     if isinstance(expr, sympy.sign):

@@ -147,7 +147,14 @@ def _finite_non_negative(name: str):
 
 def column_mapping(text: str, command: str) -> dict[str, str] | None:
     """--columns ROLE=COLUMN,... (roles t, q1..qn, u1..un; a column by name or 1-based
-    number) as a mapping, or None after saying which item is malformed."""
+    number) as a mapping, or None after saying which item is malformed, which role is
+    given twice or which column is given two roles."""
+    from ..log_columns import LogColumnError, check_column_roles
+    try:
+        check_column_roles(text)
+    except LogColumnError as error:
+        print(f"harness {command}: {error}", file=sys.stderr)
+        return None
     mapping = {}
     for item in filter(None, (part.strip() for part in text.split(","))):
         name, _, column = item.partition("=")
@@ -183,7 +190,7 @@ def robot_and_log(args, mapping: dict[str, str]):
 
 
 def identify_command(args) -> int:
-    from ..outputs import Outputs
+    from ..outputs import Outputs, shown
     from .consistency import ProjectionError
     from .joint_log import LogError
     from .joint_terms import JointTermsError, parse_terms
@@ -221,7 +228,7 @@ def identify_command(args) -> int:
     except (UrdfError, LogError, UnitError, ProjectionError) as error:
         print(f"harness identify: {error}", file=sys.stderr)
         return 2
-    print("wrote " + ", ".join(str(outputs.final(path)) for path in written))
+    print(f"wrote {shown(*(outputs.final(path) for path in written))}")
     if log.resampled:
         print(f"  {args.data}: {log.resampled}")
     if args.window is None:
@@ -321,7 +328,7 @@ def register_fmu_parameters(sub, parents) -> None:
 
 
 def fmu_parameters_command(args) -> int:
-    from ..outputs import Outputs
+    from ..outputs import Outputs, shown
     from .fmu import fmu_parameters, write_ssv
     from .urdf import UrdfError, read_urdf
     target = Path(args.out)
@@ -340,7 +347,7 @@ def fmu_parameters_command(args) -> int:
         return 2
     with outputs:
         write_ssv(parameters, outputs.file(target.name), name=Path(args.urdf).stem)
-    print(f"wrote {target}: {robot.n} joints, {parameters['base_count']} base parameters")
+    print(f"wrote {shown(target)}: {robot.n} joints, {parameters['base_count']} base parameters")
     # written, but the FMU models less than the identified robot: exit 1 (docs/cli.md)
     return 1 if _warn_unused_joint_terms(args.urdf, robot.joint_names) else 0
 

@@ -178,7 +178,7 @@ def validate_command(args) -> int:
     """`validate LOG --robot URDF --out DIR`: exit 0, or 2 for bad input."""
     import sys
 
-    from ..outputs import Outputs
+    from ..outputs import Outputs, shown
     from .cli import column_mapping, robot_and_log
     from .log_units import UnitError
     from .urdf import UrdfError
@@ -209,7 +209,7 @@ def validate_command(args) -> int:
     except (UrdfError, LogError, UnitError, JointTermsError) as error:
         print(f"harness validate: {error}", file=sys.stderr)
         return 2
-    print(f"wrote {', '.join(str(p) for p in outputs.written)}")
+    print(f"wrote {shown(*outputs.written)}")
     if sidecar is not None:
         settings = sidecar.terms
         described = ", ".join(

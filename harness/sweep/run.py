@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..json_files import strict_json
-from ..outputs import OutputError, Outputs, write_atomically
+from ..outputs import OutputError, Outputs, shown, write_atomically
 from ..paths import default_fmu_dir
 from ..tempdirs import remove_stale
 from ..values import argparse_type, integer, real
@@ -220,8 +220,8 @@ def cmd_sweep(args) -> int:
           + (f", {result.wall_time:.1f} s on {result.workers} "
              f"worker{'s' if result.workers != 1 else ''} "
              f"({result.runs_per_second:.2f} runs/s)" if result.executed else ""))
-    print(f"wrote {result.table}, {CSV_EXPORT}, summary.json"
-          + "".join(f", {p.name}" for p in result.plots))
+    print(f"wrote {shown(result.table)}, {CSV_EXPORT}, summary.json"
+          + "".join(f", {shown(p.name)}" for p in result.plots))
     for key, message in result.failures[:10]:
         print(f"  failed {key}: {message}")
     if len(result.failures) > 10:

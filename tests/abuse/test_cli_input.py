@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_runner import cli, refused, shell
+from cli_runner import REPO, cli, refused, shell
 
 pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
 
@@ -112,6 +112,63 @@ def test_identify_data_path_that_is_no_file(tmp_path, what):
     path = tmp_path if what == "a-folder" else tmp_path / "nothing.csv"
     code, text = cli(["identify", str(path), "--out", str(tmp_path / "o")])
     refused(code, text, "cannot")
+
+
+@pytest.fixture(scope="module")
+def robot_log(tmp_path_factory) -> tuple[Path, Path]:
+    """A double pendulum's URDF and a log whose columns have names of their own."""
+    from harness.robot.examples import example_urdf
+    folder = tmp_path_factory.mktemp("robot")
+    t = 1e-3 * np.arange(400)
+    rows = np.column_stack([t, np.sin(t), np.cos(t), np.sin(2 * t), np.cos(2 * t)])
+    log = folder / "named.csv"
+    np.savetxt(log, rows, delimiter=",", header="time,a,b,ta,tb", comments="")
+    return Path(example_urdf("double_pendulum")[0]), log
+
+
+# --columns with a role given twice (the last one won silently: a typo in the first went
+# unnoticed) or two roles given one column (one signal read as two, or a shape mismatch
+# reported as "line 0: a value is not a number"), on every command that takes it
+COLUMN_CASES = {
+    "t,y,u role twice": ("tyu", "y=theta,y=y", "--columns gives y twice (y=theta, y=y)"),
+    "t,y,u one column": ("tyu", "y=u,u=U", "--columns maps y and u to the same column 'U'"),
+    "robot role twice": ("identify", "q1=zzz,q1=a", "--columns gives q1 twice (q1=zzz, q1=a)"),
+    "robot one column": ("identify", "t=time,q1=a,q2=a,u1=ta,u2=tb",
+                         "--columns maps q1 and q2 to the same column 'a'"),
+    "robot name and number": ("identify", "t=time,q1=2,q2=a,u1=ta,u2=tb",
+                              "q1 and q2 are both read from the column 'a'"),
+    "validate role twice": ("validate", "t=time,q1=zzz,q1=a",
+                            "--columns gives q1 twice (q1=zzz, q1=a)"),
+    "validate one column": ("validate", "t=time,q1=b,q2=b,u1=ta,u2=tb",
+                            "--columns maps q1 and q2 to the same column 'b'"),
+}
+
+
+@pytest.mark.parametrize("case", list(COLUMN_CASES))
+def test_columns_with_a_role_twice_or_a_column_twice_is_refused(tmp_path, data, robot_log,
+                                                                case):
+    command, columns, words = COLUMN_CASES[case]
+    urdf, log = robot_log
+    args = (["identify", str(data)] if command == "tyu" else
+            [command, str(log), "--robot", str(urdf)])
+    code, text = cli([*args, "--columns", columns, "--out", str(tmp_path / "o")])
+    assert code == 2, text
+    refused(code, text, words)
+    assert "line 0" not in text and not (tmp_path / "o").exists()
+
+
+def test_a_model_file_mapping_two_names_to_one_column_is_refused(tmp_path):
+    """The model file's [columns]: the same one reader refuses two names on one column."""
+    emps = REPO / "examples" / "emps" / "emps.toml"
+    model = tmp_path / "emps.toml"
+    model.write_text(emps.read_text().replace('vir = "vir"', 'vir = "qm"'))
+    log = tmp_path / "log.csv"
+    t = 1e-3 * np.arange(400)
+    np.savetxt(log, np.column_stack([t, np.sin(t), np.cos(t)]), delimiter=",",
+               header="t,qm,vir", comments="")
+    code, text = cli(["identify", str(log), "--model", str(model), "--out", str(tmp_path / "o")])
+    assert code == 2, text
+    refused(code, text, str(log), "x and vir are both read from the column 'qm'")
 
 
 @pytest.mark.parametrize("encoding, newline", [("utf-8-sig", "\n"), ("utf-8-sig", "\r\n"),

@@ -1,13 +1,20 @@
 """Logs without samples: a CSV of its header row only (with or without blank lines or a
 final line feed) says so as an empty Parquet file does, with one message on the robot
-and the model-file paths and exit status 2."""
+and the model-file paths and exit status 2.  Logs without an end or a form: a link to a
+device or a FIFO (refused unread), a header row that never ends, and a .mat file that is
+no MATLAB file are each named, exit status 2, never a traceback, a wait or MemoryError."""
 from __future__ import annotations
 
+import io
+import os
+import resource
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_runner import REPO, cli, refused
+from cli_runner import FMU_DIR, REPO, cli, refused
 
 pytestmark = pytest.mark.cli
 
@@ -69,3 +76,78 @@ def test_the_column_reader_gives_no_rows_for_a_header_only_file(tmp_path):
     log.write_text("t,y\n")
     data = read_columns(log, read_header(log), ["t", "y"], ["t", "y"])
     assert data.shape == (0, 2)
+
+
+def _limited() -> None:
+    """The child's address space: a reader without a cap fails, not the machine."""
+    resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))
+
+
+# every command that reads a log: its arguments after the log (URDF: the robot's)
+READERS = {
+    "identify --robot": ["identify", "--robot", "URDF"],
+    "identify --model": ["identify", "--model", str(EMPS)],
+    "identify (t, y, u)": ["identify"],
+    "validate --robot": ["validate", "--robot", "URDF"],
+    "validate --model": ["validate", "--model", str(EMPS)],
+}
+
+
+@pytest.mark.parametrize("kind", ["device", "fifo"])
+@pytest.mark.parametrize("reader", list(READERS))
+def test_a_log_that_is_not_a_regular_file_is_refused_unread(tmp_path, urdf, reader, kind):
+    """A link to /dev/zero (no end: the header was read until MemoryError) or a FIFO (no
+    writer: the reader waited for ever) as the log: refused by its mode, naming it."""
+    log = tmp_path / "log.csv"
+    if kind == "device":
+        log.symlink_to(os.devnull.replace("null", "zero"))  # read only, never written
+    else:
+        os.mkfifo(log)
+    command, *rest = [str(urdf) if a == "URDF" else a for a in READERS[reader]]
+    result = subprocess.run([sys.executable, "-m", "harness", "--fmu-dir", str(FMU_DIR),
+                             command, str(log), *rest, "--out", str(tmp_path / "out")],
+                            cwd=REPO, capture_output=True, text=True, timeout=60,
+                            preexec_fn=_limited)
+    refused(result.returncode, result.stderr, str(log), "not a regular file",
+            "character device" if kind == "device" else "FIFO")
+    assert result.returncode == 2 and not (tmp_path / "out").exists(), result.stderr[-2000:]
+
+
+def test_a_header_row_that_never_ends_is_refused_after_a_cap(tmp_path, urdf):
+    from harness.log_columns import MAX_HEADER_BYTES
+
+    log = tmp_path / "log.csv"
+    log.write_bytes(b"t" * (MAX_HEADER_BYTES + 10))
+    for args in (["--robot", str(urdf)], ["--model", str(EMPS)], []):
+        code, text = cli(["identify", str(log), *args, "--out", str(tmp_path / "o")])
+        assert code == 2, text
+        refused(code, text, str(log), f"does not end within {MAX_HEADER_BYTES} bytes")
+
+
+def _mat(**kwargs) -> bytes:
+    import scipy.io
+    buffer = io.BytesIO()
+    t = np.arange(100.0)
+    scipy.io.savemat(buffer, {"t": t, "qm": np.sin(t), "vir": np.cos(t)}, **kwargs)
+    return buffer.getvalue()
+
+
+MALFORMED_MAT = {
+    "33 bytes of text": lambda: b"hello, this is not a MATLAB file",  # IndexError in scipy
+    "200 bytes of text": lambda: b"x" * 200,
+    "cut in a variable": lambda: _mat()[:700],  # scipy's "could not read bytes" (OSError)
+    "cut compressed": lambda: _mat(do_compression=True)[:300],
+    "damaged compressed": lambda: (lambda b: b[:200] + bytes(64) + b[264:])(
+        _mat(do_compression=True)),  # zlib.error
+}
+
+
+@pytest.mark.parametrize("content", list(MALFORMED_MAT))
+@pytest.mark.parametrize("reader", ["identify --model", "identify --robot", "validate --model"])
+def test_a_malformed_mat_file_is_named(tmp_path, urdf, reader, content):
+    log = tmp_path / "log.mat"
+    log.write_bytes(MALFORMED_MAT[content]())
+    command, *rest = [str(urdf) if a == "URDF" else a for a in READERS[reader]]
+    code, text = cli([command, str(log), *rest, "--out", str(tmp_path / "out")])
+    assert code == 2, text
+    refused(code, text, str(log), "not a readable MATLAB file")

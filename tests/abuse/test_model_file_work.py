@@ -101,6 +101,36 @@ def test_hostile_unit_strings_are_refused_in_time(tmp_path, unit, words):
     fmu_refuses(tmp_path, path, "unit of x", *words)
 
 
+@pytest.mark.parametrize("unit, exponent", [
+    ("kg**1e400/V", "1e400"),        # pint got kg**inf and worked its base units out forever
+    ("kg**1e400", "1e400"),          # was accepted as [mass]**inf
+    ("kg**1e3", "1e3"),              # was "(34, 'Numerical result out of range')"
+    ("kg^999999999", "999999999"),   # was "power 999": only the first three digits read
+    ("kg**(1/1e400)", "(1/1e400)"),
+    ("kg**1_000", "1_000"),
+])
+def test_a_unit_exponent_is_read_whole_and_bounded(tmp_path, unit, exponent):
+    """A parameter's unit: the exponent is its whole number token, refused unless a plain
+    number of at most 12, in time and naming the unit and the exponent (a separate
+    process: the old reader never returned from kg**1e400/V)."""
+    path = tmp_path / "m.toml"
+    path.write_text(MODEL.format(c="x", eq="M*der(x,2) + Fv*der(x) = F", extra="")
+                    .replace('unit = "kg/s"', f'unit = "{unit}"'), encoding="utf-8")
+    result = shell(["fmu", "--model", str(path), "--out", str(tmp_path / "out")], timeout=60)
+    refused(result.returncode, result.stderr, "parameter Fv", f"'{unit}'")
+    assert result.returncode == 2, result.stderr
+    assert (f"the exponent {exponent} is not a plain number" in result.stderr
+            or f"raises to the power {exponent} (" in result.stderr), result.stderr
+    assert "(34," not in result.stderr and not (tmp_path / "out").exists()
+
+
+def test_a_unit_never_has_a_power_that_is_not_finite():
+    from harness.units import quantity
+    for unit in ("kg**1e400", "kg**(1/1e400)", "m^(1/0)"):
+        with pytest.raises(ValueError, match="exponent"):
+            quantity(unit)
+
+
 def test_a_huge_unit_string_in_a_huge_file_is_refused_by_its_size(tmp_path):
     path = model(tmp_path / "m.toml", extra=UNITS.format(c="x", unit="m" * (100 << 20)))
     fmu_refuses(tmp_path, path, "larger than")

@@ -363,3 +363,24 @@ def test_identify_into_a_folder_a_sweep_writes_is_refused(tmp_path):
     finally:
         holder.kill()
         holder.wait()
+
+
+# A name holding ESC sequences, a bell, a carriage return and a newline: printed as they
+# are, they would recolour or clear the terminal and rewrite the "wrote" line
+HOSTILE_NAME = "out\x1b[2J\x1b]0;title\x07\r\nx"
+
+
+@pytest.mark.parametrize("command", ["fmu", "robot-fmu-parameters", "identify"])
+def test_the_wrote_line_shows_control_characters_escaped(tmp_path, urdf, command):
+    out = tmp_path / HOSTILE_NAME
+    args = {"fmu": ["fmu", "--model", str(REPO / "examples" / "emps" / "emps.toml"),
+                    "--out", str(out)],
+            "robot-fmu-parameters": ["robot-fmu-parameters", str(urdf), "--out",
+                                     str(out) + ".ssv"],
+            "identify": ["identify", str(recording(tmp_path / "run.csv")), "--out", str(out)],
+            }[command]
+    code, text = cli(args)
+    assert code == 0, text
+    assert not any(c in text for c in "\x1b\x07\r"), repr(text)
+    wrote = [line for line in text.splitlines() if line.startswith("wrote ")]
+    assert wrote and "out\\x1b[2J\\x1b]0;title\\x07\\r\\nx" in wrote[0], repr(text)
