@@ -3,6 +3,16 @@ import os
 import signal
 import sys
 
+
+def _quiet_interrupts(unraisable: "sys.UnraisableHookArgs") -> None:
+    """A Ctrl-C that lands in a finalizer is dropped by Python with "Exception ignored"
+    and a traceback; the output folder notes it and ends the command before its commit
+    (harness.outputs), so it is not printed as an error here."""
+    if not isinstance(unraisable.exc_value, KeyboardInterrupt):
+        sys.__unraisablehook__(unraisable)
+
+
+sys.unraisablehook = _quiet_interrupts
 try:
     from .cli import main  # imports numpy and more: Ctrl-C may come while it loads
     status = main()

@@ -26,6 +26,7 @@ from .log_columns import (
     read_columns,
     read_header,
 )
+from .mat_file import MatFileError, load_mat
 
 #: The formats read beyond CSV and Parquet, by extension.
 OTHER_FORMATS = {".mat": "MATLAB"}
@@ -178,37 +179,21 @@ def _read_table(path: Path, header: Header, wanted: list[Column], hint: str) -> 
 
 def _read_mat(path: Path, wanted: list[Column], hint: str) -> np.ndarray:
     """The variables of a MATLAB (v4 to v7) file, (N, len(wanted))."""
-    import scipy.io
-    from scipy.io.matlab import MatReadError
-
     try:
-        data = scipy.io.loadmat(str(path))
-    except FileNotFoundError:
-        raise LogSignalsError(f"{path}: no such file") from None
-    except NotImplementedError:  # MATLAB v7.3 files are HDF5
-        raise LogSignalsError(f"{path}: a MATLAB v7.3 (HDF5) file; save it with -v7 or as "
-                              "CSV") from None
-    except OSError as exc:
-        if exc.errno is not None:  # the system's (permissions ...); scipy's own OSError
-            raise LogSignalsError(f"{path}: cannot read it ({exc.strerror or exc})") from None
-        raise LogSignalsError(f"{path}: not a readable MATLAB file (it ends too early: "
-                              f"{exc})") from None
-    except MatReadError as exc:  # empty, or not MATLAB's header
-        raise LogSignalsError(f"{path}: not a readable MATLAB file ({exc})") from None
-    except Exception as exc:  # noqa: BLE001 - scipy's parser fails on a file that is not
-        # MATLAB's (text, truncated, forged) in many ways: IndexError, ValueError, TypeError,
-        # struct.error, EOFError, zlib.error, MemoryError for a forged size ... each is the
-        # file's fault, not a bug to show as a traceback
-        raise LogSignalsError(f"{path}: not a readable MATLAB file ({type(exc).__name__}: "
-                              f"{exc})") from None
+        data = load_mat(path)
+    except MatFileError as error:
+        raise LogSignalsError(str(error)) from None
     _one_column_each(path, wanted, [c.column for c in wanted])
-    available = ", ".join(sorted(k for k in data if not k.startswith("__"))) or "nothing"
+    available = ", ".join(sorted([*data, *data.others])) or "nothing"
     columns = []
     for column in wanted:
+        if column.column in data.others:
+            raise LogSignalsError(f"{path}: variable {column.column!r} ({column.role}) is not "
+                                  f"a numeric vector ({data.others[column.column]})")
         if column.column not in data:
             raise _missing(path, column, available, hint)
-        value = np.asarray(data[column.column])
-        if value.dtype.kind not in "fiub" or value.ndim > 2 or min(value.shape, default=0) > 1:
+        value = data[column.column]
+        if value.ndim > 2 or min(value.shape, default=0) > 1:
             raise LogSignalsError(f"{path}: variable {column.column!r} ({column.role}) is not "
                                   f"a numeric vector (shape {value.shape}, type {value.dtype})")
         columns.append(value.astype(float).ravel())

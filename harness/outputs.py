@@ -255,7 +255,8 @@ class Outputs:
             shutil.rmtree(self.staging, ignore_errors=True)
             self._release(failed=not committed)  # a folder made for nothing is removed
             self._restore_signals()
-        self._raise_deferred()  # a signal that came during the renames
+        if not isinstance(error, KeyboardInterrupt):  # that one is on its way already
+            self._raise_deferred()  # a signal that came during the renames
 
     def _writing(self, error: OSError) -> bool:
         """Whether an OSError of the block came from writing (not from reading an input)."""
@@ -320,6 +321,9 @@ class Outputs:
         if self._holding or (frame is not None and frame.f_code is _EXIT_CODE):
             self._deferred = number
             return
+        # kept too: raised inside a finalizer (a garbage collection), the exception is
+        # printed and dropped by Python and the block goes on; the commit then honours it
+        self._deferred = number
         raise Terminated() if number == signal.SIGTERM else KeyboardInterrupt()
 
 

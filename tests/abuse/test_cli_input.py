@@ -132,6 +132,7 @@ def robot_log(tmp_path_factory) -> tuple[Path, Path]:
 COLUMN_CASES = {
     "t,y,u role twice": ("tyu", "y=theta,y=y", "--columns gives y twice (y=theta, y=y)"),
     "t,y,u one column": ("tyu", "y=u,u=U", "--columns maps y and u to the same column 'U'"),
+    "t,y,u onto a default": ("tyu", "u=y", "y and u are both read from the column 'y'"),
     "robot role twice": ("identify", "q1=zzz,q1=a", "--columns gives q1 twice (q1=zzz, q1=a)"),
     "robot one column": ("identify", "t=time,q1=a,q2=a,u1=ta,u2=tb",
                          "--columns maps q1 and q2 to the same column 'a'"),

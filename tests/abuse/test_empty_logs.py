@@ -139,7 +139,17 @@ MALFORMED_MAT = {
     "cut compressed": lambda: _mat(do_compression=True)[:300],
     "damaged compressed": lambda: (lambda b: b[:200] + bytes(64) + b[264:])(
         _mat(do_compression=True)),  # zlib.error
+    "forged sizes": lambda: _forged_sizes(_mat()),  # scipy's C reader dies (SIGSEGV)
 }
+
+
+def _forged_sizes(content: bytes) -> bytes:
+    """The last variable's array-flags size and data type overwritten: scipy's reader
+    (its C part) reads out of bounds and the process dies by a segmentation fault."""
+    forged = bytearray(content)
+    start = forged.rindex(b"vir") - 44  # the variable's tag; its name is at byte 44
+    forged[start + 13], forged[start + 49] = 194, 4
+    return bytes(forged)
 
 
 @pytest.mark.parametrize("content", list(MALFORMED_MAT))

@@ -1,8 +1,10 @@
 """harness.outputs: files appear together when the block ends, or not at all."""
 from __future__ import annotations
 
+import gc
 import os
 import signal
+import sys
 
 import pytest
 
@@ -63,4 +65,29 @@ def test_a_signal_during_the_renames_waits_until_all_are_done(tmp_path, monkeypa
             for name in ("a", "b", "c"):
                 written.file(name).write_text(name)
     assert len(calls) == 3 and all((out / n).read_text() == n for n in "abc")
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_a_signal_dropped_by_a_finalizer_stops_the_commit(tmp_path):
+    """Ctrl-C raised inside a finalizer is printed and dropped by Python and the block
+    goes on to its end: the outputs are then not written, the interrupt raised."""
+    class Finalized:
+        def __del__(self):
+            os.kill(os.getpid(), signal.SIGINT)  # its handler raises here, and is dropped
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "a").write_text("earlier")
+    dropped = []
+    hook, sys.unraisablehook = sys.unraisablehook, lambda u: dropped.append(u.exc_type)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with Outputs(out, "test") as written:
+                written.file("a").write_text("new")
+                Finalized()
+                gc.collect()
+    finally:
+        sys.unraisablehook = hook
+    assert dropped == [KeyboardInterrupt]
+    assert (out / "a").read_text() == "earlier"
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
