@@ -318,7 +318,6 @@ def global_options() -> argparse.ArgumentParser:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .model.fmu_export import register_fmu
     from .robot.cli import register_fmu_parameters
     from .sweep import register as register_sweep
 
@@ -471,6 +470,30 @@ def register_validate(sub, parents) -> None:
     add_chain_arguments(robot)
     add_unit_arguments(robot, time=True)
     p.set_defaults(func=_validate)
+
+
+def register_fmu(sub, parents) -> None:
+    """The fmu command's parser."""
+    p = sub.add_parser("fmu", parents=parents,
+                       help="the observer/identifier FMU of a model file",
+                       description="Writes DIR/<model>.fmu: the super-twisting observer and "
+                       "LSM/MFF identifier of the model file's equations (read by the FMU "
+                       "from its resources; no compiler needed), with the model's coordinates "
+                       "and inputs as inputs, der(c) and each unknown (with <name>_std) as "
+                       "outputs (docs/model_files.md, 'The FMU').")
+    p.add_argument("--model", required=True, metavar="MODEL.toml", help="the model file")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    p.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
+                   help="FMI 2.0 or 3.0 (default 2)")
+    p.add_argument("--identifier", choices=("lsm", "mff"), default=None,
+                   help="lsm: least squares, constant parameters (the default); mff: matrix "
+                        "forgetting factor, time-varying parameters")
+    p.set_defaults(func=_fmu)
+
+
+def _fmu(args: argparse.Namespace) -> int:
+    from .model.fmu_export import fmu_command  # sympy and lxml: loaded for this command only
+    return fmu_command(args)
 
 
 def _positive_window(text: str) -> float:

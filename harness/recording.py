@@ -133,7 +133,7 @@ def _locate(path: Path, header: list[str], columns: Mapping[str, str]) -> dict[s
         raise DataError(f"{path} line 1: missing column(s) {', '.join(missing)}; the header "
                         f"must name t (or time), y and u, or map them with --columns "
                         f"t=NAME,y=NAME,u=NAME (found: {', '.join(header) or 'nothing'})")
-    roles = {}
+    roles: dict[int, str] = {}
     for role, index in found.items():  # "u=y": u mapped onto the column y is read from
         if index in roles:
             raise DataError(f"{path}: {roles[index]} and {role} are both read from the "

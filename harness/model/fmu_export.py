@@ -280,22 +280,3 @@ def fmu_command(args) -> int:
           f"{', '.join(f'der({c})' for c in model.coordinates)}, "
           f"{', '.join(p.name for p in model.parameters)} and their _std")
     return 0
-
-
-def register_fmu(sub, parents) -> None:
-    """The fmu command's parser."""
-    p = sub.add_parser("fmu", parents=parents,
-                       help="the observer/identifier FMU of a model file",
-                       description="Writes DIR/<model>.fmu: the super-twisting observer and "
-                       "LSM/MFF identifier of the model file's equations (read by the FMU "
-                       "from its resources; no compiler needed), with the model's coordinates "
-                       "and inputs as inputs, der(c) and each unknown (with <name>_std) as "
-                       "outputs (docs/model_files.md, 'The FMU').")
-    p.add_argument("--model", required=True, metavar="MODEL.toml", help="the model file")
-    p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
-    p.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
-                   help="FMI 2.0 or 3.0 (default 2)")
-    p.add_argument("--identifier", choices=("lsm", "mff"), default=None,
-                   help="lsm: least squares, constant parameters (the default); mff: matrix "
-                        "forgetting factor, time-varying parameters")
-    p.set_defaults(func=fmu_command)

@@ -35,3 +35,15 @@ def test_import_is_cheap():
                             check=True)
     assert result.stdout.strip() == ""
 
+
+
+def test_the_command_line_parser_loads_no_model_machinery():
+    """--help and every command's parsing: sympy, pint and scipy load with the commands
+    that use them (the model package's names are loaded on first use)."""
+    code = ("import sys; from harness.cli import build_parser; build_parser(); "
+            "import harness.model; heavy = [m for m in ('sympy', 'pint', 'scipy', "
+            "'matplotlib') if m in sys.modules]; print(','.join(heavy))")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            check=True)
+    assert result.stdout.strip() == ""
+    assert harness.model.read_model.__module__ == "harness.model.reader"
