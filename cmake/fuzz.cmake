@@ -14,7 +14,7 @@ foreach(id IN LISTS STO_MODELS)
         target_link_libraries(${target}-${id} PRIVATE sto_instance sto_core)
         target_link_options(${target}-${id} PRIVATE -fsanitize=fuzzer)
         # a model that reads its resources (ModelObserver) finds the committed ones
-        set(resources "${CMAKE_SOURCE_DIR}/fmu/model/resources")
+        set(resources "${CMAKE_SOURCE_DIR}/fmu/src/models/ModelObserver/resources")
         target_compile_definitions(${target}-${id} PRIVATE
             "FUZZ_RESOURCE_URI=\"file://${resources}\"" "FUZZ_RESOURCE_PATH=\"${resources}/\"")
         if(NOT STO_FUZZ_FORGED)

@@ -33,24 +33,26 @@ set(STO_SHIPPED_HEADERS instance/instance.h instance/instance_internal.h instanc
 
 # The FMUs: model identifier, its model file, its core group, the folder of its
 # committed modelDescription.xml (FMI 2; FMI 3 in <folder>/fmi3/) and the files of
-# its resources/ folder (optional), relative to the repository.
+# its resources/ folder (optional), relative to the repository.  Each model is a
+# folder, models/<identifier>/ (its C, descriptions and resources); the observer's
+# descriptions stay at fmu/ where the project's contract puts them.
 set(STO_MODELS SuperTwistingObserver Pendulum TwistingController RobotObserver ModelObserver)
-set(STO_SuperTwistingObserver_MODEL models/observer.c)
+set(STO_SuperTwistingObserver_MODEL models/SuperTwistingObserver/model.c)
 set(STO_SuperTwistingObserver_CORE ${STO_CORE_OBSERVER})
 set(STO_SuperTwistingObserver_XML_DIR fmu)
-set(STO_Pendulum_MODEL models/pendulum.c)
+set(STO_Pendulum_MODEL models/Pendulum/model.c)
 set(STO_Pendulum_CORE "")
-set(STO_Pendulum_XML_DIR fmu/plants/Pendulum)
-set(STO_TwistingController_MODEL models/twisting_controller.c)
+set(STO_Pendulum_XML_DIR fmu/src/models/Pendulum)
+set(STO_TwistingController_MODEL models/TwistingController/model.c)
 set(STO_TwistingController_CORE "")
-set(STO_TwistingController_XML_DIR fmu/plants/TwistingController)
-set(STO_RobotObserver_MODEL models/robot_observer.c)
+set(STO_TwistingController_XML_DIR fmu/src/models/TwistingController)
+set(STO_RobotObserver_MODEL models/RobotObserver/model.c)
 set(STO_RobotObserver_CORE ${STO_CORE_ROBOT})
-set(STO_RobotObserver_XML_DIR fmu/robot)
-set(STO_ModelObserver_MODEL models/model_observer.c)
+set(STO_RobotObserver_XML_DIR fmu/src/models/RobotObserver)
+set(STO_ModelObserver_MODEL models/ModelObserver/model.c)
 set(STO_ModelObserver_CORE ${STO_CORE_MODEL})
-set(STO_ModelObserver_XML_DIR fmu/model)
-set(STO_ModelObserver_RESOURCES fmu/model/resources/model.txt)
+set(STO_ModelObserver_XML_DIR fmu/src/models/ModelObserver)
+set(STO_ModelObserver_RESOURCES fmu/src/models/ModelObserver/resources/model.txt)
 
 # The Python package's native library (ctypes): the master loop and the robot batch
 # entry points over the same core.

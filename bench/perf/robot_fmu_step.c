@@ -31,7 +31,7 @@
 #include "fmi2Functions.h"
 
 #define MAX_N 7
-/* Value references, fmu/src/models/robot_observer.c (docs/robots.md). */
+/* Value references, fmu/src/models/RobotObserver/model.c (docs/robots.md). */
 enum { VR_N = 2, VR_BASE_COUNT = 4, VR_Q = 600, VR_U = 610, VR_GAMMA_TRACE = 1000,
        VR_IDENTIFIER_ACTIVE = 1002, VR_CONVERGED = 1003 };
 #define MAX_PUBLISHED 16 /* publications of the statistics recorded */

@@ -75,7 +75,7 @@ def model_file(name: str, path: Path) -> int:
     return base.count
 
 
-FMU_DESCRIPTION = REPO / "fmu/robot/modelDescription.xml"
+FMU_DESCRIPTION = REPO / "fmu/src/models/RobotObserver/modelDescription.xml"
 FMU_H = 1e-4        # [s] the sampling period: 10 kHz
 FMU_T_ID = 0.02     # [s] the identifier starts here ...
 FMU_WARMUP = 500    # ... before these doSteps of H = h end (0.05 s)

@@ -29,7 +29,7 @@
 
 #define GUID "{5d0c3f0e-7b7a-4c52-9d5e-2f1a6b8e9c01}"
 
-/* Value references, fmu/src/models/observer.c (docs/observer.md). */
+/* Value references, fmu/src/models/SuperTwistingObserver/model.c (docs/observer.md). */
 enum {
     VR_H = 1, VR_N = 2, VR_NOMINAL_MODEL = 3, VR_SCHEME = 4, VR_IDENTIFIER = 5, VR_L = 6,
     VR_THETA_NOMINAL = 40, VR_T_ID = 80, VR_IDENTIFY = 83, VR_IDENTIFIER_FORM = 110,

@@ -1,7 +1,7 @@
 """``sto-harness fmu --model MODEL.toml --out DIR``: the observer/identifier FMU of a
 model file, with no compiler on the user's machine.
 
-The ModelObserver FMU (fmu/src/models/model_observer.c) is one binary for every model
+The ModelObserver FMU (fmu/src/models/ModelObserver/model.c) is one binary for every model
 file: it reads the model's equations from ``resources/model.txt`` (the term program,
 :mod:`harness.model.program`).  Its modelDescription names generic scalars
 (``position_1``, ``theta_3``, ...); the FMU written here is that FMU with the model's

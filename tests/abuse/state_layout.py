@@ -1,6 +1,6 @@
 """Where a field of a model's data block lies in a serialized FMU state.
 
-The data block is a C struct private to the model file (fmu/src/models/), so its
+The data block is a C struct private to the model (fmu/src/models/<model>/model.c), so its
 layout is asked of the compiler: a small program that includes the model file
 prints offsetof and sizeof of each field (e.g. "info.blocks.first[0]").  The compiler
 is the one the CMake build of the FMUs configured (build/cmake/CMakeCache.txt; $CC or
@@ -17,22 +17,22 @@ from pathlib import Path
 from tools.abuse.abuse_fmi import CLOCK_SIZE, HEADER_SIZE, REPO
 from tools.abuse.state_format import compiler
 
-# model identifier -> (model file, name of its data struct)
+# model identifier -> the name of its data struct (in fmu/src/models/<identifier>/model.c)
 DATA_TYPES = {
-    "SuperTwistingObserver": ("observer.c", "ObserverData"),
-    "RobotObserver": ("robot_observer.c", "RobotData"),
-    "ModelObserver": ("model_observer.c", "ModelData"),
-    "Pendulum": ("pendulum.c", "PendulumData"),
-    "TwistingController": ("twisting_controller.c", "ControllerData"),
+    "SuperTwistingObserver": "ObserverData",
+    "RobotObserver": "RobotData",
+    "ModelObserver": "ModelData",
+    "Pendulum": "PendulumData",
+    "TwistingController": "ControllerData",
 }
 DATA_OFFSET = HEADER_SIZE + CLOCK_SIZE  # the model data follows the header and the clock
 
 
 @functools.cache
 def _layout(model: str, fields: tuple[str, ...]) -> dict[str, tuple[int, int]]:
-    source, data_type = DATA_TYPES[model]
+    data_type = DATA_TYPES[model]
     src = REPO / "fmu" / "src"
-    lines = [f'#include "{src / "models" / source}"', "#include <stdio.h>", "int main(void) {"]
+    lines = [f'#include "{src / "models" / model / "model.c"}"', "#include <stdio.h>", "int main(void) {"]
     for field in fields:
         lines.append(f'    printf("%zu %zu\\n", offsetof({data_type}, {field}), '
                      f"sizeof((({data_type} *)0)->{field}));")

@@ -90,9 +90,9 @@ def test_model_description_is_valid_and_structured(observer_fmu):
     with zipfile.ZipFile(observer_fmu) as archive:  # sources for `fmpy compile`
         files = archive.namelist()
         xml = archive.read("modelDescription.xml").decode()
-    assert "sources/fmi2/fmi2_functions.c" in files and "sources/instance/instance.c" in files and "sources/models/observer.c" in files
+    assert "sources/fmi2/fmi2_functions.c" in files and "sources/instance/instance.c" in files and "sources/models/SuperTwistingObserver/model.c" in files
     assert "binaries/linux64/SuperTwistingObserver.so" in files
-    assert '<File name="models/observer.c"/>' in xml
+    assert '<File name="models/SuperTwistingObserver/model.c"/>' in xml
 
 
 # ---- state machine --------------------------------------------------------------------------

@@ -19,7 +19,7 @@
 #include <math.h>
 #include <stddef.h>
 
-#include "../instance/model_interface.h"
+#include "../../instance/model_interface.h"
 
 #define TWO_PI 6.283185307179586
 

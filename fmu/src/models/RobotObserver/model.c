@@ -19,15 +19,15 @@
 #include <stddef.h>
 #include <string.h>
 
-#include "../core/gains.h"
-#include "../core/regressor_identifier.h"
-#include "../core/rigid_body.h"
-#include "../core/robot_observer.h"
-#include "../core/robot_pipeline.h"
-#include "../core/statistics_job.h"
-#include "../instance/model_interface.h"
-#include "input_cadence_outputs.h"
-#include "state_fields.h"
+#include "../../core/gains.h"
+#include "../../core/regressor_identifier.h"
+#include "../../core/rigid_body.h"
+#include "../../core/robot_observer.h"
+#include "../../core/robot_pipeline.h"
+#include "../../core/statistics_job.h"
+#include "../../instance/model_interface.h"
+#include "../input_cadence_outputs.h"
+#include "../state_fields.h"
 
 #define MAX_N RB_MAX_JOINTS
 #define MAX_P RB_MAX_PARAMETERS

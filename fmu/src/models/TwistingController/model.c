@@ -14,7 +14,7 @@
 #include <math.h>
 #include <stddef.h>
 
-#include "../instance/model_interface.h"
+#include "../../instance/model_interface.h"
 
 typedef struct {
     double h, k1, k2, A1, w1, p1, A2, w2, p2; /* parameters */

@@ -6,11 +6,11 @@
 #include <stddef.h>
 #include <string.h>
 
-#include "../core/gains.h"
-#include "../core/observer_pipeline.h"
-#include "../instance/model_interface.h"
-#include "input_cadence_outputs.h"
-#include "state_fields.h"
+#include "../../core/gains.h"
+#include "../../core/observer_pipeline.h"
+#include "../../instance/model_interface.h"
+#include "../input_cadence_outputs.h"
+#include "../state_fields.h"
 
 #define MAX_N OP_MAX_N
 #define MAX_L OP_MAX_L

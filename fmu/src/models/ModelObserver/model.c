@@ -10,13 +10,13 @@
 #include <stddef.h>
 #include <string.h>
 
-#include "../core/gains.h"
-#include "../core/model_damping.h"
-#include "../core/model_pipeline.h"
-#include "../core/term_program.h"
-#include "../instance/model_interface.h"
-#include "input_cadence_outputs.h"
-#include "state_fields.h"
+#include "../../core/gains.h"
+#include "../../core/model_damping.h"
+#include "../../core/model_pipeline.h"
+#include "../../core/term_program.h"
+#include "../../instance/model_interface.h"
+#include "../input_cadence_outputs.h"
+#include "../state_fields.h"
 
 #define MAX_N MP_MAX_COORDINATES
 #define MAX_U TP_MAX_INPUTS
