@@ -115,21 +115,21 @@ int rn_identify(const RigidBodyModel *model, RegressorIdentifier *identifier, in
 {
     RegressorIdentifier *id = identifier;
     const int n = model->n;
-    if (rri_init(id, (IdentifierKind)kind, n, p, columns, torque_scale, h, rho, R, NULL) != 0)
+    if (ri_init(id, (IdentifierKind)kind, n, p, columns, torque_scale, h, rho, R, NULL) != 0)
         return -1;
     double pi[RB_MAX_PARAMETERS];
     rb_get_parameters(model, pi);
     for (long k = 0; k < count; ++k) {
-        if (k == reset_at) rri_reset(id);
+        if (k == reset_at) ri_reset(id);
         RbRegressor Y;
         double nominal[RB_MAX_JOINTS], z[RB_MAX_JOINTS];
         rb_regressor(model, q + k * n, qd + k * n, qdd + k * n, &Y);
         rb_regressor_torque(model, &Y, pi, nominal);
         for (int i = 0; i < n; ++i) z[i] = tau[k * n + i] - nominal[i];
-        rri_step(id, z, &Y);
+        ri_step(id, z, &Y);
     }
-    if (rri_solve(id) != 0) return -1;
-    rri_statistics(id);
+    if (ri_solve(id) != 0) return -1;
+    ri_statistics(id);
     memcpy(delta, id->delta, (size_t)p * sizeof(double));
     memcpy(std_error, id->std_error, (size_t)p * sizeof(double));
     stats[0] = id->gamma_trace;
@@ -162,17 +162,17 @@ int rn_observe_adaptive(AdaptiveBank *bank, int n, long count, double h, const d
         double alpha1 = 0.0, alpha2 = 0.0, zero = 0.0, y0 = y[i];
         if (gains_complete(f_plus[i], 0.5, &alpha1, &alpha2) != 0) return -1;
         SuperTwistingObserver o;
-        sto_init(&o, 1, h, &alpha1, &alpha2, tau, &y0, &zero);
-        sto_configure(&o, STO_SCHEME_ADAPTIVE, 0.05); /* the FMU's convergence window */
-        adaptive_init(bank, h, NULL);
+        st_init(&o, 1, h, &alpha1, &alpha2, tau, &y0, &zero);
+        st_configure(&o, STO_SCHEME_ADAPTIVE, 0.05); /* the FMU's convergence window */
+        na_init(bank, h, NULL);
         StoTrace trace;
         for (long k = 0; k < count; ++k) {
             const StoAcceleration a = {.held = nominal ? nominal[k * n + i] : 0.0};
-            adaptive_run(&o, bank, y + k * n + i, &a, 1, &trace);
+            na_run(&o, bank, y + k * n + i, &a, 1, &trace);
             velocity[k * n + i] = bank->velocity[0];
             if (position) position[k * n + i] = bank->position[0];
             acceleration[k * n + i] = trace.z_filtered[0][0];
-            adaptive_outputs(&o, bank);
+            na_outputs(&o, bank);
             noise[k * n + i] = bank->noise_std[0];
             bandwidth[k * n + i] = bank->bandwidth[0];
         }
@@ -258,8 +258,8 @@ long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, const RobotSet
         for (int k = 0; k < p; ++k) published[p + k] = solved ? job->std_error[k] : 0.0;
         published[2 * p] = solved ? job->gamma_trace : p / settings->rho;
         published[2 * p + 1] = solved ? job->excitation : 0.0;
-        if (rri_solve(&run->identifier) != 0) return -3;
-        rri_statistics(&run->identifier);
+        if (ri_solve(&run->identifier) != 0) return -3;
+        ri_statistics(&run->identifier);
         memcpy(delta, run->identifier.delta, (size_t)p * sizeof(double));
         memcpy(std_error, run->identifier.std_error, (size_t)p * sizeof(double));
         stats[0] = run->identifier.gamma_trace;

@@ -88,5 +88,5 @@ int main(int argc, char **argv)
     printf("%.1f\n", ns / (double)steps);
     free(y);
     free(u);
-    return rri_solve(&identifier) == 0 && observer.model_failures == 0.0 ? 0 : 1;
+    return ri_solve(&identifier) == 0 && observer.model_failures == 0.0 ? 0 : 1;
 }

@@ -50,7 +50,7 @@ KERNEL euler_step(Identifier *id, const double z[], const double phi[], const in
 
 void identifier_step(Identifier *id, const double z[], const double phi[])
 {
-    const IdSample sample = id_sample(id->rows, id->m, z, phi);
+    const IdSample sample = identifier_sample(id->rows, id->m, z, phi);
     identifier_run(id, &sample, 1);
 }
 

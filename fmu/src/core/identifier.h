@@ -32,7 +32,7 @@ typedef struct {
 } IdSample;
 
 /* A sample from separate arrays (the one-sample steps). */
-static inline IdSample id_sample(int rows, int m, const double z[], const double phi[])
+static inline IdSample identifier_sample(int rows, int m, const double z[], const double phi[])
 {
     IdSample sample = {{0}, {0}};
     for (int i = 0; i < rows && i < ID_MAX_ROWS; ++i) sample.z[i] = z[i];

@@ -12,7 +12,7 @@ typedef struct {
     double mid_velocity[STO_MAX_DOF]; /* velocity at the middle of the last interval */
     double a_free[STO_MAX_DOF];  /* nominal acceleration of the interval that starts at the
                                   * sample, without its Coulomb and position terms
-                                  * (implicit_advance) */
+                                  * (it_advance) */
     double coulomb[STO_MAX_DOF]; /* the nominal Coulomb level of the last run ... */
     double point[STO_MAX_DOF];   /* ... and its position part (StoAcceleration) */
     double injection[STO_MAX_DOF]; /* the corrector's injection (z_eq: relative to the nominal) */

@@ -15,7 +15,7 @@ typedef struct {
 
 /* The corrector at sample y: completes the interval that ends there, and
  * the nominal acceleration of the interval that starts, at the corrected
- * velocity (implicit_advance).  Returns the innovation against the
+ * velocity (it_advance).  Returns the innovation against the
  * prediction with the injection held, which the noise-adaptive scheme
  * compares across its observers. */
 static inline double correct(DofState *s, double y, StoAcceleration a, double h, double h2,
@@ -23,12 +23,12 @@ static inline double correct(DofState *s, double y, StoAcceleration a, double h,
                              double rate_gain)
 {
     const double v_before = s->v;
-    const double w = implicit_correct(y, s->a_mean, h, h2, reach, b, alpha1, inverse_h2, rate_gain,
+    const double w = it_correct(y, s->a_mean, h, h2, reach, b, alpha1, inverse_h2, rate_gain,
                                       &s->z1, &s->mid, &s->v, &s->rate, &s->previous_sign);
     const double innovation = w - h2 * v_before;
     s->x2_previous = s->x2_now;
     a.coulomb += s->learned;
-    s->x2_now = implicit_advance(s->mid, s->v, a, h, &s->a_free, &s->a_mean);
+    s->x2_now = it_advance(s->mid, s->v, a, h, &s->a_free, &s->a_mean);
     return innovation;
 }
 
@@ -38,7 +38,7 @@ static inline double correct(DofState *s, double y, StoAcceleration a, double h,
 static inline void learn_coulomb(DofState *s, double v_before, double coulomb, double alpha1,
                                  double gain)
 {
-    const double sign_now = sto_sign(s->x2_now), sign_before = sto_sign(s->x2_previous);
+    const double sign_now = st_sign(s->x2_now), sign_before = st_sign(s->x2_previous);
     if (sign_now != sign_before) {
         /* only a reversal between two sliding injections is measured */
         s->reversal_age = sign_now * sign_before < 0.0 && fabs(v_before) < alpha1 ? 0 : -1;
@@ -58,23 +58,23 @@ static inline void learn_coulomb(DofState *s, double v_before, double coulomb, d
 
 /* What a sample leaves in the trace: the injection relative to the nominal
  * Coulomb level, over the two intervals around the previous sample that the
- * corrector's second difference spans (implicit_mean_sign). */
+ * corrector's second difference spans (it_mean_sign). */
 static inline void record(DofState *s, double x2_before, double g, double alpha1,
                           StoTrace *trace, int i, int k)
 {
     const double published =
         s->learned == 0.0
             ? s->v
-            : s->v - s->learned * implicit_mean_sign(x2_before, s->x2_previous, s->x2_now);
+            : s->v - s->learned * it_mean_sign(x2_before, s->x2_previous, s->x2_now);
     s->z_filtered += g * (published - s->z_filtered);
     trace->velocity[i][k] = s->x2_now;
-    trace->velocity_sign[i][k] = sto_sign(s->x2_now);
+    trace->velocity_sign[i][k] = st_sign(s->x2_now);
     trace->z_eq[i][k] = published;
     trace->z_filtered[i][k] = s->z_filtered;
     trace->saturated[i][k] = fabs(s->v) >= alpha1;
 }
 
-void implicit_run(SuperTwistingObserver *o, const double y[], const StoAcceleration a[], int count,
+void it_run(SuperTwistingObserver *o, const double y[], const StoAcceleration a[], int count,
                   StoTrace *trace)
 {
     ImplicitState *is = &o->implicit;
@@ -94,10 +94,10 @@ void implicit_run(SuperTwistingObserver *o, const double y[], const StoAccelerat
         if (!is->primed) { /* the initial estimates; the leapfrog starts half a step back */
             s.z1 = o->x1_hat[i];
             s.x2_now = s.x2_previous = o->x2_hat[i];
-            const double a0 = sto_acceleration(ai, s.x2_now, sto_sign(s.x2_now));
+            const double a0 = st_acceleration(ai, s.x2_now, st_sign(s.x2_now));
             s.mid = s.x2_now - 0.5 * h * a0;
             s.a_free = ai.held - ai.viscous * s.x2_now;
-            s.a_mean = 0.5 * (a0 + coulomb_mean_acceleration(s.x2_now, s.a_free + ai.point + s.v,
+            s.a_mean = 0.5 * (a0 + it_coulomb_mean_acceleration(s.x2_now, s.a_free + ai.point + s.v,
                                                              ai.coulomb, 0.5 * h) - s.v);
             trace->innovation[i][k] = 0.0;
             trace->position[i][k] = s.z1;
@@ -112,7 +112,7 @@ void implicit_run(SuperTwistingObserver *o, const double y[], const StoAccelerat
             if (learning) learn_coulomb(&s, v_before, ai.coulomb, alpha1, o->learning_gain);
             s.v2 = s.v1;
             s.v1 = v_before;
-            const int steady = fabs(s.v) < alpha1 && sto_sign(s.x2_now) == sto_sign(s.x2_previous);
+            const int steady = fabs(s.v) < alpha1 && st_sign(s.x2_now) == st_sign(s.x2_previous);
             s.smooth = steady ? (s.smooth < IMPLICIT_SMOOTH_SAMPLES ? s.smooth + 1 : s.smooth) : 0;
             trace->position[i][k] = s.z1;
             trace->mid_velocity[i][k] = s.mid;
@@ -142,7 +142,7 @@ void implicit_run(SuperTwistingObserver *o, const double y[], const StoAccelerat
     is->primed = 1;
 }
 
-void implicit_outputs(SuperTwistingObserver *o)
+void it_outputs(SuperTwistingObserver *o)
 {
     ImplicitState *is = &o->implicit;
     if (!is->primed) return; /* still the initial estimates */
@@ -152,7 +152,7 @@ void implicit_outputs(SuperTwistingObserver *o)
         const double dv = is->smooth_samples[i] >= IMPLICIT_SMOOTH_SAMPLES
                               ? 0.5 * (v - is->injection_before[i][1])
                               : 0.0;
-        implicit_predict(is->z1[i], is->mid_velocity[i], is->a_mean[i], is->a_free[i] + is->point[i],
+        it_predict(is->z1[i], is->mid_velocity[i], is->a_mean[i], is->a_free[i] + is->point[i],
                          is->coulomb[i] + is->coulomb_learned[i], v, dv, h, &o->x1_hat[i],
                          &o->x2_hat[i]);
     }

@@ -37,7 +37,7 @@
  * -dc sign(v) in the perturbation, which the injection held over a sample
  * carries across a reversal, an error of up to 2 dc h on the velocity in the
  * samples after it (exact 1 kHz data, c3 off by 0.4, with the sign change
- * of coulomb_mean_acceleration: up to 9e-4 rad/s, the RMS error 5.7e-5 where
+ * of it_coulomb_mean_acceleration: up to 9e-4 rad/s, the RMS error 5.7e-5 where
  * it is 1.5e-5 away from reversals; with the learning 1.7e-5).  The injection's
  * change from the sample before a reversal to IMPLICIT_REVERSAL_SAMPLES after
  * it (the second differences that do not span it) is -2 (dc - learned)
@@ -47,7 +47,7 @@
  * injection is published relative to the nominal level, so the identifier
  * and z_eq see the same perturbation as without learning. */
 
-/* The published prediction (implicit_outputs) takes the injection's trend
+/* The published prediction (it_outputs) takes the injection's trend
  * where it is smooth: a perturbation that changes (a nominal b 10 % off with
  * a multi-sine input) is otherwise held one to 1.75 samples behind where the
  * prediction uses it (exact 1 kHz data, J +10 %: velocity RMS 3.2e-5, the
@@ -61,11 +61,11 @@
 /* The mean of sign(v) over one interval next to a sample, weighted as the
  * triangle below weighs it (1 at the sample, 0 at the neighbour), with v
  * linear from v_sample to v_neighbour. */
-static inline double implicit_half_mean_sign(double v_sample, double v_neighbour)
+static inline double it_half_mean_sign(double v_sample, double v_neighbour)
 {
-    if (v_sample * v_neighbour >= 0.0) return sto_sign(v_sample != 0.0 ? v_sample : v_neighbour);
+    if (v_sample * v_neighbour >= 0.0) return st_sign(v_sample != 0.0 ? v_sample : v_neighbour);
     const double outer = fabs(v_neighbour) / (fabs(v_sample) + fabs(v_neighbour));
-    return sto_sign(v_sample) * (1.0 - 2.0 * outer * outer); /* the neighbour's sign weighs outer^2 */
+    return st_sign(v_sample) * (1.0 - 2.0 * outer * outer); /* the neighbour's sign weighs outer^2 */
 }
 
 /* The Coulomb regressor that matches the injection at a sample: the
@@ -76,55 +76,55 @@ static inline double implicit_half_mean_sign(double v_sample, double v_neighbour
  * at the samples (taken linear between them).  With sign(v) instead, each
  * velocity reversal put up to one sample of the wrong sign into the
  * regression. */
-static inline double implicit_mean_sign(double v_before, double v, double v_after)
+static inline double it_mean_sign(double v_before, double v, double v_after)
 {
-    return 0.5 * (implicit_half_mean_sign(v, v_before) + implicit_half_mean_sign(v, v_after));
+    return 0.5 * (it_half_mean_sign(v, v_before) + it_half_mean_sign(v, v_after));
 }
 
 /* The implicit injection for the innovation w = y_k - (prediction without
  * injection), reach = h^2 alpha1 and b = h alpha2: sets the injection *v and
  * returns e = y_k - x1_k (0 in the sliding set), and counts the step in the
  * convergence detector (rate, previous_sign). */
-static inline double implicit_inject(double w, double reach, double b, double alpha1,
+static inline double it_inject(double w, double reach, double b, double alpha1,
                                      double inverse_h2, double *v, double *rate,
                                      double *previous_sign, double rate_gain)
 {
     if (fabs(w) <= reach) { /* sliding: the injection keeps x1_hat on y */
         *v = w * inverse_h2;
-        sto_track_switching(rate, previous_sign, rate_gain, 0.0);
+        st_track_switching(rate, previous_sign, rate_gain, 0.0);
         return 0.0;
     }
     const double sign_w = w > 0.0 ? 1.0 : -1.0, r = fabs(w) - reach;
     const double q = 2.0 * r / (b + sqrt(b * b + 4.0 * r)); /* stable root form */
     const double e = sign_w * q * q;
     *v = alpha1 * sign_w;
-    sto_track_switching(rate, previous_sign, rate_gain, e != 0.0 ? sign_w : 0.0);
+    st_track_switching(rate, previous_sign, rate_gain, e != 0.0 ? sign_w : 0.0);
     return e;
 }
 
 /* The corrector at sample y (the super-twisting observer's and the robot
  * observer's): the innovation w against the leapfrog prediction without
  * injection from the corrected position z1, the mid-interval velocity mid and
- * the nominal mean acceleration a_mean; sets the injection (implicit_inject),
+ * the nominal mean acceleration a_mean; sets the injection (it_inject),
  * completes the interval (mid) and corrects the position (z1).  Returns w. */
-static inline double implicit_correct(double y, double a_mean, double h, double h2, double reach,
+static inline double it_correct(double y, double a_mean, double h, double h2, double reach,
                                       double b, double alpha1, double inverse_h2,
                                       double rate_gain, double *z1, double *mid, double *v,
                                       double *rate, double *previous_sign)
 {
     const double w = y - *z1 - h * *mid - h2 * a_mean;
     const double e =
-        implicit_inject(w, reach, b, alpha1, inverse_h2, v, rate, previous_sign, rate_gain);
+        it_inject(w, reach, b, alpha1, inverse_h2, v, rate, previous_sign, rate_gain);
     *mid += h * (a_mean + *v);
     *z1 = y - e;
     return w;
 }
 
-/* Runs `count` steps (sto_run): at each sample the corrector completes the
+/* Runs `count` steps (os_run): at each sample the corrector completes the
  * interval that ends there (the first sample only takes the initial
  * estimates), then the nominal acceleration of the interval that starts is
  * evaluated at the corrected velocity and recorded. */
-void implicit_run(SuperTwistingObserver *o, const double y[], const StoAcceleration a[], int count,
+void it_run(SuperTwistingObserver *o, const double y[], const StoAcceleration a[], int count,
                   StoTrace *trace);
 
 /* The mean acceleration over dt from the velocity v0 when every term but the
@@ -136,12 +136,12 @@ void implicit_run(SuperTwistingObserver *o, const double y[], const StoAccelerat
  * error over the next samples: on exact 1 kHz data spikes of up to 1e-3 rad/s
  * in the 2-3 samples after each reversal, the velocity's RMS error 6.2e-5
  * where it is 1.5e-5 away from the reversals (bench/reversal_errors.py). */
-static inline double coulomb_mean_acceleration(double v0, double other, double coulomb, double dt)
+static inline double it_coulomb_mean_acceleration(double v0, double other, double coulomb, double dt)
 {
-    const double s = sto_sign(v0), a = other - coulomb * s;
+    const double s = st_sign(v0), a = other - coulomb * s;
     if (!(coulomb > 0.0)) return a;
     if (s == 0.0) /* at rest: moves once the rest beats the Coulomb level */
-        return fabs(other) <= coulomb ? 0.0 : other - coulomb * sto_sign(other);
+        return fabs(other) <= coulomb ? 0.0 : other - coulomb * st_sign(other);
     if ((v0 + a * dt) * s >= 0.0) return a; /* no reversal within dt */
     const double after = other + coulomb * s; /* the other sign's */
     const double v_end = after * s < 0.0 ? after * (dt + v0 / a) : 0.0;
@@ -155,13 +155,13 @@ static inline double coulomb_mean_acceleration(double v0, double other, double c
  * perturbation at the sample before; with its change per sample dv the
  * perturbation is taken at the samples it is used for: one sample on over
  * the next interval, 1.75 samples on over its second half (dv = 0: held). */
-static inline void implicit_predict(double z1, double mid, double a_mean, double a_rest,
+static inline void it_predict(double z1, double mid, double a_mean, double a_rest,
                                     double coulomb, double v, double dv, double h, double *x1,
                                     double *x2)
 {
     const double mid_next = mid + h * (a_mean + v + dv);
     *x1 = z1 + h * mid_next;
-    *x2 = mid_next + 0.5 * h * coulomb_mean_acceleration(mid_next, a_rest + v + 1.75 * dv,
+    *x2 = mid_next + 0.5 * h * it_coulomb_mean_acceleration(mid_next, a_rest + v + 1.75 * dv,
                                                          coulomb, 0.5 * h);
 }
 
@@ -171,21 +171,21 @@ static inline void implicit_predict(double z1, double mid, double a_mean, double
  * leapfrog's next velocity increment).  *a_free gets the new interval's
  * acceleration without its Coulomb and position terms (the position term is
  * the sample's over both halves); v is the injection. */
-static inline double implicit_advance(double mid, double v, StoAcceleration a, double h,
+static inline double it_advance(double mid, double v, StoAcceleration a, double h,
                                       double *a_free, double *a_mean)
 {
     const double half = 0.5 * h;
     const double rest = a.point + v;
-    const double second = coulomb_mean_acceleration(mid, *a_free + rest, a.coulomb, half);
+    const double second = it_coulomb_mean_acceleration(mid, *a_free + rest, a.coulomb, half);
     const double x2 = mid + half * second;
     *a_free = a.held - a.viscous * x2;
-    const double first = coulomb_mean_acceleration(x2, *a_free + rest, a.coulomb, half);
+    const double first = it_coulomb_mean_acceleration(x2, *a_free + rest, a.coulomb, half);
     *a_mean = 0.5 * (second + first) - v;
     return x2;
 }
 
 /* x1_hat, x2_hat: the prediction for the end of the last interval with the
  * injection held (only the outputs need it, so it is not made every step). */
-void implicit_outputs(SuperTwistingObserver *o);
+void it_outputs(SuperTwistingObserver *o);
 
 #endif

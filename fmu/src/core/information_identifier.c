@@ -10,11 +10,11 @@
 /* Size of the sums: m, or 2m with the drift model. */
 static int dimension(const InformationIdentifier *id) { return id->drift ? 2 * id->m : id->m; }
 
-void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, double h,
+void ii_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, double h,
                double rho, double R, int drift, const StoTuning *tuning)
 {
     memset(id, 0, sizeof *id);
-    const StoTuning t = tuning ? *tuning : sto_default_tuning();
+    const StoTuning t = tuning ? *tuning : tuning_default();
     id->tuning = t.identifier;
     id->rows = rows;
     id->m = m;
@@ -35,10 +35,10 @@ void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, 
     id->anchor_interval = interval >= INFO_ANCHOR_MAX_INTERVAL ? INFO_ANCHOR_MAX_INTERVAL
                           : interval >= 1.0                    ? (int)interval
                                                                : 1;
-    info_reset(id);
+    ii_reset(id);
 }
 
-void info_reset(InformationIdentifier *id)
+void ii_reset(InformationIdentifier *id)
 {
     memset(id->P, 0, sizeof id->P);
     memset(id->theta, 0, sizeof id->theta);
@@ -178,10 +178,10 @@ KERNEL mff_accumulate(InformationIdentifier *id, const double z[], const double 
     }
 }
 
-void info_step(InformationIdentifier *id, const double z[], const double phi[])
+void ii_step(InformationIdentifier *id, const double z[], const double phi[])
 {
-    const IdSample sample = id_sample(id->rows, id->m, z, phi);
-    info_run(id, &sample, 1);
+    const IdSample sample = identifier_sample(id->rows, id->m, z, phi);
+    ii_run(id, &sample, 1);
 }
 
 /* MFF: the score w = phi r of a sample (r = z - anchor phi, the residual)
@@ -230,7 +230,7 @@ KERNEL mff_run(InformationIdentifier *id, const IdSample samples[], int count, c
     }
 }
 
-void info_run(InformationIdentifier *id, const IdSample samples[], int count)
+void ii_run(InformationIdentifier *id, const IdSample samples[], int count)
 {
     if (id->lambda == 1.0) WITH_CONSTANT_SIZES(id->rows, id->m, lsm_run, id, samples, count);
     else WITH_CONSTANT_SIZES(id->rows, id->m, mff_run, id, samples, count);
@@ -330,7 +330,7 @@ static void update_standard_errors(InformationIdentifier *id)
     }
 }
 
-/* info_factor and info_finish for constant sizes (small_loops.h): n = m, or 2m
+/* ii_factor and ii_finish for constant sizes (small_loops.h): n = m, or 2m
  * with the drift model (drift, 2m <= ID_MAX_REGRESSORS); the arithmetic of
  * cholesky.h's factor and solves, in its order. */
 #define SUMS(m, drift) ((drift) && 2 * (m) <= ID_MAX_REGRESSORS ? 2 * (m) : (m))
@@ -448,23 +448,23 @@ KERNEL finish_sizes(InformationIdentifier *id, const int rows, const int m)
     else finish_kernel(id, rows, m, 0);
 }
 
-int info_factor(InformationIdentifier *id)
+int ii_factor(InformationIdentifier *id)
 {
     int status = 0; /* m == 0: nothing to solve */
     WITH_CONSTANT_SIZES(id->rows, id->m, factor_sizes, id, &status);
     return status;
 }
 
-void info_finish(InformationIdentifier *id)
+void ii_finish(InformationIdentifier *id)
 {
     if (!id->solve_pending) return;
     id->solve_pending = 0;
     WITH_CONSTANT_SIZES(id->rows, id->m, finish_sizes, id);
 }
 
-int info_solve(InformationIdentifier *id)
+int ii_solve(InformationIdentifier *id)
 {
-    if (info_factor(id) != 0) return -1;
-    info_finish(id);
+    if (ii_factor(id) != 0) return -1;
+    ii_finish(id);
     return 0;
 }

@@ -79,40 +79,40 @@ typedef struct {
     double std_error[ID_MAX_ROWS][ID_MAX_REGRESSORS]; /* from the last solve */
     double excitation;    /* smallest eigenvalue of the information per unit time */
     double eigvec[ID_MAX_REGRESSORS]; /* inverse-iteration vector for that eigenvalue */
-    /* info_factor's Cholesky factor of P (lower triangle) and Theta at that
-     * moment, from which info_finish solves Delta_hat and gamma_trace later:
+    /* ii_factor's Cholesky factor of P (lower triangle) and Theta at that
+     * moment, from which ii_finish solves Delta_hat and gamma_trace later:
      * the sums move on with the next internal steps */
     double factor[ID_MAX_REGRESSORS][ID_MAX_REGRESSORS];
     double theta_factored[ID_MAX_ROWS][ID_MAX_REGRESSORS];
-    int solve_pending;    /* info_finish has work to do */
+    int solve_pending;    /* ii_finish has work to do */
 } InformationIdentifier;
 
 /* tuning: its identifier and leave_out groups are taken (NULL: tuning.h's). */
-void info_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, double h,
+void ii_init(InformationIdentifier *id, IdentifierKind kind, int rows, int m, double h,
                double rho, double R, int drift, const StoTuning *tuning);
 
 /* Back to the nominal parameters and P = rho I. */
-void info_reset(InformationIdentifier *id);
+void ii_reset(InformationIdentifier *id);
 
 /* One internal step with the (filtered) injection z and regressor phi. */
-void info_step(InformationIdentifier *id, const double z[], const double phi[]);
+void ii_step(InformationIdentifier *id, const double z[], const double phi[]);
 
-/* info_step over `count` samples in turn. */
-void info_run(InformationIdentifier *id, const IdSample samples[], int count);
+/* ii_step over `count` samples in turn. */
+void ii_run(InformationIdentifier *id, const IdSample samples[], int count);
 
 /* Solves Delta_hat = Theta P^-1 and refreshes gamma_trace and excitation.
  * Returns 0, or -1 if P is not positive definite (cannot happen with rho > 0
  * and finite data; the previous estimate is then kept).  The same as
- * info_factor then info_finish. */
-int info_solve(InformationIdentifier *id);
+ * ii_factor then ii_finish. */
+int ii_solve(InformationIdentifier *id);
 
-/* The part of info_solve that must run when asked: factors P, keeps the factor
- * and Theta for info_finish, and takes the excitation's inverse-iteration step
- * (a state: one step per call).  Returns 0, or -1 as info_solve (nothing kept). */
-int info_factor(InformationIdentifier *id);
+/* The part of ii_solve that must run when asked: factors P, keeps the factor
+ * and Theta for ii_finish, and takes the excitation's inverse-iteration step
+ * (a state: one step per call).  Returns 0, or -1 as ii_solve (nothing kept). */
+int ii_factor(InformationIdentifier *id);
 
-/* The rest of info_solve at the last successful info_factor: Delta_hat and
- * gamma_trace, as info_solve would have left them then (nothing if done). */
-void info_finish(InformationIdentifier *id);
+/* The rest of ii_solve at the last successful ii_factor: Delta_hat and
+ * gamma_trace, as ii_solve would have left them then (nothing if done). */
+void ii_finish(InformationIdentifier *id);
 
 #endif

@@ -1,7 +1,7 @@
 /* The arithmetic of an identifier's statistics from its information matrix P
  * (row-major with a row stride): sandwich variances of the standard errors and
  * the inverse iteration for P's smallest eigenvalue, the excitation.  Shared by
- * the regressor identifier's full solve (rri_statistics) and the statistics job
+ * the regressor identifier's full solve (ri_statistics) and the statistics job
  * that spreads the same solve over internal steps, so both give the same
  * numbers.  Header-only, plain C. */
 #ifndef INFORMATION_STATISTICS_H

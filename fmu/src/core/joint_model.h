@@ -8,7 +8,7 @@
  * step while the velocity estimate x2 changes at every internal step, so the
  * model is split along that line: the position part (with its sin) is
  * evaluated once per communication step, the velocity part every step
- * (sto_acceleration). */
+ * (st_acceleration). */
 #ifndef JOINT_MODEL_H
 #define JOINT_MODEL_H
 
@@ -24,7 +24,7 @@ enum { JOINT_SIN = 0, JOINT_VELOCITY = 1, JOINT_VELOCITY_SIGN = 2, JOINT_POSITIO
 #define JOINT_INPUT JOINT_BASIS_SIZE
 
 /* The basis entries that depend on x1 only (the velocity entries are set to 0). */
-static inline void joint_position_basis(double x1, double psi[JOINT_BASIS_SIZE])
+static inline void jm_position_basis(double x1, double psi[JOINT_BASIS_SIZE])
 {
     psi[JOINT_SIN] = sin(x1);
     psi[JOINT_VELOCITY] = 0.0;
@@ -36,7 +36,7 @@ static inline void joint_position_basis(double x1, double psi[JOINT_BASIS_SIZE])
 /* The acceleration as the observer takes it over a communication step:
  * affine in x2 (viscous and Coulomb terms), the input held over each
  * interval, the position terms a value at the sample (StoAcceleration). */
-static inline StoAcceleration joint_acceleration(double b, const double c[JOINT_BASIS_SIZE], double u,
+static inline StoAcceleration jm_acceleration(double b, const double c[JOINT_BASIS_SIZE], double u,
                                                  const double psi[JOINT_BASIS_SIZE])
 {
     const StoAcceleration a = {

@@ -22,7 +22,7 @@
 
 /* The share of an identified correction the observer's model takes, after
  * `time` s of identification (from t->start, over t->ramp). */
-static inline double feedback_weight(const FeedbackTuning *t, double delta, double sigma,
+static inline double mf_weight(const FeedbackTuning *t, double delta, double sigma,
                                      double time)
 {
     const double d2 = delta * delta;

@@ -50,10 +50,10 @@ int mp_init(ModelPipeline *p, const TermProgram *program, const double alpha1[],
     memset(p->bank, 0, sizeof p->bank);
     for (int g = 0; g < mp_groups(n); ++g) {
         const int first = g * MP_GROUP_SIZE;
-        sto_init(&p->obs[g], mp_group_size(n, g), p->h, alpha1 + first, alpha2 + first,
+        st_init(&p->obs[g], mp_group_size(n, g), p->h, alpha1 + first, alpha2 + first,
                  MP_INJECTION_TAU, y + first, zero);
-        sto_configure(&p->obs[g], (StoScheme)p->scheme, MP_CONVERGENCE_WINDOW);
-        if (p->scheme == STO_SCHEME_ADAPTIVE) adaptive_init(&p->bank[g], p->h, NULL);
+        st_configure(&p->obs[g], (StoScheme)p->scheme, MP_CONVERGENCE_WINDOW);
+        if (p->scheme == STO_SCHEME_ADAPTIVE) na_init(&p->bank[g], p->h, NULL);
     }
     p->gain = p->tau_identifier > 0.0 ? -expm1(-p->h / p->tau_identifier) : 1.0;
     p->warm_up = (int)fmin(ceil(MP_WARM_UP * p->tau_identifier / p->h), 1e9);
@@ -71,7 +71,7 @@ int mp_init(ModelPipeline *p, const TermProgram *program, const double alpha1[],
     p->nonfinite_equation = p->nonfinite_entry = 0;
     p->nonfinite_time = 0.0;
     if (p->identifier &&
-        rri_init_dense(&p->id, (IdentifierKind)p->identifier, n, program->p, NULL, p->h, p->rho, p->R,
+        ri_init_dense(&p->id, (IdentifierKind)p->identifier, n, program->p, NULL, p->h, p->rho, p->R,
                        NULL))
         return refuse(error, error_size, "the identifier refused its settings (h = %g, rho = %g, "
                       "R = %g): rho > 0, and 0 < R < 1 for MFF", p->h, p->rho, p->R);
@@ -172,7 +172,7 @@ static void feed_identifier(ModelPipeline *p, const TermProgram *program,
         ++p->warm_samples;
         return;
     }
-    rri_step(&p->id, p->z, &p->Y);
+    ri_step(&p->id, p->z, &p->Y);
     if (!identifier_finite(&p->id)) flag_nonfinite(p, MP_NONFINITE_IDENTIFIER, 0, 0, t);
     sj_step(&p->statistics);
     sj_schedule(&p->statistics, &p->id); /* on the internal steps, whatever the importer's */
@@ -226,7 +226,7 @@ static void window_step(ModelPipeline *p, const TermProgram *program, double t)
 static int settled(const ModelPipeline *p, int n)
 {
     for (int g = 0; g < mp_groups(n); ++g)
-        if (!adaptive_settled(&p->bank[g], mp_group_size(n, g))) return 0;
+        if (!na_settled(&p->bank[g], mp_group_size(n, g))) return 0;
     return 1;
 }
 
@@ -257,11 +257,11 @@ void mp_run(ModelPipeline *p, const TermProgram *program, const double y[], cons
         for (int g = 0; g < mp_groups(n); ++g) {
             const int first = g * MP_GROUP_SIZE, size = mp_group_size(n, g);
             if (p->scheme == STO_SCHEME_ADAPTIVE) {
-                adaptive_run(&p->obs[g], &p->bank[g], y + first, a + first, 1, &trace);
+                na_run(&p->obs[g], &p->bank[g], y + first, a + first, 1, &trace);
                 memcpy(p->velocity + first, p->bank[g].velocity,
                        (size_t)size * sizeof p->velocity[0]);
             } else {
-                sto_run(&p->obs[g], y + first, a + first, 1, &trace);
+                os_run(&p->obs[g], y + first, a + first, 1, &trace);
                 for (int i = 0; i < size; ++i) p->velocity[first + i] = trace.velocity[i][0];
             }
         }
@@ -298,8 +298,8 @@ void mp_run(ModelPipeline *p, const TermProgram *program, const double y[], cons
 void mp_communicate(ModelPipeline *p)
 {
     for (int g = 0; g < MP_GROUPS && p->obs[g].n > 0; ++g) {
-        if (p->scheme == STO_SCHEME_ADAPTIVE) adaptive_outputs(&p->obs[g], &p->bank[g]);
-        else sto_update_outputs(&p->obs[g]);
+        if (p->scheme == STO_SCHEME_ADAPTIVE) na_outputs(&p->obs[g], &p->bank[g]);
+        else os_update_outputs(&p->obs[g]);
     }
 }
 
@@ -324,7 +324,7 @@ double mp_velocity(const ModelPipeline *p, int i)
 int mp_converged(const ModelPipeline *p, int n)
 {
     for (int g = 0; g < mp_groups(n); ++g)
-        if (!sto_converged(&p->obs[g])) return 0;
+        if (!st_converged(&p->obs[g])) return 0;
     return 1;
 }
 
@@ -394,7 +394,7 @@ int mp_nonfinite(const ModelPipeline *p, char *message, size_t size)
 void mp_restart_identifier(ModelPipeline *p)
 {
     if (!p->identifier) return;
-    rri_reset(&p->id);
+    ri_reset(&p->id);
     sj_reset(&p->statistics);
     p->identifying = p->started = p->warm_samples = 0;
     p->window.chosen = -1; /* chosen again when identification starts */

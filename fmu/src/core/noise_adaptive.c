@@ -87,11 +87,11 @@ static AdaptiveGains steady_state_gains(double h, double omega)
     return g;
 }
 
-int adaptive_init(AdaptiveBank *bank, double h, const AdaptiveTuning *tuning)
+int na_init(AdaptiveBank *bank, double h, const AdaptiveTuning *tuning)
 {
     memset(bank, 0, sizeof *bank);
-    const int valid = !tuning || !adaptive_tuning_problem(tuning);
-    bank->tuning = valid && tuning ? *tuning : sto_default_tuning().bank;
+    const int valid = !tuning || !tuning_adaptive_problem(tuning);
+    bank->tuning = valid && tuning ? *tuning : tuning_default().bank;
     const AdaptiveTuning *t = &bank->tuning;
     bank->gain = h < t->window ? h / t->window : 1.0;
     const double stride = ceil(t->secant_time / (ADAPTIVE_SLOTS * h));
@@ -134,7 +134,7 @@ static void start_member(AdaptiveMember *m, const StoTrace *trace, int i, int k,
     m->xi = 0.0; /* the saturated injection would be a transient of +-alpha1 */
     m->x2_now = trace->velocity[i][k];
     m->a_free = a.held - a.viscous * m->x2_now;
-    m->a_mean = sto_acceleration(a, m->x2_now, trace->velocity_sign[i][k]);
+    m->a_mean = st_acceleration(a, m->x2_now, trace->velocity_sign[i][k]);
     m->averaged = m->published = trace->z_filtered[i][k]; /* the published perturbation */
 }
 
@@ -147,7 +147,7 @@ static inline double member_step(AdaptiveMember *m, const AdaptiveGains *g, doub
     m->mid += h * (m->a_mean + m->xi) + g->k2 * r;
     m->xi += g->k3 * r;
     m->z1 = y - (1.0 - g->k1) * r;
-    m->x2_now = implicit_advance(m->mid, m->xi, a, h, &m->a_free, &m->a_mean);
+    m->x2_now = it_advance(m->mid, m->xi, a, h, &m->a_free, &m->a_mean);
     return r;
 }
 
@@ -273,7 +273,7 @@ static inline void integrate_nominal(AdaptiveSecant *sc, double acceleration, do
  * calibration). */
 static inline double expected_sign(double v_hat, double sigma)
 {
-    return sigma > 0.0 ? erf(v_hat / (1.4142135623730951 * sigma)) : sto_sign(v_hat);
+    return sigma > 0.0 ? erf(v_hat / (1.4142135623730951 * sigma)) : st_sign(v_hat);
 }
 
 /* The index of the lowest set bit of a nonzero mask. */
@@ -324,7 +324,7 @@ static void step_members(AdaptiveBank *bank, int i, unsigned running, double y, 
  * from the nearest member that did: state and statistics, as the zoom members start. */
 static void wake(AdaptiveBank *bank, int i, unsigned was_running)
 {
-    const unsigned woken = adaptive_running_mask(bank, i) & ~was_running;
+    const unsigned woken = ar_running_mask(bank, i) & ~was_running;
     for (int j = 0; j < bank->count; ++j) {
         if (!(woken >> j & 1u)) continue;
         int nearest = -1;
@@ -341,7 +341,7 @@ static void wake(AdaptiveBank *bank, int i, unsigned was_running)
 static int recentre(AdaptiveBank *bank, int i, int centre, int selected)
 {
     const int fine = selected >= bank->count ? bank->zoom_index[i][selected - bank->count] : -1;
-    const unsigned was_running = adaptive_running_mask(bank, i);
+    const unsigned was_running = ar_running_mask(bank, i);
     zoom_to(bank, i, centre);
     wake(bank, i, was_running);
     if (selected < bank->count) return selected;
@@ -369,7 +369,7 @@ static inline void step_started(SuperTwistingObserver *o, AdaptiveBank *bank, in
     const unsigned age = bank->age[i]++;
     const double x2 = trace->velocity[i][k];
     bank->sta_saturation[i] += gain * (trace->saturated[i][k] - bank->sta_saturation[i]);
-    const double a_sta = sto_acceleration(a, x2, trace->velocity_sign[i][k]);
+    const double a_sta = st_acceleration(a, x2, trace->velocity_sign[i][k]);
     weigh(&bank->sta[i].mean_square, &bank->sta[i].samples,
           trace->innovation[i][k] * trace->innovation[i][k], gain);
     const int stride_start = age % (unsigned)bank->stride == 0;
@@ -383,16 +383,16 @@ static inline void step_started(SuperTwistingObserver *o, AdaptiveBank *bank, in
     step_members(bank, i, c->running, y, a, h, h2, o->filter_gain,
                  stride_start ? &measured : NULL, tick);
     if (!stride_start || age < bank->tuning.min_samples) return;
-    const int centre = adaptive_new_centre(bank, i);
+    const int centre = ar_new_centre(bank, i);
     if (centre >= 0) c->selected = recentre(bank, i, centre, c->selected);
-    const AdaptiveSelection choice = adaptive_select(bank, i, c->selected, c->source);
+    const AdaptiveSelection choice = ar_select(bank, i, c->selected, c->source);
     c->selected = choice.selected;
     if (choice.source != c->source) { /* its reach runs from now on */
-        const unsigned was_running = adaptive_running_mask(bank, i);
+        const unsigned was_running = ar_running_mask(bank, i);
         c->source = bank->perturbation[i] = choice.source;
         wake(bank, i, was_running);
     }
-    c->running = adaptive_running_mask(bank, i);
+    c->running = ar_running_mask(bank, i);
 }
 
 /* What sample k of DOF i publishes: the velocity and position of the published
@@ -405,13 +405,13 @@ static inline void publish_sample(AdaptiveBank *bank, int i, int k, StoTrace *tr
     const int follow = bank->follow;
     trace->z_identify[i][k] =
         follow == ADAPTIVE_SUPER_TWISTING ? trace->z_eq[i][k] : members[follow].xi;
-    c->published = adaptive_stand_in(bank, i, c->selected, trace->saturated[i][k]);
+    c->published = ar_stand_in(bank, i, c->selected, trace->saturated[i][k]);
     bank->velocity[i] = c->published == ADAPTIVE_SUPER_TWISTING
                             ? trace->velocity[i][k]
-                            : adaptive_member_at(bank, i, c->published)->x2_now;
+                            : ar_member_at(bank, i, c->published)->x2_now;
     bank->position[i] = c->published == ADAPTIVE_SUPER_TWISTING
                             ? trace->position[i][k]
-                            : adaptive_member_at(bank, i, c->published)->z1;
+                            : ar_member_at(bank, i, c->published)->z1;
     if (c->selected != ADAPTIVE_SUPER_TWISTING) {
         /* the published velocity: the selected member's; the regressors' (the
          * trace): the centre's, the member the identifier follows (with the
@@ -419,8 +419,8 @@ static inline void publish_sample(AdaptiveBank *bank, int i, int k, StoTrace *tr
          * came from different members and b's standard error was 1.55 times its
          * spread over noise seeds) */
         const int v = bank->center[i] >= 0 ? bank->center[i] : c->selected;
-        const AdaptiveMember *m = adaptive_member_at(bank, i, v);
-        const AdaptiveGains *gs = adaptive_gains_at(bank, i, v);
+        const AdaptiveMember *m = ar_member_at(bank, i, v);
+        const AdaptiveGains *gs = ar_gains_at(bank, i, v);
         trace->velocity[i][k] = m->x2_now;
         trace->velocity_sign[i][k] = expected_sign(
             m->x2_now, gs->velocity_std * sqrt(m->stats.mean_square / gs->innovation_variance));
@@ -431,14 +431,14 @@ static inline void publish_sample(AdaptiveBank *bank, int i, int k, StoTrace *tr
     }
 }
 
-void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[],
+void na_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[],
                   const StoAcceleration a[], int count, StoTrace *trace)
 {
-    implicit_run(o, y, a, count, trace);
+    it_run(o, y, a, count, trace);
     for (int i = 0; i < o->n; ++i) {
         /* which members run changes only with the rules (and the follow, between runs) */
         AdaptiveChoice c = {bank->selected[i], bank->perturbation[i], bank->published[i],
-                            adaptive_running_mask(bank, i)};
+                            ar_running_mask(bank, i)};
         for (int k = 0; k < count; ++k) {
             if (bank->started[i]) {
                 step_started(o, bank, i, k, y[i], a[i], trace, &c);
@@ -463,23 +463,23 @@ void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[]
     }
 }
 
-void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank)
+void na_outputs(SuperTwistingObserver *o, AdaptiveBank *bank)
 {
-    implicit_outputs(o);
+    it_outputs(o);
     const double h = o->h;
     for (int i = 0; i < o->n; ++i) {
         const int selected = bank->selected[i], published = bank->published[i];
         double mean_square = bank->sta[i].mean_square, variance = STA_INNOVATION_VARIANCE;
         bank->bandwidth[i] = 1.0 / h;
         if (published != ADAPTIVE_SUPER_TWISTING && o->implicit.primed) {
-            const AdaptiveMember *m = adaptive_member_at(bank, i, published);
-            implicit_predict(m->z1, m->mid, m->a_mean, m->a_free + o->implicit.point[i],
+            const AdaptiveMember *m = ar_member_at(bank, i, published);
+            it_predict(m->z1, m->mid, m->a_mean, m->a_free + o->implicit.point[i],
                              o->implicit.coulomb[i], m->xi, 0.0, h, &o->x1_hat[i], &o->x2_hat[i]);
-            bank->bandwidth[i] = adaptive_gains_at(bank, i, published)->omega;
+            bank->bandwidth[i] = ar_gains_at(bank, i, published)->omega;
         }
         if (selected != ADAPTIVE_SUPER_TWISTING && o->implicit.primed) {
-            mean_square = adaptive_member_at(bank, i, selected)->stats.mean_square;
-            variance = adaptive_gains_at(bank, i, selected)->innovation_variance;
+            mean_square = ar_member_at(bank, i, selected)->stats.mean_square;
+            variance = ar_gains_at(bank, i, selected)->innovation_variance;
         }
         o->z_eq[i] = bank->perturbation[i] != ADAPTIVE_SUPER_TWISTING && o->implicit.primed
                          ? bank->member[i][bank->perturbation[i]].xi
@@ -491,7 +491,7 @@ void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank)
          * the members estimates R (measured 3.5 % low on white noise). */
         double ratio = mean_square / variance;
         if (o->implicit.primed && bank->started[i])
-            for (unsigned running = adaptive_running_mask(bank, i); running;
+            for (unsigned running = ar_running_mask(bank, i); running;
                  running &= running - 1u) {
                 const int j = lowest_bit(running);
                 ratio = fmin(ratio, bank->member[i][j].stats.mean_square /
@@ -501,7 +501,7 @@ void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank)
     }
 }
 
-int adaptive_settled(const AdaptiveBank *bank, int n)
+int na_settled(const AdaptiveBank *bank, int n)
 {
     for (int i = 0; i < n; ++i)
         if (!bank->started[i] || bank->sta[i].samples * bank->gain < bank->tuning.settled ||
@@ -510,17 +510,17 @@ int adaptive_settled(const AdaptiveBank *bank, int n)
     return 1;
 }
 
-void adaptive_follow_published(AdaptiveBank *bank)
+void na_follow_published(AdaptiveBank *bank)
 {
     unsigned was_running[STO_MAX_DOF];
-    for (int i = 0; i < STO_MAX_DOF; ++i) was_running[i] = adaptive_running_mask(bank, i);
+    for (int i = 0; i < STO_MAX_DOF; ++i) was_running[i] = ar_running_mask(bank, i);
     /* a zoom member moves with its centre: the identifier follows the centre */
     bank->follow = bank->selected[0] >= bank->count ? bank->center[0] : bank->selected[0];
     for (int i = 0; i < STO_MAX_DOF; ++i)
         if (bank->started[i]) wake(bank, i, was_running[i]);
 }
 
-int adaptive_valid(const AdaptiveBank *bank, int n)
+int na_valid(const AdaptiveBank *bank, int n)
 {
     if (bank->count < 0 || bank->count > ADAPTIVE_MAX_MEMBERS) return 0;
     if (bank->stride < 1 || bank->stride > ADAPTIVE_MAX_STRIDE || !(bank->span > 0.0))

@@ -27,7 +27,7 @@
  * Reach: every member runs until the rankings have settled (ADAPTIVE_SETTLED
  * windows of comparisons); then only the members from ADAPTIVE_REACH_SLOWER below
  * to ADAPTIVE_REACH_FASTER above the centre and the published perturbation's
- * member, and the identifier's, run (adaptive_running_mask); the rankings move
+ * member, and the identifier's, run (ar_running_mask); the rankings move
  * the two choices along the grid, each newly running member starting from its
  * nearest running neighbour.  The members far from both choices only cost: with
  * them the step was twice as expensive for the same results (docs/design).
@@ -66,10 +66,10 @@
  *
  * Identification with a linear member: xi is the perturbation through the
  * member's closed-loop filter G, so the regressor must pass the same G
- * (adaptive_shadow_step) for xi = Delta (G phi) to hold; the identifier
+ * (na_shadow_step) for xi = Delta (G phi) to hold; the identifier
  * follows one member, fixed when it starts: the one whose velocity is
  * published then, or the centre if that is a zoom member (the regressors take
- * the centre's velocity, see adaptive_run). */
+ * the centre's velocity, see na_run). */
 #ifndef NOISE_ADAPTIVE_H
 #define NOISE_ADAPTIVE_H
 
@@ -153,13 +153,13 @@ typedef struct {
     int started[STO_MAX_DOF];            /* the members run (the observer has converged) */
     unsigned waited[STO_MAX_DOF];        /* steps before they started */
     unsigned age[STO_MAX_DOF];           /* steps since they started */
-    int selected[STO_MAX_DOF];           /* whose velocity is chosen (adaptive_select): a
+    int selected[STO_MAX_DOF];           /* whose velocity is chosen (ar_select): a
                                           * member index or ADAPTIVE_SUPER_TWISTING */
     int published[STO_MAX_DOF];          /* whose velocity is published at the last sample:
                                           * `selected`, or while the super-twisting injection
                                           * saturates, the member of the smallest one-step
-                                          * mean square (adaptive_stand_in) */
-    int perturbation[STO_MAX_DOF];       /* whose injection is published (adaptive_select) */
+                                          * mean square (ar_stand_in) */
+    int perturbation[STO_MAX_DOF];       /* whose injection is published (ar_select) */
     int follow;                          /* the member the identifier follows */
     double z_filtered[STO_MAX_DOF];      /* the published perturbation */
     double noise_std[STO_MAX_DOF];       /* estimated measurement noise [rad] */
@@ -171,29 +171,29 @@ typedef struct {
 /* Gains of the members for step h (steady-state Riccati, at initialization), with
  * the tuning (NULL: the defaults).  Returns 0, with the defaults taken, if the
  * tuning has a problem. */
-int adaptive_init(AdaptiveBank *bank, double h, const AdaptiveTuning *tuning);
+int na_init(AdaptiveBank *bank, double h, const AdaptiveTuning *tuning);
 
 /* The scheme's run: the super-twisting observer and the members over `count`
  * steps with y held; the trace gets the selected member's values. */
-void adaptive_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[],
+void na_run(SuperTwistingObserver *o, AdaptiveBank *bank, const double y[],
                   const StoAcceleration a[], int count, StoTrace *trace);
 
 /* x1_hat, x2_hat, z_eq, z_filtered, noise_std and bandwidth of the selected members. */
-void adaptive_outputs(SuperTwistingObserver *o, AdaptiveBank *bank);
+void na_outputs(SuperTwistingObserver *o, AdaptiveBank *bank);
 
 /* Whether every DOF's innovations and velocities have been compared for ADAPTIVE_SETTLED
  * windows: the selection is then worth following (the identifier waits for
  * it when it starts by itself). */
-int adaptive_settled(const AdaptiveBank *bank, int n);
+int na_settled(const AdaptiveBank *bank, int n);
 
 /* Fixes the member the identifier follows to the one whose velocity is
  * published now on DOF 1
  * (one member for all DOFs: the rows of the regression share one regressor). */
-void adaptive_follow_published(AdaptiveBank *bank);
+void na_follow_published(AdaptiveBank *bank);
 
 /* One step of G for a regressor entry: state s[3] = position error, velocity
  * error, estimate; returns the estimate (G phi).  s starts at 0. */
-static inline double adaptive_shadow_step(const AdaptiveGains *g, double h, double s[3],
+static inline double na_shadow_step(const AdaptiveGains *g, double h, double s[3],
                                           double phi)
 {
     s[1] += h * (phi - s[2]);
@@ -205,6 +205,6 @@ static inline double adaptive_shadow_step(const AdaptiveGains *g, double h, doub
 }
 
 /* Whether a deserialized bank's counts and indices fit its arrays. */
-int adaptive_valid(const AdaptiveBank *bank, int n);
+int na_valid(const AdaptiveBank *bank, int n);
 
 #endif

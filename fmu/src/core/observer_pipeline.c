@@ -25,7 +25,7 @@ static int information(const ObserverPipeline *p)
     return p->identifier != IDENTIFIER_OFF && p->identifier_form == OP_FORM_INFORMATION;
 }
 
-/* The estimates from the identifier's last solve (info_finish done). */
+/* The estimates from the identifier's last solve (ii_finish done). */
 static void publish(const ObserverPipeline *p, ObserverEstimates *out)
 {
     const int info_form = information(p);
@@ -64,7 +64,7 @@ static void publish(const ObserverPipeline *p, ObserverEstimates *out)
         out->excitation = p->info.excitation;
     }
     out->identifier_active = p->identifier_active;
-    out->converged = sto_converged(&p->obs);
+    out->converged = st_converged(&p->obs);
 }
 
 /* Model feedback applies: the built-in joint's LSM in information form with the
@@ -83,7 +83,7 @@ static void take_identified_model(ObserverPipeline *p)
     for (int j = 0; j < p->m; ++j) {
         const int k = p->selected[j];
         const double delta = p->info.delta[0][j];
-        double D = delta * feedback_weight(&p->feedback, delta, p->info.std_error[0][j],
+        double D = delta * mf_weight(&p->feedback, delta, p->info.std_error[0][j],
                                            p->info.active_time);
         if (k == JOINT_INPUT) { /* Delta = b - bbar */
             D = fmin(fmax(D, fmin(-0.5 * p->b, p->b)), fmax(-0.5 * p->b, p->b));
@@ -139,19 +139,19 @@ int op_init(ObserverPipeline *p, const double alpha1[], const double alpha2[],
             const double x1_hat0[], const double x2_hat0[], const ObserverInputs *in,
             ObserverEstimates *out, const StoTuning *tuning)
 {
-    if (tuning && sto_tuning_problem(tuning)) return -1;
-    const StoTuning t = tuning ? *tuning : sto_default_tuning();
-    sto_init(&p->obs, p->n, p->h, alpha1, alpha2, p->tau, x1_hat0, x2_hat0);
-    sto_configure(&p->obs, (StoScheme)p->scheme, p->convergence_window);
+    if (tuning && tuning_problem(tuning)) return -1;
+    const StoTuning t = tuning ? *tuning : tuning_default();
+    st_init(&p->obs, p->n, p->h, alpha1, alpha2, p->tau, x1_hat0, x2_hat0);
+    st_configure(&p->obs, (StoScheme)p->scheme, p->convergence_window);
     p->obs.learning_gain = t.implicit.learning_gain;
-    adaptive_init(&p->bank, p->h, &t.bank);
+    na_init(&p->bank, p->h, &t.bank);
     p->feedback = t.feedback;
     memset(p->shadow, 0, sizeof p->shadow);
     identifier_init(&p->id, (IdentifierKind)p->identifier, p->n, p->m, p->h, p->rho, p->R);
     if (p->identifier == IDENTIFIER_MFF && p->identifier_form == OP_FORM_INFORMATION &&
         p->mff_drift && 2 * p->m > ID_MAX_REGRESSORS)
         return -1;
-    info_init(&p->info, (IdentifierKind)p->identifier, p->n, p->m, p->h, p->rho, p->R,
+    ii_init(&p->info, (IdentifierKind)p->identifier, p->n, p->m, p->h, p->rho, p->R,
               p->mff_drift, &t);
     /* Constant parameters need no tracking: the LSM filters the regression over
      * tau_identifier, long enough to keep velocity noise and the plant's
@@ -173,7 +173,7 @@ int op_init(ObserverPipeline *p, const double alpha1[], const double alpha2[],
     memset(p->model_shadow, 0, sizeof p->model_shadow);
     p->model_z = 0.0;
     out->b_hat = p->b;
-    if (information(p)) info_solve(&p->info);
+    if (information(p)) ii_solve(&p->info);
     publish(p, out);
     p->publish_pending = 0;
     return 0;
@@ -182,7 +182,7 @@ int op_init(ObserverPipeline *p, const double alpha1[], const double alpha2[],
 void op_restart_identifier(ObserverPipeline *p)
 {
     identifier_init(&p->id, (IdentifierKind)p->identifier, p->n, p->m, p->h, p->rho, p->R);
-    info_reset(&p->info);
+    ii_reset(&p->info);
     p->identifier_active = 0;
     update_model(p);
 }
@@ -195,9 +195,9 @@ void op_nominal_model(const ObserverPipeline *p, const ObserverInputs *in,
 {
     memset(regressor, 0, MAX_L * sizeof *regressor);
     if (p->nominal_model == OP_NOMINAL_JOINT) {
-        joint_position_basis(in->y[0], regressor);
+        jm_position_basis(in->y[0], regressor);
         regressor[JOINT_INPUT] = in->u;
-        acceleration[0] = joint_acceleration(p->b_model, p->c_model, in->u, regressor);
+        acceleration[0] = jm_acceleration(p->b_model, p->c_model, in->u, regressor);
     } else {
         for (int i = 0; i < p->n; ++i) {
             double a = in->F[i];
@@ -212,7 +212,7 @@ void op_nominal_model(const ObserverPipeline *p, const ObserverInputs *in,
 /* The regressor of step k of a trace: the joint's velocity entries.  The
  * implicit schemes take the previous sample's regressor, to match the
  * injection, a second difference over the two intervals around that sample:
- * - its Coulomb entry becomes the mean sign around it (implicit_mean_sign)
+ * - its Coulomb entry becomes the mean sign around it (it_mean_sign)
  *   once the velocity after it is known, where the sign is hard (a smoothed
  *   expected sign of a linear member is left as it is);
  * - its input entry becomes the mean of the inputs held over the two
@@ -227,7 +227,7 @@ static void take_velocity(ObserverPipeline *p, const StoTrace *trace, int k)
     if (p->scheme == STO_SCHEME_PAPER) return;
     const int slot = p->slot_velocity_sign;
     if (slot < MAX_L && fabs(p->phi_previous[slot]) == 1.0)
-        p->phi_previous[slot] = implicit_mean_sign(p->velocity_before[0], p->velocity_before[1], v);
+        p->phi_previous[slot] = it_mean_sign(p->velocity_before[0], p->velocity_before[1], v);
     p->velocity_before[0] = p->velocity_before[1];
     p->velocity_before[1] = v;
     if (p->slot_input < MAX_L) {
@@ -242,8 +242,8 @@ static int start_identifier(ObserverPipeline *p, double t)
 {
     p->identifier_active = t >= p->t_id &&
                            (p->identifier_start == OP_START_AT_T_ID ||
-                            (sto_converged(&p->obs) &&
-                             (p->scheme != STO_SCHEME_ADAPTIVE || adaptive_settled(&p->bank, p->n))));
+                            (st_converged(&p->obs) &&
+                             (p->scheme != STO_SCHEME_ADAPTIVE || na_settled(&p->bank, p->n))));
     if (p->identifier_active) {
         /* Both filters start from zero together: z = Delta phi then holds for
          * the filtered pair exactly, with no trace of the observer's transient. */
@@ -252,7 +252,7 @@ static int start_identifier(ObserverPipeline *p, double t)
         memset(p->shadow, 0, sizeof p->shadow);
         memset(p->model_shadow, 0, sizeof p->model_shadow);
         p->model_z = 0.0;
-        if (p->scheme == STO_SCHEME_ADAPTIVE) adaptive_follow_published(&p->bank);
+        if (p->scheme == STO_SCHEME_ADAPTIVE) na_follow_published(&p->bank);
     }
     return p->identifier_active;
 }
@@ -289,13 +289,13 @@ KERNEL identify_run(ObserverPipeline *p, const StoTrace *trace, int count, const
         if (feedback) { /* the injection against the nominal model: + D phi, filtered alike */
             double shift = 0.0;
             UNROLL for (int j = 0; j < m; ++j) shift += p->model_delta[j] * sample[j];
-            if (G) shift = adaptive_shadow_step(G, p->h, p->model_shadow, shift);
+            if (G) shift = na_shadow_step(G, p->h, p->model_shadow, shift);
             p->model_z += g * (shift - p->model_z);
             samples[k].z[0] += p->model_z;
         }
         if (G) {
             UNROLL for (int j = 0; j < m; ++j) {
-                const double through_g = adaptive_shadow_step(G, p->h, p->shadow[j], sample[j]);
+                const double through_g = na_shadow_step(G, p->h, p->shadow[j], sample[j]);
                 phi[j] = p->filter_regressor
                              ? (p->phi_filtered[j] += g * (through_g - p->phi_filtered[j]))
                              : through_g;
@@ -314,7 +314,7 @@ KERNEL identify_run(ObserverPipeline *p, const StoTrace *trace, int count, const
         }
     }
     if (p->identifier_form == OP_FORM_PAPER) identifier_run(&p->id, samples, count);
-    else info_run(&p->info, samples, count);
+    else ii_run(&p->info, samples, count);
 }
 
 /* The identified model: the information form's factor (and the excitation's
@@ -323,8 +323,8 @@ KERNEL identify_run(ObserverPipeline *p, const StoTrace *trace, int count, const
 static void model_update(ObserverPipeline *p)
 {
     if (information(p)) {
-        info_factor(&p->info);
-        if (feedback_on(p) && p->identifier_active) info_finish(&p->info);
+        ii_factor(&p->info);
+        if (feedback_on(p) && p->identifier_active) ii_finish(&p->info);
     }
     update_model(p);
 }
@@ -358,9 +358,9 @@ void op_run(ObserverPipeline *p, const ObserverInputs *in, double start_time, ui
                           : left < most                       ? (int)left
                                                               : (int)most;
         if (p->scheme == STO_SCHEME_ADAPTIVE)
-            adaptive_run(&p->obs, &p->bank, in->y, acceleration, count, &trace);
+            na_run(&p->obs, &p->bank, in->y, acceleration, count, &trace);
         else
-            sto_run(&p->obs, in->y, acceleration, count, &trace);
+            os_run(&p->obs, in->y, acceleration, count, &trace);
         if (identifying) {
             if (p->identifier_active || start_identifier(p, start_time + (double)k * p->h)) {
                 WITH_CONSTANT_M(p->m, identify_run, p, &trace, count);
@@ -379,11 +379,11 @@ void op_run(ObserverPipeline *p, const ObserverInputs *in, double start_time, ui
 
 void op_communicate(ObserverPipeline *p, ObserverEstimates *out)
 {
-    if (p->scheme == STO_SCHEME_ADAPTIVE) adaptive_outputs(&p->obs, &p->bank);
-    else sto_update_outputs(&p->obs);
+    if (p->scheme == STO_SCHEME_ADAPTIVE) na_outputs(&p->obs, &p->bank);
+    else os_update_outputs(&p->obs);
     if (!information(p)) update_model(p); /* the paper's form: the nominal model */
     out->identifier_active = p->identifier_active;
-    out->converged = sto_converged(&p->obs);
+    out->converged = st_converged(&p->obs);
     p->publish_pending = 1;
 }
 
@@ -391,7 +391,7 @@ int op_publish(ObserverPipeline *p, ObserverEstimates *out)
 {
     if (!p->publish_pending) return 0;
     p->publish_pending = 0;
-    if (information(p)) info_finish(&p->info);
+    if (information(p)) ii_finish(&p->info);
     publish(p, out);
     return 1;
 }

@@ -62,7 +62,7 @@ typedef struct {
     SuperTwistingObserver obs;
     AdaptiveBank bank;          /* scheme 3: the linear observers beside obs */
     double shadow[OP_MAX_L][3]; /* scheme 3: the selected regressors through the followed
-                                 * member's filter G (adaptive_shadow_step) */
+                                 * member's filter G (na_shadow_step) */
     Identifier id;              /* identifier_form = 1 (the paper's explicit Euler) */
     InformationIdentifier info; /* identifier_form = 2 */
     int identifier_active;

@@ -26,7 +26,7 @@ typedef struct {
     double held, point, viscous, coulomb;
 } StoAcceleration;
 
-/* Longest run of steps sto_run takes at once. */
+/* Longest run of steps os_run takes at once. */
 #define STO_RUN_MAX 32
 
 /* What each step of a run leaves for the identifier, per DOF and step. */

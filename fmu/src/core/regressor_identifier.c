@@ -30,13 +30,13 @@ static int init_settings(RegressorIdentifier *id, IdentifierKind kind, int rows,
     /* an int: a tiny h (below RRI_BATCH_TIME / RRI_MAX_BATCH_SAMPLES) gets shorter batches */
     id->batch_samples = (int)fmin(ceil(RRI_BATCH_TIME / h), RRI_MAX_BATCH_SAMPLES);
     id->batch_lambda = pow(id->lambda, 2.0 * id->batch_samples); /* variances forget twice as fast */
-    const LeaveOutTuning t = leave_out ? *leave_out : sto_default_tuning().leave_out;
+    const LeaveOutTuning t = leave_out ? *leave_out : tuning_default().leave_out;
     leave_out_init(&id->leave_out, &t, id->lambda, rho, kind == IDENTIFIER_MFF ? R : 1.0, p);
-    rri_reset(id);
+    ri_reset(id);
     return 0;
 }
 
-int rri_init(RegressorIdentifier *id, IdentifierKind kind, int rows, int p, const int columns[],
+int ri_init(RegressorIdentifier *id, IdentifierKind kind, int rows, int p, const int columns[],
              const double torque_scale[], double h, double rho, double R,
              const LeaveOutTuning *leave_out)
 {
@@ -68,7 +68,7 @@ int rri_init(RegressorIdentifier *id, IdentifierKind kind, int rows, int p, cons
     return init_settings(id, kind, rows, p, torque_scale, h, rho, R, leave_out);
 }
 
-int rri_init_dense(RegressorIdentifier *id, IdentifierKind kind, int rows, int p,
+int ri_init_dense(RegressorIdentifier *id, IdentifierKind kind, int rows, int p,
                    const double torque_scale[], double h, double rho, double R,
                    const LeaveOutTuning *leave_out)
 {
@@ -83,7 +83,7 @@ int rri_init_dense(RegressorIdentifier *id, IdentifierKind kind, int rows, int p
     return init_settings(id, kind, rows, p, torque_scale, h, rho, R, leave_out);
 }
 
-void rri_reset(RegressorIdentifier *id)
+void ri_reset(RegressorIdentifier *id)
 {
     memset(id->P, 0, sizeof id->P);
     memset(id->b, 0, sizeof id->b);
@@ -195,7 +195,7 @@ static int leave_out_rule(RegressorIdentifier *id, const RbRegressor *Y)
     return use;
 }
 
-void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
+void ri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
 {
     const int p = id->p;
     int use = 1;
@@ -249,7 +249,7 @@ void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
     anchor_slice(id);
 }
 
-void rri_filter_regressor(const RegressorIdentifier *id, const RbRegressor *Y,
+void ri_filter_regressor(const RegressorIdentifier *id, const RbRegressor *Y,
                           const double weight[], double gain, RbRegressor *filtered)
 {
     for (int i = 0; i < id->rows; ++i) {
@@ -263,7 +263,7 @@ void rri_filter_regressor(const RegressorIdentifier *id, const RbRegressor *Y,
     }
 }
 
-int rri_solve(RegressorIdentifier *id)
+int ri_solve(RegressorIdentifier *id)
 {
     if (factorize(id) != 0) return -1;
     memcpy(id->delta, id->b, sizeof id->b);
@@ -271,7 +271,7 @@ int rri_solve(RegressorIdentifier *id)
     return 0;
 }
 
-void rri_statistics(RegressorIdentifier *id)
+void ri_statistics(RegressorIdentifier *id)
 {
     const int p = id->p;
     /* Gamma's columns g_k give trace(Gamma) and the sandwich g_k^T S g_k */

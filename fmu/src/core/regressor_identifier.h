@@ -12,7 +12,7 @@
  *   with lambda = R^h (MFF) or 1 (LSM), W = diag(1/s_i^2) the joints' torque
  *   scales (so that joints with large torques do not drown the others);
  * - stabilized forgetting toward rho I: Gamma = P^-1 <= I / rho always;
- * - Delta_hat = P^-1 b by Cholesky only when asked (rri_solve), so the
+ * - Delta_hat = P^-1 b by Cholesky only when asked (ri_solve), so the
  *   internal step costs at most n p (p + 3) / 2 multiply-adds, plus the
  *   running solution (the anchor): the solve of a snapshot of P and b taken every
  *   RRI_ANCHOR_INTERVAL samples, spread in equal shares of work over the
@@ -93,54 +93,54 @@ typedef struct {
  * torque_scale[rows]: per-joint torque scales s_i > 0 (NULL: 1); leave_out: MFF's rule
  * (NULL: tuning.h's).
  * Returns 0, or -1 for sizes, columns, h, rho or R out of range. */
-int rri_init(RegressorIdentifier *id, IdentifierKind kind, int rows, int p, const int columns[],
+int ri_init(RegressorIdentifier *id, IdentifierKind kind, int rows, int p, const int columns[],
              const double torque_scale[], double h, double rho, double R,
              const LeaveOutTuning *leave_out);
 
 /* The same over a dense regressor of any model (a model file's, model_pipeline.h):
  * Y's columns 0..p-1 are the parameters and every row may reach every column. */
-int rri_init_dense(RegressorIdentifier *id, IdentifierKind kind, int rows, int p,
+int ri_init_dense(RegressorIdentifier *id, IdentifierKind kind, int rows, int p,
                    const double torque_scale[], double h, double rho, double R,
                    const LeaveOutTuning *leave_out);
 
 /* Back to the nominal parameters and P = rho I. */
-void rri_reset(RegressorIdentifier *id);
+void ri_reset(RegressorIdentifier *id);
 
 /* One internal step: z the torque residual (rows), Y the full regressor in the
  * layout of rb_regressor, whose structural zeros are not read (joint i's row
  * for the links before i and for the other joints' friction): the step costs
  * the regressor's nonzero products only, about a third of n p (p + 3) / 2 for
  * a 7-joint arm. */
-void rri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y);
+void ri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y);
 
-/* The entries of Y that rri_step reads (row i's base columns), weighted and
+/* The entries of Y that ri_step reads (row i's base columns), weighted and
  * through a first-order filter: filtered <- filtered + gain (weight_i Y - filtered)
  * (gain 1: filtered = weight_i Y).  The other entries of `filtered` are left as
  * they are (zero-initialize it).  Costs one multiply-add per entry read. */
-void rri_filter_regressor(const RegressorIdentifier *id, const RbRegressor *Y,
+void ri_filter_regressor(const RegressorIdentifier *id, const RbRegressor *Y,
                           const double weight[], double gain, RbRegressor *filtered);
 
 /* Solves Delta_hat = P^-1 b (p^3/6 multiply-adds).  Returns 0, or -1 if P is
  * not positive definite (cannot happen with rho > 0 and finite data; the
  * estimate is then kept).  Between solves, the anchor is an estimate of P and b
- * RRI_ANCHOR_INTERVAL to 2 RRI_ANCHOR_INTERVAL - 1 samples old (rri_anchor_age),
+ * RRI_ANCHOR_INTERVAL to 2 RRI_ANCHOR_INTERVAL - 1 samples old (ri_anchor_age),
  * which the step keeps at a bounded cost per step: what an FMU can output at
  * every communication point. */
-int rri_solve(RegressorIdentifier *id);
+int ri_solve(RegressorIdentifier *id);
 
 /* Samples since the snapshot of P and b that the anchor solves (after the first
  * solve since the reset; before it the anchor is the reset's 0, exact). */
-static inline int rri_anchor_age(const RegressorIdentifier *id)
+static inline int ri_anchor_age(const RegressorIdentifier *id)
 {
     return id->anchor_age + RRI_ANCHOR_INTERVAL;
 }
 
-/* After rri_solve: the standard errors, trace(Gamma) and the excitation
+/* After ri_solve: the standard errors, trace(Gamma) and the excitation
  * (p^3 multiply-adds: at a slower rate than the estimate, or spread over
  * internal steps by statistics_job.h in the same arithmetic).  The inverse
  * iteration for the smallest eigenvalue starts from the uniform vector and
  * stops at convergence (information_statistics.h's STATS_EIGEN_TOLERANCE), after
  * STATS_EIGEN_ITERATIONS iterations at most. */
-void rri_statistics(RegressorIdentifier *id);
+void ri_statistics(RegressorIdentifier *id);
 
 #endif

@@ -92,7 +92,7 @@ int ro_step(RobotObserver *o, const RigidBodyModel *model, const double y[], con
     } else {
         for (int i = 0; i < n; ++i) { /* each joint's corrector (implicit_twisting.h) */
             RobotDof *s = &o->dof[i];
-            implicit_correct(y[i], s->a_mean, h, o->h_squared, o->h_squared * o->alpha1[i],
+            it_correct(y[i], s->a_mean, h, o->h_squared, o->h_squared * o->alpha1[i],
                              h * o->alpha2[i], o->alpha1[i], o->inverse_h_squared, o->rate_gain,
                              &s->z1, &s->mid, &s->v, &s->rate, &s->previous_sign);
             /* the velocity difference across the previous sample over h */
@@ -118,7 +118,7 @@ void ro_outputs(RobotObserver *o)
         const RobotDof *s = &o->dof[i];
         /* no Coulomb term in the prediction (a_current has the joint's friction), the
          * injection held */
-        implicit_predict(s->z1, s->mid, s->a_mean, s->a_current, 0.0, s->v, 0.0, o->h,
+        it_predict(s->z1, s->mid, s->a_mean, s->a_current, 0.0, s->v, 0.0, o->h,
                          &o->x1_hat[i], &o->x2_hat[i]);
     }
 }
@@ -178,9 +178,9 @@ void ro_regression_step(RobotRegression *r, const RigidBodyModel *model, const R
             rb_regressor_torque(model, &Y, r->pi_nominal, nominal);
             for (int i = 0; i < n; ++i)
                 r->z[i] += gain * (r->weight[i] * (r->previous_u[i] - nominal[i]) - r->z[i]);
-            rri_filter_regressor(id, &Y, r->weight, gain, &r->Y);
+            ri_filter_regressor(id, &Y, r->weight, gain, &r->Y);
             r->started = 1;
-            rri_step(id, r->z, &r->Y);
+            ri_step(id, r->z, &r->Y);
         }
     }
     for (int i = 0; i < n; ++i) {

@@ -114,7 +114,7 @@ int ro_regression_init(RobotRegression *r, const RigidBodyModel *model, double h
 /* The filters start again at the next sample (with its values: no transient). */
 void ro_regression_restart(RobotRegression *r);
 
-/* After ro_step(o, model, y, u): one identifier step (rri_step) with the
+/* After ro_step(o, model, y, u): one identifier step (ri_step) with the
  * regression of the previous sample (none on the first sample, nor with id
  * NULL: the identifier is not running, the sample is only remembered). */
 void ro_regression_step(RobotRegression *r, const RigidBodyModel *model, const RobotObserver *o,

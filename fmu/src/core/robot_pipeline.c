@@ -45,7 +45,7 @@ RpProblem rp_init(const RobotPipeline *p, const RigidBodyModel *model, const Rob
                                             s->reversal_margin) != 0)
         return RP_BAD_REGRESSION;
     memset(p->identifier, 0, sizeof *p->identifier);
-    if (s->identifier && rri_init(p->identifier, (IdentifierKind)s->identifier, s->n, s->p,
+    if (s->identifier && ri_init(p->identifier, (IdentifierKind)s->identifier, s->n, s->p,
                                   s->columns, s->torque_scale, s->h, s->rho, s->R, NULL) != 0)
         return RP_BAD_IDENTIFIER;
     sj_init(p->statistics, s->identifier ? s->p : 1, sj_interval_steps(s->statistics_interval, s->h),

@@ -27,7 +27,7 @@ double sj_interval_steps(double seconds, double h)
 
 const double *sj_freshest_estimate(const StatisticsJob *job, const RegressorIdentifier *id)
 {
-    return job->completed > 0.0 && job->age < rri_anchor_age(id) ? job->delta : id->anchor;
+    return job->completed > 0.0 && job->age < ri_anchor_age(id) ? job->delta : id->anchor;
 }
 
 void sj_reset(StatisticsJob *job)

@@ -1,5 +1,5 @@
-/* The regressor identifier's solve with statistics (rri_solve and
- * rri_statistics: the estimate, the standard errors by the sandwich
+/* The regressor identifier's solve with statistics (ri_solve and
+ * ri_statistics: the estimate, the standard errors by the sandwich
  * P^-1 S P^-1, trace(Gamma) and the excitation) spread over internal steps, so
  * that no step of a hard real-time loop carries its O(p^3) work at once.
  *
@@ -11,12 +11,12 @@
  * internal step (sj_step) does units of work (a column of the Cholesky
  * factor, a solve, a sandwich row, an inverse iteration) up to `budget`
  * multiply-adds; the results are published when the job completes.  Every unit
- * is the arithmetic of rri_solve and rri_statistics, in their order: the
+ * is the arithmetic of ri_solve and ri_statistics, in their order: the
  * results are those of the full solve at the snapshot.  The inverse iteration
  * for the smallest eigenvalue of P starts from the previous job's eigenvector
  * (warm start) and stops when its estimate changes by less than
  * STATS_EIGEN_TOLERANCE (relative; at most STATS_EIGEN_ITERATIONS iterations), as
- * rri_statistics' does from its own start: the excitations agree to that
+ * ri_statistics' does from its own start: the excitations agree to that
  * tolerance, the other results exactly.
  * Plain C, no allocation; the offline path (native/robot_native.c) runs the same
  * schedule as the RobotObserver FMU. */
@@ -79,7 +79,7 @@ const double *sj_freshest_estimate(const StatisticsJob *job, const RegressorIden
  * no longer counts as fresher than the identifier's running solution. */
 void sj_reset(StatisticsJob *job);
 
-/* An internal step (after rri_step): a slice of the running job.  Returns 1 if
+/* An internal step (after ri_step): a slice of the running job.  Returns 1 if
  * the job completed in this step. */
 int sj_step(StatisticsJob *job);
 

@@ -3,7 +3,7 @@
 #include <math.h>
 #include <string.h>
 
-void sto_init(SuperTwistingObserver *o, int n, double h, const double alpha1[],
+void st_init(SuperTwistingObserver *o, int n, double h, const double alpha1[],
               const double alpha2[], double tau, const double x1_hat0[], const double x2_hat0[])
 {
     memset(o, 0, sizeof *o);
@@ -29,20 +29,20 @@ void sto_init(SuperTwistingObserver *o, int n, double h, const double alpha1[],
     }
 }
 
-void sto_configure(SuperTwistingObserver *o, StoScheme scheme, double convergence_window)
+void st_configure(SuperTwistingObserver *o, StoScheme scheme, double convergence_window)
 {
     o->scheme = scheme;
     o->rate_gain = convergence_window > o->h ? o->h / convergence_window : 1.0;
 }
 
-int sto_converged(const SuperTwistingObserver *o)
+int st_converged(const SuperTwistingObserver *o)
 {
     for (int i = 0; i < o->n; ++i)
         if (!(o->switching_rate[i] >= STO_CONVERGED_RATE)) return 0;
     return 1;
 }
 
-void sto_run_paper(SuperTwistingObserver *o, const double y[], const StoAcceleration a[],
+void st_run_paper(SuperTwistingObserver *o, const double y[], const StoAcceleration a[],
                    int count, StoTrace *trace)
 {
     const double h = o->h, g = o->filter_gain, rate_gain = o->rate_gain;
@@ -52,10 +52,10 @@ void sto_run_paper(SuperTwistingObserver *o, const double y[], const StoAccelera
         double x1 = o->x1_hat[i], x2 = o->x2_hat[i], z = o->z_eq[i], zf = o->z_filtered[i];
         double rate = o->switching_rate[i], previous_sign = o->previous_sign[i];
         for (int k = 0; k < count; ++k) {
-            const double sign_v = sto_sign(x2), acceleration = sto_acceleration(ai, x2, sign_v);
-            const double e = yi - x1, s = sto_sign(e);
+            const double sign_v = st_sign(x2), acceleration = st_acceleration(ai, x2, sign_v);
+            const double e = yi - x1, s = st_sign(e);
             z = alpha1 * s;
-            sto_track_switching(&rate, &previous_sign, rate_gain, s);
+            st_track_switching(&rate, &previous_sign, rate_gain, s);
             trace->velocity[i][k] = x2;
             trace->velocity_sign[i][k] = sign_v;
             x1 += h * (x2 + alpha2 * sqrt(fabs(e)) * s);

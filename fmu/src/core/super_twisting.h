@@ -27,33 +27,33 @@ typedef struct {
     double switching_rate[STO_MAX_DOF];
     double previous_sign[STO_MAX_DOF];
     double rate_gain;            /* h / convergence window */
-    double learning_gain;        /* the implicit scheme's (tuning.h; sto_init sets the
+    double learning_gain;        /* the implicit scheme's (tuning.h; st_init sets the
                                   * default, a caller may set another after it) */
     int scheme;                  /* StoScheme */
     ImplicitState implicit; /* the implicit scheme's (schemes 2 and 3) */
 } SuperTwistingObserver;
 
 /* Sets gains, filter and initial estimates; z_eq and its filter start at 0. */
-void sto_init(SuperTwistingObserver *o, int n, double h, const double alpha1[],
+void st_init(SuperTwistingObserver *o, int n, double h, const double alpha1[],
               const double alpha2[], double tau, const double x1_hat0[], const double x2_hat0[]);
 
-/* Selects the scheme and the convergence window [s] (after sto_init). */
-void sto_configure(SuperTwistingObserver *o, StoScheme scheme, double convergence_window);
+/* Selects the scheme and the convergence window [s] (after st_init). */
+void st_configure(SuperTwistingObserver *o, StoScheme scheme, double convergence_window);
 
 /* Runs `count` (1..STO_RUN_MAX) steps of the paper's explicit Euler on (12)
  * with the measurement y held, each DOF over the run; trace receives every
- * step.  The scheme switch (sto_run) is observer_scheme.h's. */
-void sto_run_paper(SuperTwistingObserver *o, const double y[], const StoAcceleration a[],
+ * step.  The scheme switch (os_run) is observer_scheme.h's. */
+void st_run_paper(SuperTwistingObserver *o, const double y[], const StoAcceleration a[],
                    int count, StoTrace *trace);
 
 /* All DOFs converged by the switching-rate test. */
-int sto_converged(const SuperTwistingObserver *o);
+int st_converged(const SuperTwistingObserver *o);
 
 /* sign with sign(0) = 0, as the observer requires. */
-static inline double sto_sign(double x) { return x > 0.0 ? 1.0 : x < 0.0 ? -1.0 : 0.0; }
+static inline double st_sign(double x) { return x > 0.0 ? 1.0 : x < 0.0 ? -1.0 : 0.0; }
 
 /* Nominal acceleration at the velocity v, whose sign is sign_v. */
-static inline double sto_acceleration(StoAcceleration a, double v, double sign_v)
+static inline double st_acceleration(StoAcceleration a, double v, double sign_v)
 {
     return a.held + a.point - a.viscous * v - a.coulomb * sign_v;
 }
@@ -61,7 +61,7 @@ static inline double sto_acceleration(StoAcceleration a, double v, double sign_v
 /* Convergence detector update with s = sign(e): a step counts as switching if
  * e = 0 or sign(e) flipped.  (On a DOF's rate and previous sign, which the
  * runs keep in locals.) */
-static inline void sto_track_switching(double *rate, double *previous_sign, double gain, double s)
+static inline void st_track_switching(double *rate, double *previous_sign, double gain, double s)
 {
     const double switched = (s == 0.0 || s != *previous_sign) ? 1.0 : 0.0;
     *rate += gain * (switched - *rate);

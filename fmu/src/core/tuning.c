@@ -3,7 +3,7 @@
 #include <math.h>
 #include <stddef.h>
 
-StoTuning sto_default_tuning(void)
+StoTuning tuning_default(void)
 {
     const StoTuning tuning = {
         .bank = {.lowest_bandwidth = ADAPTIVE_LOWEST_BANDWIDTH,
@@ -34,7 +34,7 @@ StoTuning sto_default_tuning(void)
     return tuning;
 }
 
-const char *adaptive_tuning_problem(const AdaptiveTuning *t)
+const char *tuning_adaptive_problem(const AdaptiveTuning *t)
 {
     if (!(t->lowest_bandwidth > 0.0 && isfinite(t->lowest_bandwidth)))
         return "lowest_bandwidth must be positive and finite";
@@ -62,9 +62,9 @@ const char *adaptive_tuning_problem(const AdaptiveTuning *t)
 static int positive(double x) { return x > 0.0 && isfinite(x); }
 static int non_negative(double x) { return x >= 0.0 && isfinite(x); }
 
-const char *sto_tuning_problem(const StoTuning *t)
+const char *tuning_problem(const StoTuning *t)
 {
-    const char *bank = adaptive_tuning_problem(&t->bank);
+    const char *bank = tuning_adaptive_problem(&t->bank);
     if (bank) return bank;
     if (!(t->implicit.learning_gain > 0.0 && t->implicit.learning_gain <= 1.0))
         return "implicit.learning_gain must be in (0, 1]";

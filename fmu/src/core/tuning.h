@@ -115,7 +115,7 @@
 
 /* ---- the same values at run time ------------------------------------------------------
  * Each part of the core takes its group of this table when it is initialized
- * (sto_default_tuning: the values above), so that a caller may run it with others:
+ * (tuning_default: the values above), so that a caller may run it with others:
  * a study of one rule, a test.  The limits that size arrays or bound a restored
  * state's counters (IMPLICIT_REVERSAL_SAMPLES, IMPLICIT_SMOOTH_SAMPLES,
  * INFO_ANCHOR_MAX_INTERVAL, INFO_STD_INTERVAL, RRI_ANCHOR_INTERVAL) stay compile-time. */
@@ -181,10 +181,10 @@ typedef struct {
 } StoTuning;
 
 /* The table's values. */
-StoTuning sto_default_tuning(void);
+StoTuning tuning_default(void);
 
 /* What is wrong with a tuning, or its bank's part (NULL: nothing). */
-const char *sto_tuning_problem(const StoTuning *tuning);
-const char *adaptive_tuning_problem(const AdaptiveTuning *tuning);
+const char *tuning_problem(const StoTuning *tuning);
+const char *tuning_adaptive_problem(const AdaptiveTuning *tuning);
 
 #endif

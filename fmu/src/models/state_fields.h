@@ -24,7 +24,7 @@
     STATE_FIELD(T, o.implicit.smooth_samples, FIELD_INT, 0, IMPLICIT_SMOOTH_SAMPLES)
 
 /* An AdaptiveBank (noise_adaptive.h); its indices below its member count are
- * adaptive_valid's to check. */
+ * na_valid's to check. */
 #define BANK_STATE_FIELDS(T, b)                                                                  \
     DERIVED_FIELD(T, b.tuning), DERIVED_FIELD(T, b.count), DERIVED_FIELD(T, b.gain),            \
     DERIVED_FIELD(T, b.stride),                                                                  \

@@ -27,16 +27,16 @@ static int coulomb_level_learned(void)
     const double h = 1e-4, c = 0.3;
     SuperTwistingObserver o;
     const double a1[1] = {2.0}, a2[1] = {5.0}, x0[1] = {0.0}, v0[1] = {1.0};
-    sto_init(&o, 1, h, a1, a2, 0.0, x0, v0);
-    sto_configure(&o, STO_SCHEME_IMPLICIT, 0.05);
+    st_init(&o, 1, h, a1, a2, 0.0, x0, v0);
+    st_configure(&o, STO_SCHEME_IMPLICIT, 0.05);
     double near = 0.0, away = 0.0, z_error = 0.0;
     const long steps = (long)(40.0 / h + 0.5);
     for (long k = 0; k < steps; ++k) {
         const double t = k * h, t1 = t + h;
         const double y[1] = {sin(t)};
         const StoAcceleration nominal[1] = {{.held = -sin(t), .viscous = 0.0, .coulomb = c}};
-        sto_run(&o, y, nominal, 1, NULL);
-        sto_update_outputs(&o);
+        os_run(&o, y, nominal, 1, NULL);
+        os_update_outputs(&o);
         if (t1 < 30.0) continue;
         /* distance to the nearest reversal, t = pi/2 + j pi, in samples */
         const double from_reversal = fabs(remainder(t1 - 0.5 * PI, PI)) / h;
@@ -44,7 +44,7 @@ static int coulomb_level_learned(void)
         if (from_reversal <= 3.0) near = fmax(near, e2);
         else {
             away = fmax(away, e2);
-            z_error = fmax(z_error, fabs(o.z_eq[0] - c * sto_sign(cos(t))));
+            z_error = fmax(z_error, fabs(o.z_eq[0] - c * st_sign(cos(t))));
         }
     }
     int failures = 0;
@@ -58,7 +58,7 @@ static int coulomb_level_learned(void)
     return failures;
 }
 
-/* implicit_mean_sign: the triangle-weighted mean of sign(v) around a sample. */
+/* it_mean_sign: the triangle-weighted mean of sign(v) around a sample. */
 static int mean_sign_of_a_reversal(void)
 {
     int failures = 0;
@@ -69,7 +69,7 @@ static int mean_sign_of_a_reversal(void)
         {-1.0, -3.0, 1.0, -0.9375}, /* 3/4 of the way: 1/16 of that side's weight flips */
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
-        const double m = implicit_mean_sign(cases[i].before, cases[i].v, cases[i].after);
+        const double m = it_mean_sign(cases[i].before, cases[i].v, cases[i].after);
         failures += check(fabs(m - cases[i].expected) < 1e-15, "mean sign (%g, %g, %g) = %.17g "
                           "(expected %g)", cases[i].before, cases[i].v, cases[i].after, m,
                           cases[i].expected);

@@ -60,16 +60,16 @@ static int lsm_exact_data(void)
      * 20 s of data.  Measured: 1.08e-7. */
     {
         InformationIdentifier info;
-        info_init(&info, IDENTIFIER_LSM, 2, 3, 1e-3, 1e-6, 0.5, 0, NULL);
+        ii_init(&info, IDENTIFIER_LSM, 2, 3, 1e-3, 1e-6, 0.5, 0, NULL);
         for (long k = 0; k < 20000; ++k) {
             const double t = k * 1e-3;
             const double phi[3] = {sin(t), cos(3 * t), 1.0};
             double z[2];
             for (int i = 0; i < 2; ++i)
                 z[i] = truth[i][0] * phi[0] + truth[i][1] * phi[1] + truth[i][2] * phi[2];
-            info_step(&info, z, phi);
+            ii_step(&info, z, phi);
         }
-        const int solved = info_solve(&info);
+        const int solved = ii_solve(&info);
         double worst = 0.0;
         for (int i = 0; i < 2; ++i)
             for (int k = 0; k < 3; ++k)
@@ -119,7 +119,7 @@ static int lsm_standard_errors(void)
     double reported[2][3];
     for (int blue = 0; blue <= 1; ++blue) {
         InformationIdentifier info;
-        info_init(&info, IDENTIFIER_LSM, 1, 3, h, 1e-6, 0.5, 0, NULL);
+        ii_init(&info, IDENTIFIER_LSM, 1, 3, h, 1e-6, 0.5, 0, NULL);
         Noise g = {0x9E3779B97F4A7C15ULL};
         double eps[3] = {0.0, 0.0, 0.0}, phi_prev[2][3] = {{0}}, psi_sum[3][3] = {{0}};
         for (long k = 0; k < n; ++k) {
@@ -130,7 +130,7 @@ static int lsm_standard_errors(void)
             eps[0] = noise_gaussian(&g);
             const double e = blue ? eps[0] - 2.0 * eps[1] + eps[2] : eps[0];
             const double z = truth[0] * phi[0] + truth[1] * phi[1] + truth[2] * phi[2] + sigma * e;
-            info_step(&info, &z, phi);
+            ii_step(&info, &z, phi);
             /* psi_j for eps_j: phi_j (white); phi_j - 2 phi_(j+1) + phi_(j+2) (blue),
              * complete two samples later (the ends of the record are negligible) */
             double psi[3];
@@ -143,7 +143,7 @@ static int lsm_standard_errors(void)
             for (int a = 0; a < 3; ++a)
                 for (int b = 0; b < 3; ++b) psi_sum[a][b] += psi[a] * psi[b];
         }
-        info_solve(&info);
+        ii_solve(&info);
         /* exact covariance: Gamma = P^-1 by Gauss-Jordan on the 3 x 3 P */
         double A[3][6];
         for (int a = 0; a < 3; ++a)
@@ -194,7 +194,7 @@ static double mff_learn(int variant, Identifier *paper, InformationIdentifier *i
 {
     const double h = 1e-3, rho = mff_rho(variant);
     identifier_init(paper, IDENTIFIER_MFF, 1, 1, h, rho, MFF_R);
-    info_init(info, IDENTIFIER_MFF, 1, 1, h, rho, MFF_R, variant == MFF_DRIFT, NULL);
+    ii_init(info, IDENTIFIER_MFF, 1, 1, h, rho, MFF_R, variant == MFF_DRIFT, NULL);
     double sum = 0.0;
     long n = 0;
     for (long k = 0; k < 60000; ++k) {
@@ -207,8 +207,8 @@ static double mff_learn(int variant, Identifier *paper, InformationIdentifier *i
             identifier_step(paper, z, phi);
             estimate = paper->delta[0][0];
         } else {
-            info_step(info, z, phi);
-            if (k % 10 == 0) info_solve(info);
+            ii_step(info, z, phi);
+            if (k % 10 == 0) ii_solve(info);
             estimate = info->delta[0][0];
         }
         if (t > 10.0) {
@@ -276,7 +276,7 @@ static int mff_without_excitation(void)
         double estimate_at[3]; /* end of the data, +20 s, +40 s */
         double trace_max = 0.0;
         const double trace_before = identifier_gamma_trace(&paper);
-        if (variant != MFF_PAPER) info_solve(&info);
+        if (variant != MFF_PAPER) ii_solve(&info);
         const double info_trace_before = info.gamma_trace;
         estimate_at[0] = variant == MFF_PAPER ? paper.delta[0][0] : info.delta[0][0];
         for (long k = 1; k <= 40000; ++k) {
@@ -285,8 +285,8 @@ static int mff_without_excitation(void)
                 identifier_step(&paper, z, phi);
                 if (k == 20000) trace_max = identifier_gamma_trace(&paper);
             } else {
-                info_step(&info, z, phi);
-                if (k % 10 == 0 && info_solve(&info) == 0)
+                ii_step(&info, z, phi);
+                if (k % 10 == 0 && ii_solve(&info) == 0)
                     trace_max = fmax(trace_max, info.gamma_trace);
             }
             if (k % 20000 == 0)
@@ -341,9 +341,9 @@ static int mff_pulses_and_resumption(void)
         for (long k = 0; k < 60000; ++k) {
             const int pulse = k % 10000 >= 5000 && k % 10000 < 5020;
             const double phi[1] = {pulse ? 0.05 : 0.0}, z[1] = {pulse ? 10.0 : 0.0};
-            info_step(&info, z, phi);
-            if (k == 1000 && info_solve(&info) == 0) before = info.delta[0][0];
-            if (k > 1000 && k % 10 == 0 && info_solve(&info) == 0)
+            ii_step(&info, z, phi);
+            if (k == 1000 && ii_solve(&info) == 0) before = info.delta[0][0];
+            if (k > 1000 && k % 10 == 0 && ii_solve(&info) == 0)
                 moved = fmax(moved, fabs(info.delta[0][0] - before) / fabs(before));
         }
         failures += check(moved < 0.01, "%s: 60 s at rest with wrong pulses moved the "
@@ -351,8 +351,8 @@ static int mff_pulses_and_resumption(void)
         double resumed = -1.0;
         for (long k = 0; k < 120000 && resumed < 0.0; ++k) {
             const double t = k * h, phi[1] = {0.1 * (sin(3 * t) + 1.5)}, z[1] = {2.0 * phi[0]};
-            info_step(&info, z, phi);
-            if (k % 10 == 0 && info_solve(&info) == 0 && fabs(info.delta[0][0] - 2.0) < 0.02)
+            ii_step(&info, z, phi);
+            if (k % 10 == 0 && ii_solve(&info) == 0 && fabs(info.delta[0][0] - 2.0) < 0.02)
                 resumed = t;
         }
         failures += check(resumed >= 0.0 && resumed < 15.0, "%s: 10x smaller excitation, "

@@ -8,7 +8,7 @@
 
 static LeaveOut rule_of(double h, double R, double p)
 {
-    const LeaveOutTuning tuning = sto_default_tuning().leave_out;
+    const LeaveOutTuning tuning = tuning_default().leave_out;
     LeaveOut rule;
     leave_out_init(&rule, &tuning, pow(R, h), 1e-6, R, p);
     return rule;
@@ -41,7 +41,7 @@ static int freezes_after_a_gap_of_its_memories(void)
 {
     const double h = 1e-3, R = 0.5;
     LeaveOut rule = rule_of(h, R, 3.0);
-    const double limit = sto_default_tuning().leave_out.gap_memory / -log(R);
+    const double limit = tuning_default().leave_out.gap_memory / -log(R);
     double lambda, pull;
     int failed = 0, first_rest = -1;
     for (int k = 1; k <= 1000 && first_rest < 0; ++k)

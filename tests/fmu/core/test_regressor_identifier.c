@@ -40,7 +40,7 @@ static void rri_test_torque(const RbRegressor *Y, const double delta[4], double 
 static double rri_test_distance(RegressorIdentifier *id, const double to[4])
 {
     double worst = 0.0;
-    if (rri_solve(id) != 0) return INFINITY;
+    if (ri_solve(id) != 0) return INFINITY;
     for (int k = 0; k < 4; ++k) worst = fmax(worst, fabs(id->delta[k] - to[k]) / fabs(to[k]));
     return worst;
 }
@@ -63,28 +63,28 @@ static int rri_mff_pulses_and_resumption(void)
     const double h = 1e-3, delta[4] = {1.0, 2.0, -1.0, 0.5}, doubled[4] = {2.0, 4.0, -2.0, 1.0};
     for (int rule = 1; rule >= 0; --rule) {
         RegressorIdentifier id;
-        if (rri_init(&id, IDENTIFIER_MFF, 2, 4, RRI_TEST_COLUMNS, NULL, h, 1e-3, 0.1, NULL) != 0)
-            return check(0, "rri_init refused the test's settings");
+        if (ri_init(&id, IDENTIFIER_MFF, 2, 4, RRI_TEST_COLUMNS, NULL, h, 1e-3, 0.1, NULL) != 0)
+            return check(0, "ri_init refused the test's settings");
         if (!rule) id.leave_out.skip_threshold = 0.0;
         RbRegressor Y;
         double z[2];
         for (long k = 0; k < 20000; ++k) {
             rri_test_regressor(k * h, 1.0, &Y);
             rri_test_torque(&Y, delta, 0.0, z);
-            rri_step(&id, z, &Y);
+            ri_step(&id, z, &Y);
         }
         const double learned = rri_test_distance(&id, delta);
-        rri_statistics(&id);
+        ri_statistics(&id);
         const double trace_before = id.gamma_trace;
         double moved = 0.0, trace_max = trace_before;
         for (long k = 0; k < 60000; ++k) {
             const int pulse = k % 10000 >= 5000 && k % 10000 < 5020;
             rri_test_regressor(k * h, pulse ? 0.05 : 0.0, &Y);
             rri_test_torque(&Y, delta, pulse ? 10.0 : 0.0, z);
-            rri_step(&id, z, &Y);
+            ri_step(&id, z, &Y);
             if (k % 100 == 99) {
                 moved = fmax(moved, rri_test_distance(&id, delta));
-                rri_statistics(&id);
+                ri_statistics(&id);
                 trace_max = fmax(trace_max, id.gamma_trace);
             }
         }
@@ -107,7 +107,7 @@ static int rri_mff_pulses_and_resumption(void)
         for (long k = 0; k < 30000 && resumed < 0.0; ++k) {
             rri_test_regressor(k * h, 0.1, &Y);
             rri_test_torque(&Y, doubled, 0.0, z);
-            rri_step(&id, z, &Y);
+            ri_step(&id, z, &Y);
             if (k % 10 == 0 && rri_test_distance(&id, doubled) < 0.01) resumed = k * h;
         }
         failures += check(resumed >= 0.0 && resumed < 15.0, "%s: 10x smaller excitation, "
@@ -117,7 +117,7 @@ static int rri_mff_pulses_and_resumption(void)
 }
 
 /* The running solution (the anchor) solved in shares over the samples after its
- * snapshot: each installed anchor must be rri_solve of the identifier at the snapshot
+ * snapshot: each installed anchor must be ri_solve of the identifier at the snapshot
  * RRI_ANCHOR_INTERVAL samples before (the same arithmetic: to 1e-12, measured 0). */
 static int anchor_solve_spread(void)
 {
@@ -127,7 +127,7 @@ static int anchor_solve_spread(void)
         const int rows = 7, p = 57;
         int columns[RRI_MAX_PARAMETERS];
         for (int k = 0; k < p; ++k) columns[k] = k + 12;
-        if (rri_init(&id, (IdentifierKind)kind, rows, p, columns, NULL, 1e-4, 1e-6, 0.5, NULL) != 0)
+        if (ri_init(&id, (IdentifierKind)kind, rows, p, columns, NULL, 1e-4, 1e-6, 0.5, NULL) != 0)
             return 1;
         snapshot = id;
         unsigned long state = 777;
@@ -141,10 +141,10 @@ static int anchor_solve_spread(void)
                 for (int c = 0; c < RRI_PARAMETERS_OF(rows); ++c) Y.row[i][c] = uniform_random(&state);
                 z[i] = uniform_random(&state);
             }
-            rri_step(&id, z, &Y);
+            ri_step(&id, z, &Y);
             if (id.anchor_age != 0) continue;
             /* a new anchor (of the last snapshot) and the next snapshot, both here */
-            if (rri_solve(&snapshot) != 0) return 1;
+            if (ri_solve(&snapshot) != 0) return 1;
             for (int k = 0; k < p; ++k) worst = fmax(worst, relative(id.anchor[k], snapshot.delta[k]));
             installs += !before_snapshot;
             before_snapshot = 0;

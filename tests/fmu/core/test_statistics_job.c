@@ -14,7 +14,7 @@
 
 /* A 7-joint identifier over every column (p = 84) on random data with one weakly
  * excited direction; a job every 700 samples with a budget of 2000 multiply-adds
- * per step.  Each completed job must give rri_solve + rri_statistics of a copy of
+ * per step.  Each completed job must give ri_solve + ri_statistics of a copy of
  * the identifier taken at its snapshot: Delta_hat, the standard errors and
  * trace(Gamma) to 1e-12 (the same arithmetic: measured 0), the excitation to 1e-12
  * of the smallest eigenvalue per remembered time (different starts of the inverse
@@ -29,7 +29,7 @@ static int statistics_job_equals_full_solve(void)
         int columns[RRI_MAX_PARAMETERS];
         for (int k = 0; k < p; ++k) columns[k] = k;
         const double h = 1e-3;
-        if (rri_init(&id, (IdentifierKind)kind, rows, p, columns, NULL, h, 1e-6, 0.5, NULL) != 0) return 1;
+        if (ri_init(&id, (IdentifierKind)kind, rows, p, columns, NULL, h, 1e-6, 0.5, NULL) != 0) return 1;
         sj_init(&job, p, 700.0, 2000.0);
         unsigned long state = 12345;
         int jobs = 0, sliced = 0;
@@ -44,15 +44,15 @@ static int statistics_job_equals_full_solve(void)
                 Y.row[i][1] = Y.row[i][0] + 1e-3 * Y.row[i][1]; /* the weak direction */
                 z[i] = 0.1 * uniform_random(&state);
             }
-            rri_step(&id, z, &Y);
+            ri_step(&id, z, &Y);
             const int done = sj_step(&job);
             sj_schedule(&job, &id); /* a communication point after every step */
             if (job.since == 0.0) snapshot = id; /* sj_schedule took its snapshot here */
             if (!done) continue;
             ++jobs;
             sliced += job.age > 1.0;
-            if (rri_solve(&snapshot) != 0) return 1;
-            rri_statistics(&snapshot);
+            if (ri_solve(&snapshot) != 0) return 1;
+            ri_statistics(&snapshot);
             for (int k = 0; k < p; ++k) {
                 worst = fmax(worst, relative(job.delta[k], snapshot.delta[k]));
                 worst = fmax(worst, relative(job.std_error[k], snapshot.std_error[k]));

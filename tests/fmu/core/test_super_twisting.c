@@ -48,8 +48,8 @@ static Observation observe(const Trajectory *tr, int scheme, double alpha1, doub
     const double h = 1e-4;
     SuperTwistingObserver o;
     const double a1[1] = {alpha1}, a2[1] = {alpha2}, zero[1] = {0.0};
-    sto_init(&o, 1, h, a1, a2, tau, zero, zero);
-    sto_configure(&o, (StoScheme)scheme, 0.05);
+    st_init(&o, 1, h, a1, a2, tau, zero, zero);
+    st_configure(&o, (StoScheme)scheme, 0.05);
     Observation r;
     memset(&r, 0, sizeof r);
     double reference = 0.0, sum_xi = 0.0, sum_lagged = 0.0;
@@ -59,8 +59,8 @@ static Observation observe(const Trajectory *tr, int scheme, double alpha1, doub
         const double t = k * h, t1 = t + h;
         const double y[1] = {tr->x1(t)};
         const StoAcceleration nominal[1] = {{.held = tr->known(t), .viscous = 0.0, .coulomb = 0.0}};
-        sto_run(&o, y, nominal, 1, NULL);
-        sto_update_outputs(&o);
+        os_run(&o, y, nominal, 1, NULL);
+        os_update_outputs(&o);
         /* the filter (9), discretized exactly as the observer does, applied to xi itself:
          * what z_filtered can at best be, lag included */
         reference += o.filter_gain * (tr->unknown(t) - reference);
@@ -97,7 +97,7 @@ static double a_fast(double t) { return -2.0 * sin(2.0 * t); }
  * 0.5, the paper's "discontinuous perturbation") and the known part -sin t - xi. */
 static double xi_sine(double t) { return 0.5 * sin(2.0 * t); }
 static double known_sine(double t) { return -sin(t) - xi_sine(t); }
-static double xi_square(double t) { return 0.5 * sto_sign(sin(2.0 * t)); }
+static double xi_square(double t) { return 0.5 * st_sign(sin(2.0 * t)); }
 static double known_square(double t) { return -sin(t) - xi_square(t); }
 
 /* Finite time, not asymptotic: once |e2| is at 1e-2, reaching the scheme's accuracy

@@ -14,26 +14,26 @@
  * and each part honours its group. */
 static int tuning_groups(void)
 {
-    const StoTuning defaults = sto_default_tuning();
-    int failed = check(sto_tuning_problem(&defaults) == NULL, "the defaults have no problem");
+    const StoTuning defaults = tuning_default();
+    int failed = check(tuning_problem(&defaults) == NULL, "the defaults have no problem");
     StoTuning t = defaults;
     t.implicit.learning_gain = 0.0;
-    const char *problem = sto_tuning_problem(&t);
+    const char *problem = tuning_problem(&t);
     failed += check(problem && strstr(problem, "learning_gain"), "learning_gain 0: %s",
                     problem ? problem : "(none)");
     t = defaults;
     t.leave_out.rest_memory = -1.0;
-    problem = sto_tuning_problem(&t);
+    problem = tuning_problem(&t);
     failed += check(problem && strstr(problem, "rest_memory"), "rest_memory -1: %s",
                     problem ? problem : "(none)");
     t = defaults;
     t.feedback.ramp = 0.0;
-    problem = sto_tuning_problem(&t);
+    problem = tuning_problem(&t);
     failed += check(problem && strstr(problem, "feedback.ramp"), "feedback ramp 0: %s",
                     problem ? problem : "(none)");
     t = defaults;
     t.bank.hysteresis = 2.0;
-    problem = sto_tuning_problem(&t);
+    problem = tuning_problem(&t);
     failed += check(problem && strstr(problem, "hysteresis"), "the bank's part checked too: %s",
                     problem ? problem : "(none)");
 
@@ -44,8 +44,8 @@ static int tuning_groups(void)
     t = defaults;
     t.identifier.batch_window = 2.0 * defaults.identifier.batch_window;
     t.leave_out.skip_share = 2.0 * defaults.leave_out.skip_share;
-    info_init(&id[0], IDENTIFIER_MFF, 1, 2, h, 1e-3, 0.9, 0, NULL);
-    info_init(&id[1], IDENTIFIER_MFF, 1, 2, h, 1e-3, 0.9, 0, &t);
+    ii_init(&id[0], IDENTIFIER_MFF, 1, 2, h, 1e-3, 0.9, 0, NULL);
+    ii_init(&id[1], IDENTIFIER_MFF, 1, 2, h, 1e-3, 0.9, 0, &t);
     failed += check(fabs(id[1].leave_out.skip_threshold - 2.0 * id[0].leave_out.skip_threshold) <=
                         1e-15 * id[0].leave_out.skip_threshold,
                     "twice the skip share, twice the threshold (%g, %g)", id[0].leave_out.skip_threshold,
@@ -59,10 +59,10 @@ static int tuning_groups(void)
     /* model feedback: nothing before its start, then the ramp */
     FeedbackTuning f = defaults.feedback;
     const double at = f.start + 0.5 * f.ramp;
-    const double w = feedback_weight(&f, 1.0, 0.0, at);
+    const double w = mf_weight(&f, 1.0, 0.0, at);
     failed += check(fabs(w - 0.5) < 1e-12, "half the ramp, an exact correction: weight %g", w);
     f.start = at + 1.0;
-    failed += check(feedback_weight(&f, 1.0, 0.0, at) == 0.0, "a later start: weight 0");
+    failed += check(mf_weight(&f, 1.0, 0.0, at) == 0.0, "a later start: weight 0");
     return failed;
 }
 

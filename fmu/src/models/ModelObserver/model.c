@@ -440,7 +440,7 @@ static ModelStatus check_restored(const void *data, const void *initialized,
     (void)initialized;
     for (int g = 0; g < mp_groups(d->program.n); ++g)
         if (d->pipe.scheme == STO_SCHEME_ADAPTIVE &&
-            !adaptive_valid(&d->pipe.bank[g], mp_group_size(d->program.n, g))) {
+            !na_valid(&d->pipe.bank[g], mp_group_size(d->program.n, g))) {
             log->log(log->context, MODEL_ERROR, "deserialized FMU state: an index of "
                      "pipe.bank[%d] is not one of its %d members; state refused", g,
                      d->pipe.bank[g].count);

@@ -454,7 +454,7 @@ static void advance(void *data, double start_time, uint64_t k, uint64_t k_end)
     if (d->identifier && d->identifier_reset != d->reset_seen) {
         d->reset_seen = d->identifier_reset;
         if (d->identifier_reset) {
-            rri_reset(&d->id);
+            ri_reset(&d->id);
             sj_reset(&d->statistics);
             d->identifier_active = 0;
         }

@@ -487,7 +487,7 @@ static ModelStatus check_restored(const void *data, const void *initialized,
     const ObserverData *d = data;
     (void)initialized;
     if (check_cadence(&d->cadence, log) != MODEL_OK) return MODEL_ERROR;
-    if (!adaptive_valid(&d->pipe.bank, d->pipe.n)) {
+    if (!na_valid(&d->pipe.bank, d->pipe.n)) {
         log->log(log->context, MODEL_ERROR, "deserialized FMU state: an index of bank (center, "
                  "zoom_index, selected, published, perturbation or follow) is not one of its %d "
                  "members; state refused", d->pipe.bank.count);
