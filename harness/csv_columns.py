@@ -63,11 +63,13 @@ def column_of(header: Header, column: str) -> str | None:
 
 
 def _is_number(text: str) -> bool:
+    """Whether the reader (pandas) reads `text` as a number: Python's float() also takes
+    digits grouped by "_", which it refuses."""
     try:
         float(text)
     except ValueError:
         return False
-    return True
+    return "_" not in text
 
 
 def read_columns(path: Path, header: Header, columns: list[str],
@@ -96,7 +98,9 @@ def read_columns(path: Path, header: Header, columns: list[str],
         return np.empty((0, len(indices)))  # no samples, said as for any empty log
     except (ValueError, pd.errors.ParserError) as error:
         line, role = _first_bad_value(path, indices, roles, header.present)
-        raise CsvColumnError(f"{path} line {line}: {role} is not a number ({error})") from None
+        said = str(error)  # the parser's words quote the value, which may be any length
+        said = said if len(said) <= 200 else said[:200] + "..."
+        raise CsvColumnError(f"{path} line {line}: {role} is not a number ({said})") from None
     return data[:rows] if rows > 0.9 * len(data) else data[:rows].copy()
 
 
@@ -128,15 +132,20 @@ def uneven_step(t: np.ndarray, tolerance: float, role: str = "t") -> tuple[int, 
 
 def _first_bad_value(path: Path, indices: list[int], roles: list[str],
                      has_header: bool) -> tuple[int, str]:
-    """(line, role) of the first value that is not a number (only when reading failed)."""
+    """(line, what) of the first value that is not a number as the reader parses one (only
+    when reading failed; line 0 when none is found)."""
     with path.open(newline="", encoding="utf-8-sig", errors="replace") as handle:
         rows = csv.reader(handle)
-        if has_header:
-            next(rows, None)
-        for line, row in enumerate(rows, start=2 if has_header else 1):
-            for index, role in zip(indices, roles):
-                try:
-                    float(row[index])
-                except (ValueError, IndexError):
-                    return line, role
+        first = 2 if has_header else 1
+        line = first - 1  # the last line read
+        try:
+            if has_header:
+                next(rows, None)
+            for line, row in enumerate(rows, start=first):
+                for index, role in zip(indices, roles):
+                    text = row[index].strip() if index < len(row) else ""
+                    if text and not _is_number(text):  # empty: read as NaN, judged later
+                        return line, role
+        except csv.Error:  # a field longer than the csv module's limit
+            return line + 1, f"a field longer than {csv.field_size_limit()} characters"
     return 0, "a value"

@@ -169,6 +169,10 @@ def _read_table(path: Path, header: Header, wanted: list[Column], hint: str) -> 
             found = (", ".join(header) if header.present
                      else f"{len(header)} unnamed columns")
             raise _missing(path, column, found, hint)
+        if header.count(name) > 1:  # which of them is meant cannot be told
+            where = ", ".join(str(i + 1) for i, h in enumerate(header) if h == name)
+            raise LogSignalsError(f"{path}: the header names {name!r} ({column.role}) more "
+                                  f"than once (columns {where}); rename all but one")
         names.append(str(name))
     _one_column_each(path, wanted, names)
     try:

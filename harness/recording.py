@@ -127,8 +127,12 @@ def _locate(path: Path, header: list[str], columns: Mapping[str, str]) -> dict[s
                       if w.strip().lower() in names), None)
         if index is None:
             missing.append(columns.get(role, role))
-        else:
-            found[role] = index
+            continue
+        if names.count(names[index]) > 1:  # which of them is meant cannot be told
+            where = ", ".join(str(i + 1) for i, n in enumerate(names) if n == names[index])
+            raise DataError(f"{path} line 1: the header names {header[index]!r} ({role}) more "
+                            f"than once (columns {where}); rename all but one")
+        found[role] = index
     if missing:
         raise DataError(f"{path} line 1: missing column(s) {', '.join(missing)}; the header "
                         f"must name t (or time), y and u, or map them with --columns "

@@ -234,7 +234,9 @@ def _solve(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, scales: np.ndarray
     rw = r / weights[None, :]
     A = np.einsum("sek,sel->kl", Z, Z)
     b = np.einsum("sek,se->k", Z, rw)
-    lam = ridge * float(np.mean(np.diag(A)))
+    # relative to the rows' size; a regressor that is zero on the whole log (a coordinate
+    # that never moves) keeps the nominal values, for the excitation check to name
+    lam = ridge * (float(np.mean(np.diag(A))) or 1.0)
     H = A + lam * np.eye(len(scales))
     phi = np.linalg.solve(H, b + lam * scales * nominal)
     return phi / scales, H, A, Z, rw

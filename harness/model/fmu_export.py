@@ -261,7 +261,7 @@ def fmu_command(args) -> int:
     """``fmu --model MODEL.toml --out DIR [--fmi-version 2|3] [--identifier lsm|mff]``."""
     import sys
 
-    from ..outputs import OutputError, Outputs, shown
+    from ..outputs import Outputs, shown
     from .errors import ModelFileError
     from .reader import read_model
 
@@ -272,7 +272,7 @@ def fmu_command(args) -> int:
         with Outputs(args.out, "fmu", inputs=[args.model], names=[name]) as outputs:
             template = template_fmu(args.fmi_version, getattr(args, "fmu_dir", None))
             build_fmu(model, outputs.file(name), args.fmi_version, identifier, template)
-    except (ModelFileError, ExportError, OutputError) as error:
+    except (ModelFileError, ExportError) as error:  # an OutputError names the command
         print(f"harness fmu: {error}", file=sys.stderr)
         return 2
     print(f"wrote {shown(outputs.written[0])} (FMI {args.fmi_version}.0 co-simulation): inputs "

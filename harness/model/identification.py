@@ -75,6 +75,12 @@ def identify_model(model: Model, log: ModelLog, refine_mode: str = "auto") -> Id
     timing = choose_input_timing(model, log, choice.settings)
     log = timing.log  # a held input's samples, half a sample later
     rows = regression(model, log, choice.settings)
+    if not np.any(rows.r):
+        raise NotExcitedError(
+            f"{log.source}: the known side of every equation (the terms without unknowns, "
+            f"such as the inputs {', '.join(model.inputs) or '(none)'}) is zero on the log: "
+            "any multiple of the unknowns fits it as well, so their scale cannot be told. "
+            "Use a log in which the input acts, or make one unknown a constant of the model")
     batch = max(1, round(BATCH_SAMPLES / choice.settings.decimation))
     least = fit(rows.Y, rows.r, model.nominal, batch=batch, mask=rows.mask,
                 bounds=model.bounds)

@@ -146,9 +146,20 @@ def _names(model: Mapping[str, Any], key: str, fail: Fail, required: bool) -> li
 def _number(value: Any, what: str, fail: Fail) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise fail(f"{what} must be a number, not {value!r}")
-    if not math.isfinite(value):
+    number = _as_float(value, what, fail)
+    if not math.isfinite(number):
         raise fail(f"{what} must be finite, not {value}")
-    return float(value)
+    return number
+
+
+def _as_float(value: int | float, what: str, fail: Fail) -> float:
+    """A TOML number as a float; TOML integers have any size, a float64 ends at 1.8e308."""
+    try:
+        return float(value)
+    except OverflowError:
+        bits = int(value).bit_length()  # only an int overflows float()
+        raise fail(f"{what} is an integer of {bits} bits, beyond a float64's range (about "
+                   "1.8e308)") from None
 
 
 def _unit(unit: Any, what: str, fail: Fail) -> str:
@@ -199,14 +210,17 @@ def _range(name: str, spec: dict, positive: bool, fail: Fail) -> tuple[float, fl
     if not (isinstance(bounds, list) and len(bounds) == 2):
         raise fail(f"parameter {name}: range must be a list [lower, upper], not {bounds!r}")
     lower, upper = bounds
+    ends = []
     for value, what in ((lower, "lower"), (upper, "upper")):
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or math.isnan(value):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or (
+                isinstance(value, float) and math.isnan(value)):
             raise fail(f"parameter {name}: the {what} end of its range must be a number "
                        f"(inf and -inf allowed), not {value!r}")
-    if not float(lower) < float(upper):
-        raise fail(f"parameter {name}: range = [{lower}, {upper}] is empty (lower must be "
-                   "below upper)")
-    return float(lower), float(upper)
+        ends.append(_as_float(value, f"parameter {name}: the {what} end of its range", fail))
+    if not ends[0] < ends[1]:
+        raise fail(f"parameter {name}: range = [{ends[0]:g}, {ends[1]:g}] is empty (lower "
+                   "must be below upper)")
+    return ends[0], ends[1]
 
 
 def _constant(name: str, spec: Any, fail: Fail) -> Constant:

@@ -153,6 +153,8 @@ def body_inertial(link: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
 def _floats(element, attribute: str, count: int, default: str, where: str) -> np.ndarray:
     text = element.get(attribute, default) if element is not None else default
     try:
+        if "_" in text:  # Python's float() reads "1_0" as 10; an XML double has no "_"
+            raise ValueError(text)
         values = np.array([float(x) for x in text.split()])
     except ValueError:
         raise UrdfError(f"{where}: {attribute}={text!r} is not {count} numbers") from None
@@ -244,6 +246,7 @@ def read_urdf(path: str | Path, locked: tuple[str, ...] | list[str] = (),
         if not name or name in links:
             raise UrdfError(f"{source}: a link without a name or a duplicate link {name!r}")
         links[name] = link
+        _link_inertial(link, source)  # every link's values meaningful, also where unused
     joints: dict[str, etree._Element] = {}
     parent_joint: dict[str, etree._Element] = {}
     for joint in root.findall("joint"):

@@ -90,6 +90,16 @@ def test_robot_fmu_parameters_refuses_to_write_over_its_urdf(tmp_path, urdf):
     assert copy.read_bytes() == urdf.read_bytes()
 
 
+def test_fmu_refuses_to_write_over_its_model_file_saying_so_once(tmp_path):
+    model = tmp_path / "emps.fmu"  # a model file named as the FMU the command writes
+    model.write_text((REPO / "examples" / "emps" / "emps.toml").read_text())
+    before = model.read_bytes()
+    code, text = cli(["fmu", "--model", str(model), "--out", str(tmp_path)])
+    assert code == 2, text
+    refused(code, text, "writing it would overwrite the input")
+    assert text.count("harness fmu:") == 1 and model.read_bytes() == before
+
+
 def test_ssp_refuses_to_write_over_an_fmu(tmp_path):
     fmus = tmp_path / "fmus"
     shutil.copytree(FMU_DIR, fmus)

@@ -86,3 +86,37 @@ def test_missing_columns_short_logs_and_other_formats_are_named(tmp_path):
         (tmp_path / "text.mat").write_text(text)
         with pytest.raises(LogSignalsError, match="not a readable MATLAB file"):
             read_signals(tmp_path / "text.mat", Column("t", "time"), POSITION, INPUT)
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".parquet"])
+def test_a_column_name_given_twice_in_the_header_is_refused(tmp_path, suffix):
+    """Which of two columns of one name is meant cannot be told: neither is guessed."""
+    frame = _frame()
+    frame.insert(2, "dup", frame["pos"] * 0.0)
+    frame.columns = ["time", "pos", "pos", "force"]
+    path = tmp_path / f"log{suffix}"
+    if suffix == ".csv":
+        frame.to_csv(path, index=False)
+    else:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+        pq.write_table(pa.Table.from_arrays([pa.array(frame.iloc[:, i]) for i in range(4)],
+                                            names=list(frame.columns)), path)
+    with pytest.raises(LogSignalsError, match=r"names 'pos' \(x\) more than once "
+                                              r"\(columns 2, 3\)"):
+        read_signals(path, Column("t", "time"), POSITION, INPUT)
+
+
+@pytest.mark.parametrize("value, said", [
+    ("1_000", r"line 12: u is not a number"),  # Python's float() reads it, pandas does not
+    ("x" * 200_000, r"line 12: a field longer than 131072 characters is not a number"),
+])
+def test_a_bad_value_is_named_with_its_line_and_a_bounded_message(tmp_path, value, said):
+    lines = _frame(50).to_csv(index=False).splitlines()
+    lines[5] = lines[5].rsplit(",", 1)[0] + ","  # an empty value before it: read as NaN
+    lines[11] = lines[11].rsplit(",", 1)[0] + "," + value
+    path = tmp_path / "log.csv"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(LogSignalsError, match=said) as error:
+        read_signals(path, Column("t", "time"), POSITION, INPUT)
+    assert len(str(error.value)) < 600

@@ -226,6 +226,26 @@ def test_a_log_in_which_the_machine_never_moves(tmp_path, capsys):
         "(excitation 0)" in err
 
 
+def test_a_log_on_which_every_column_of_the_regressor_is_zero(tmp_path, capsys):
+    """No constant term either: the least squares have nothing at all to work on."""
+    columns = _emps_columns()
+    columns["qm"][:] = 0.1
+    text = EMPS_TEXT.replace(" + OF = gtau*vir", " = gtau*vir").replace(
+        'OF = { nominal = 0, unit = "N" }', "")
+    code, err = _run(capsys, tmp_path, _write_csv(tmp_path / "log.csv", columns), text)
+    assert code == 2 and "does not excite M (excitation 0), Fv (excitation 0), Fc " \
+        "(excitation 0)" in err
+
+
+def test_a_log_whose_input_is_zero(tmp_path, capsys):
+    """Any multiple of the unknowns fits a zero known side: their scale cannot be told."""
+    columns = _emps_columns()
+    columns["vir"][:] = 0.0
+    code, err = _run(capsys, tmp_path, _write_csv(tmp_path / "log.csv", columns))
+    assert code == 2 and "the known side of every equation" in err and "is zero on the log" \
+        in err
+
+
 def test_two_unknowns_the_log_cannot_tell_apart(tmp_path, capsys):
     text = EMPS_TEXT.replace("+ OF = gtau*vir", "+ OF + OF2 = gtau*vir").replace(
         'OF = { nominal = 0, unit = "N" }',

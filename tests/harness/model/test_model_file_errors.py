@@ -213,6 +213,21 @@ def test_a_nominal_value_that_is_not_a_finite_number(tmp_path, value):
     assert "the nominal value of parameter M must be" in message
 
 
+BIG = "1" + "0" * 400  # a TOML integer has any size; a float64 ends at 1.8e308
+
+
+@pytest.mark.parametrize("old, new, said", [
+    ("nominal = 100", f"nominal = {BIG}", "the nominal value of parameter M is an integer"),
+    ("[constants]", f"[constants]\ng = {BIG}", "constant g is an integer"),
+    ("[units]", f"[log]\nsample_rate = {BIG}\n[units]", "sample_rate is an integer"),
+    ("M  = { nominal = 100,", f"M  = {{ range = [0, {BIG}], nominal = 100,",
+     "parameter M: the upper end of its range is an integer"),
+])
+def test_an_integer_beyond_a_float_is_named(tmp_path, old, new, said):
+    message = _error(tmp_path, GOOD.replace(old, new))
+    assert said in message and "beyond a float64's range" in message
+
+
 def test_a_constant_that_is_not_finite(tmp_path):
     message = _error(tmp_path, GOOD.replace("[constants]", "[constants]\ng = nan"))
     assert "constant g must be finite" in message

@@ -106,3 +106,18 @@ def test_bad_numbers_name_the_place(tmp_path):
     path.write_text(path.read_text().replace('xyz="0 0 0.5"', 'xyz="0 zero 0.5"', 1))
     with pytest.raises(UrdfError, match="joint 'j0': xyz='0 zero 0.5' is not 3 numbers"):
         read_urdf(path)
+    path.write_text(path.read_text().replace('xyz="0 zero 0.5"', 'xyz="0 1_0 0.5"', 1))
+    with pytest.raises(UrdfError, match="joint 'j0': xyz='0 1_0 0.5' is not 3 numbers"):
+        read_urdf(path)  # Python's float() reads 1_0 as 10, an XML double has no "_"
+
+
+@pytest.mark.parametrize("value, said", [("nan", "is not 1 finite numbers"),
+                                         ("-1", "negative mass")])
+def test_a_bad_mass_is_refused_on_every_link_also_the_fixed_root(tmp_path, value, said):
+    """The root's inertial is not used (it does not move), but a value that cannot be a
+    mass is an error in the file wherever it stands."""
+    text = open(example_urdf("double_pendulum")[0]).read()
+    path = tmp_path / "robot.urdf"
+    path.write_text(text.replace('value="0.10159"', f'value="{value}"', 1))
+    with pytest.raises(UrdfError, match=f"link 'base_link' <inertial>: .*{said}"):
+        read_urdf(path)
