@@ -40,9 +40,9 @@ def _fmu_only(case: methods.Case, fmu: Path) -> dict[str, methods.Estimate]:
 
 def _row(condition: rm.Condition, data_dir: Path, fmu: Path, tau: float) -> float:
     """The row's worst relative parameter error with tau_identifier = tau (in a worker)."""
-    methods.fmu_parameters = lambda case, method: {  # type: ignore[assignment]
+    methods.fmu_parameters = lambda case, method: {
         **_PARAMETERS(case, method), "tau_identifier": tau}
-    methods.run_all = _fmu_only  # type: ignore[assignment]
+    methods.run_all = _fmu_only
     value = rm.run_row(condition, data_dir, fmu)["methods"]["fmu-default"]["scores"].get(
         "param_worst")
     return math.nan if value is None else float(value)

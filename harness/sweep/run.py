@@ -19,7 +19,6 @@ from .lock import OutputLocked, locked_output
 from .plan import (
     DEFAULT_FMU_DIR,
     FMU_FILES,
-    METHODS,
     Run,
     SweepSpec,
     load_spec,
@@ -27,6 +26,7 @@ from .plan import (
     run_key,
 )
 from .report import ProgressLine, headline_metrics, metric_unit, plot_summary, write_summary
+from .schema import METHODS
 from .simulation import SimulationPool, prepare, run_in_process, simulate
 from .spec import CONNECT_TIMEOUT, MAX_WORKERS, ClusterError, SpecError
 from .table import CSV_EXPORT, TABLE, ResultsTable, result_row
