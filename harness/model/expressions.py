@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import ast
 import math
+import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
@@ -299,6 +300,10 @@ def expanded_terms(expr: sympy.Expr, limit: int = MAX_EXPANDED_TERMS) -> int:
     return min(cap, count(expr) + inner)
 
 
+#: A number as equations write it: decimal digits, a point, an exponent.
+_DECIMAL = re.compile(r"(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+
+
 def _check_syntax(text: str, symbols: Symbols) -> ast.Expression:
     """Reject anything but numbers, known names, + - * / ** and calls of known functions,
     and text whose work is beyond the limits above; the checked syntax tree."""
@@ -314,6 +319,10 @@ def _check_syntax(text: str, symbols: Symbols) -> ast.Expression:
         if isinstance(node, ast.Constant):
             if isinstance(node.value, bool) or not isinstance(node.value, (int, float)):
                 raise ExpressionError(f"has a literal that is not a real number: {node.value!r}")
+            written = ast.get_source_segment(text, node) or ""
+            if not _DECIMAL.fullmatch(written):  # Python also reads 0x10, 0o7, 1_000
+                raise ExpressionError(f"has the number {written!r}: numbers are written in "
+                                      "decimal, such as 16, 0.5 or 1.5e-3")
             continue
         if isinstance(node, ast.Name):
             if node.id in FUNCTIONS or node.id == "der":

@@ -228,6 +228,13 @@ def test_an_integer_beyond_a_float_is_named(tmp_path, old, new, said):
     assert said in message and "beyond a float64's range" in message
 
 
+@pytest.mark.parametrize("number", ["0x10", "1_0", "0o7", "0b1"])
+def test_a_number_not_written_in_decimal_is_refused(tmp_path, number):
+    """Python would read 0x10 as 16 and 1_0 as 10: equations write numbers in decimal."""
+    message = _error(tmp_path, GOOD.replace("+ OF = F", f"+ {number}*OF = F"))
+    assert f"has the number '{number}': numbers are written in decimal" in message
+
+
 def test_a_constant_that_is_not_finite(tmp_path):
     message = _error(tmp_path, GOOD.replace("[constants]", "[constants]\ng = nan"))
     assert "constant g must be finite" in message
