@@ -105,6 +105,8 @@ def fmi_value(name: str, type_: str, value: Any, low: float | None = None,
 
 def _parse_number(name: str, text: str) -> int | float:
     stripped = text.strip()
+    if "_" in stripped:  # Python reads "1_000" as 1000: a typo is not guessed at
+        raise BadValue(f"{name} = {text!r} is not a number")
     try:
         return int(stripped)
     except ValueError:
