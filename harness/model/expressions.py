@@ -31,8 +31,9 @@ FUNCTIONS: dict[str, Callable[..., sympy.Expr]] = {
     "exp": sympy.exp, "log": sympy.log, "sqrt": sympy.sqrt,
     "sign": sympy.sign, "abs": sympy.Abs,
 }
-#: Names with a fixed meaning, which no coordinate, input, parameter or constant may take.
-RESERVED = frozenset(FUNCTIONS) | {"der", "pi", "t"}
+#: Names with a fixed meaning, which no coordinate, input, parameter or constant may take
+#: ("time": the FMI 3 FMU's independent variable, fmpy's time column beside the FMU's).
+RESERVED = frozenset(FUNCTIONS) | {"der", "pi", "t", "time"}
 
 _OPERATORS = (ast.Add, ast.Sub, ast.Mult, ast.Div, ast.Pow, ast.USub, ast.UAdd)
 

@@ -249,6 +249,8 @@ def test_a_column_mapping_for_an_unknown_name(tmp_path, line, name):
 def test_reserved_and_malformed_names(tmp_path):
     assert "'sin' is reserved" in _error(
         tmp_path, GOOD.replace('inputs = ["F"]', 'inputs = ["F", "sin"]'))
+    assert "parameter name 'time' is reserved" in _error(  # the FMU's independent variable
+        tmp_path, GOOD.replace("+ OF = F", "+ time = F").replace("OF = {", "time = {"))
     assert "'2x' is not a name" in _error(
         tmp_path, GOOD.replace('inputs = ["F"]', 'inputs = ["F", "2x"]'))
     assert "'t' is reserved" in _error(
