@@ -356,11 +356,11 @@ def _checked(path: Path, blocks, options: ReadOptions,
                 values[0] * scale + joined[1:])
             bad = np.nonzero(np.abs(dt - step) > slack)[0]
             if bad.size:
-                i = int(bad[0])
+                i, unit = int(bad[0]), options.time_unit or "s"
                 raise DataError(
                     f"{path} {word} {first_line + i + 1}: sampling step {dt[i] / scale:.9g} "
-                    f"{options.time_unit} differs from the step {step / scale:.9g} "
-                    f"{options.time_unit} by more than the tolerance "
+                    f"{unit} differs from the step {step / scale:.9g} "
+                    f"{unit} by more than the tolerance "
                     f"({100 * options.tolerance:g} % of the step); identify needs uniform "
                     f"sampling: raise --time-tolerance, or --resample onto a uniform grid")
         previous = float(time[-1])
