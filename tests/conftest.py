@@ -1,11 +1,19 @@
 """Shared fixtures: the FMUs that build.sh produced."""
 from __future__ import annotations
 
+import signal
 from pathlib import Path
 
 import pytest
 
 from tools.fmu_models import models
+
+# A shell without job control starts a command run in the background (`cmd &`) with
+# SIGINT ignored, and the harness keeps an ignored SIGINT ignored (as under nohup): the
+# Ctrl-C tests would then test nothing. Python's own handler here, and so the default
+# disposition in every process the tests start.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 REPO = Path(__file__).resolve().parents[1]
 FMU_DIR = REPO / "build" / "fmus"
