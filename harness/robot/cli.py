@@ -55,8 +55,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def add_chain_arguments(group, unmeasured: bool = True) -> None:
     """--lock, --joints (the chain) and, for commands that read a log, --unmeasured."""
-    group.add_argument("--lock", action="append", default=[], metavar="JOINT",
-                       help="a URDF joint held at 0 (e.g. gripper fingers); repeatable")
+    group.add_argument("--lock", action="append", type=_lock, default=[],
+                       metavar="JOINT[=POSITION]",
+                       help="a URDF joint held at 0 (e.g. gripper fingers), or at POSITION "
+                            "[rad, or m for a prismatic joint: a lift or a joint the log holds "
+                            "still]; repeatable")
     group.add_argument("--joints", type=_joint_names, default=None, metavar="JOINT,...",
                        help="the chain's moving joints, from the root outward (the log's q1, "
                             "q2, ...): every other joint of the URDF is held at 0, so that a "
@@ -67,6 +70,29 @@ def add_chain_arguments(group, unmeasured: bool = True) -> None:
                        help="URDF joints whose torque the log does not hold (no u column is "
                             "read for them): their equations are left out, their dynamics "
                             "stay in the other joints' equations")
+
+
+def _lock(text: str) -> tuple[str, float]:
+    """--lock JOINT or JOINT=POSITION."""
+    name, sign, value = text.partition("=")
+    if not name.strip():
+        raise argparse.ArgumentTypeError(f"{text!r}: the joint name is empty")
+    if not sign:
+        return name.strip(), 0.0
+    try:
+        return name.strip(), real(f"--lock {name.strip()}", value.strip())
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def locked_joints(locks: list[tuple[str, float]]) -> dict[str, float]:
+    """The --lock options as joint -> position; a joint locked twice is an error."""
+    from .urdf import UrdfError
+    names = [name for name, _ in locks]
+    twice = sorted({name for name in names if names.count(name) > 1})
+    if twice:
+        raise UrdfError(f"--lock names {', '.join(map(repr, twice))} more than once")
+    return dict(locks)
 
 
 def _joint_names(text: str) -> tuple[str, ...]:
@@ -174,7 +200,7 @@ def robot_and_log(args, mapping: dict[str, str]):
     if args.sample_rate is not None and args.time_unit is not None:
         raise LogError("--sample-rate and --time-unit: with a sample rate no time column is "
                        "read; give one of the two")
-    robot = read_urdf(args.robot, locked=tuple(args.lock), joints_used=args.joints)
+    robot = read_urdf(args.robot, locked=locked_joints(args.lock), joints_used=args.joints)
     roles = ["t", *(f"q{i}" for i in range(1, robot.n + 1)),
              *(f"u{i}" for i in range(1, robot.n + 1))]
     unmeasured = unmeasured_indices(args.unmeasured, robot)
@@ -335,7 +361,7 @@ def fmu_parameters_command(args) -> int:
     outputs = Outputs(target.parent, "robot-fmu-parameters", inputs=[args.urdf],
                       names=[target.name], lock=False)  # one file: its rename is atomic
     try:
-        robot = read_urdf(args.urdf, locked=tuple(args.lock), joints_used=args.joints)
+        robot = read_urdf(args.urdf, locked=locked_joints(args.lock), joints_used=args.joints)
         rule = {name: value for name, value in (("min_speed", args.min_speed),
                                                 ("reversal_margin", args.reversal_margin))
                 if value is not None}

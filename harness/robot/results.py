@@ -124,6 +124,7 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
         "samples_used": int(len(result.used)),
         "regression_window_s": result.window,
         "resampled": log.resampled,
+        "locked_joints": robot.locked_at,
         **_assessment_json(result),
         **_terms_json(result, names),
         **({} if result.velocity_window is None else

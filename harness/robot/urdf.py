@@ -13,7 +13,7 @@ Chains of any length are walked without recursion.
 """
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -66,6 +66,8 @@ class Robot:
     joints: list[ChainJoint]
     locked: tuple[str, ...] = ()
     gravity: np.ndarray = field(default_factory=lambda: np.array(DEFAULT_GRAVITY))
+    #: each locked joint's position (rad or m): 0 unless --lock JOINT=POSITION says
+    locked_at: dict[str, float] = field(default_factory=dict)
 
     @property
     def n(self) -> int:
@@ -230,12 +232,15 @@ def parse_urdf(source: Path, remove_blank_text: bool = False):
     return tree
 
 
-def read_urdf(path: str | Path, locked: tuple[str, ...] | list[str] = (),
+def read_urdf(path: str | Path, locked: Sequence[str] | Mapping[str, float] = (),
               gravity=DEFAULT_GRAVITY, joints_used: Sequence[str] | None = None) -> Robot:
-    """Read and validate a URDF as a serial chain; `locked` joints are fixed at 0.
-    `joints_used` (None: every moving joint not locked): the chain's moving joints, from
-    the root outward; every other joint is fixed at 0, so that a branching robot (a
-    mobile base's wheels, a second arm) reduces to the chain of one arm."""
+    """Read and validate a URDF as a serial chain; `locked` joints are fixed at 0, or at
+    the position (rad or m) a mapping gives each. `joints_used` (None: every moving joint
+    not locked): the chain's moving joints, from the root outward; every other joint is
+    fixed at 0, so that a branching robot (a mobile base's wheels, a second arm) reduces
+    to the chain of one arm."""
+    positions = dict(locked) if isinstance(locked, Mapping) else dict.fromkeys(locked, 0.0)
+    locked = list(positions)
     source = Path(path)
     root = parse_urdf(source).getroot()
     if root.tag != "robot":
@@ -270,6 +275,8 @@ def read_urdf(path: str | Path, locked: tuple[str, ...] | list[str] = (),
     if unknown:
         raise UrdfError(f"{source}: locked joint(s) {', '.join(map(repr, unknown))} not in the "
                         f"URDF (its joints: {', '.join(joints)})")
+    for name, position in positions.items():
+        _check_lock_position(source, joints[name], position)
     if joints_used is not None:
         locked = [*locked, *_others_locked(source, joints, list(joints_used), locked)]
     roots = [name for name in links if name not in parent_joint]
@@ -277,7 +284,8 @@ def read_urdf(path: str | Path, locked: tuple[str, ...] | list[str] = (),
         raise UrdfError(f"{source}: expected one root link, found {len(roots)} "
                         f"({', '.join(roots[:5])})")
     _check_connected(source, roots[0], links, joints)
-    chain = _Chain(source, links, joints, set(locked))
+    positions.update((name, 0.0) for name in locked if name not in positions)
+    chain = _Chain(source, links, joints, positions)
     chain.walk(roots[0])
     if not chain.joints:
         raise UrdfError(f"{source}: no revolute, continuous or prismatic joint")
@@ -290,7 +298,7 @@ def read_urdf(path: str | Path, locked: tuple[str, ...] | list[str] = (),
                         f"link meets them in the order {','.join(j.name for j in chain.joints)}"
                         f"; give them in that order (and map the log's columns with --columns)")
     robot = Robot(root.get("name", source.stem), source, roots[0], chain.joints, tuple(locked),
-                  np.asarray(gravity, dtype=float))
+                  np.asarray(gravity, dtype=float), positions)
     for joint in robot.joints:  # merged bodies: sums of bounded numbers, still finite?
         if not all(np.all(np.isfinite(x)) for x in (joint.xyz, joint.rpy, joint.link)):
             raise UrdfError(f"{source}: joint {joint.name!r}: its body's position or inertia "
@@ -311,6 +319,27 @@ def joint_indices(names: Sequence[str], moving: Sequence[str], where: str) -> li
             raise UrdfError(f"{where}: {name!r} is named twice")
         found.append(moving.index(name))
     return found
+
+
+def _check_lock_position(source: Path, joint, position: float) -> None:
+    """A joint locked at a position other than 0 moves (a fixed joint has no position) and
+    the position lies within its <limit> (a revolute or prismatic joint's, when given)."""
+    where = f"{source}: joint {joint.get('name')!r}"
+    if not np.isfinite(position):
+        raise UrdfError(f"{where}: locked at {position!r}, not a finite position")
+    if position == 0.0:
+        return
+    kind = joint.get("type")
+    if kind not in MOVING_TYPES:
+        raise UrdfError(f"{where} is fixed: it has no position to lock it at ({position:g})")
+    limit = joint.find("limit")
+    if kind == "continuous" or limit is None:
+        return
+    lower, upper = (_floats(limit, key, 1, "0", where)[0] for key in ("lower", "upper"))
+    if lower < upper and not lower <= position <= upper:
+        unit = "m" if kind == "prismatic" else "rad"
+        raise UrdfError(f"{where}: locked at {position:g} {unit}, outside its limits "
+                        f"[{lower:g}, {upper:g}] {unit}")
 
 
 def _others_locked(source: Path, joints: dict, used: list[str], locked) -> list[str]:
@@ -348,8 +377,8 @@ def _check_connected(source: Path, root: str, links: dict, joints: dict) -> None
 class _Chain:
     """Walks the kinematic tree from the root, merging fixed links into their body."""
 
-    def __init__(self, source: Path, links: dict, joints: dict, locked: set[str]):
-        self.source, self.links, self.locked = source, links, locked
+    def __init__(self, source: Path, links: dict, joints: dict, locked: dict[str, float]):
+        self.source, self.links, self.locked = source, links, locked  # name -> position
         self.children: dict[str, list] = {}
         for joint in joints.values():
             self.children.setdefault(joint.find("parent").get("link"), []).append(joint)
@@ -401,7 +430,24 @@ class _Chain:
                     moved = self._moving_joint(joint, child, R_child, p_child, where)
                     stack.append((child, moved, np.eye(3), np.zeros(3)))
                 else:
+                    R_child, p_child = self._held(joint, R_child, p_child, where)
                     stack.append((child, body, R_child, p_child))
+
+    def _held(self, joint, R: np.ndarray, p: np.ndarray, where: str
+              ) -> tuple[np.ndarray, np.ndarray]:
+        """The child frame (R, p) of a locked joint moved to its position (its <origin>
+        frame at 0): a rotation or a translation along its axis."""
+        position = self.locked.get(joint.get("name"), 0.0)
+        if position == 0.0:
+            return R, p
+        axis = _floats(joint.find("axis"), "xyz", 3, "1 0 0", where)
+        if not np.linalg.norm(axis) > 1e-9:
+            raise UrdfError(f"{where}: the axis is zero")
+        axis = axis / np.linalg.norm(axis)
+        if joint.get("type") == "prismatic":
+            return R, p + R @ (axis * position)
+        K = _skew(axis)  # Rodrigues' rotation by `position` about the axis
+        return R @ (np.eye(3) + np.sin(position) * K + (1.0 - np.cos(position)) * K @ K), p
 
     def _moving_joint(self, joint, child: str, R: np.ndarray, p: np.ndarray,
                       where: str) -> ChainJoint:
