@@ -2,9 +2,12 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pytest
+from cli_runner import cli, refused
 from fmpy.util import read_csv
 
 from harness.cli import main
@@ -102,3 +105,31 @@ def test_a_closed_pipe_ends_quietly(tmp_path):
     err = process.stderr.read().decode()
     assert process.wait(timeout=60) == 0
     assert "Traceback" not in err and "BrokenPipe" not in err
+
+
+# ---- exit status 2 for bad input ----
+
+def recording(path: Path, n: int = 2000) -> Path:
+    t = 1e-3 * np.arange(n)
+    rows = np.column_stack([t, 0.1 * np.sin(2 * t) + 0.05 * np.sin(7 * t), np.cos(3 * t)])
+    np.savetxt(path, rows, delimiter=",", header="t,y,u", comments="", fmt="%.17g")
+    return path
+
+
+@pytest.mark.cli
+@pytest.mark.parametrize("param", ["novalue", "h=abc"])
+def test_a_bad_param_exits_2(tmp_path, param):
+    data = recording(tmp_path / "run.csv")
+    code, text = cli(["identify", str(data), "--out", str(tmp_path / "o"), "--param", param])
+    assert code == 2, text
+    refused(code, text, "--param")
+
+
+@pytest.mark.cli
+def test_an_fmu_dir_without_fmus_exits_2(tmp_path):
+    from harness.cli import main
+
+    data = recording(tmp_path / "run.csv")
+    code = main(["--fmu-dir", str(tmp_path), "identify", str(data), "--out",
+                 str(tmp_path / "o")])
+    assert code == 2

@@ -3,6 +3,7 @@ header (or column numbers), its columns as floats, and what is refused before re
 from __future__ import annotations
 
 import os
+import warnings
 
 import numpy as np
 import pandas as pd
@@ -87,3 +88,12 @@ def test_steps():
     assert index == 2 and "a step of 0.02 s where the mean step is" in said
     index, said = uneven_step(np.array([0.0, 0.01, 0.01]), 0.01)
     assert index == 2 and "does not increase" in said
+
+
+@pytest.mark.cli
+def test_the_mean_step_of_extreme_times_does_not_overflow():
+    from harness.log_columns import mean_step
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert mean_step(np.array([-1.7e308, 0.0, 1.7e308])) == 1.7e308
+        assert mean_step(np.array([-1.7e308, 1.7e308])) == np.inf

@@ -2,10 +2,15 @@
 from __future__ import annotations
 
 import dataclasses
+import shutil
+import subprocess
+import sys
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_runner import FMU_DIR, REPO
 from fmpy.ssp.simulation import simulate_ssp
 from fmpy.ssp.ssd import read_ssd
 
@@ -74,3 +79,45 @@ def test_libcosim_loads_and_simulates_it(ssp, harness_run, tmp_path):
     assert got[3:] == [2.0, 8.0]  # the scenario's parameters, bound in the SSD
     for value, name in zip(got, ESTIMATES):
         assert value == pytest.approx(harness_run[name][-1], rel=0.02), name
+
+
+# ---- outputs: harness.ssp refuses to overwrite its inputs, writes all or nothing ----
+
+def leftovers(folder: Path) -> list[Path]:
+    """Temporaries of the output machinery left in ``folder``."""
+    return [p for p in folder.rglob("*") if "sto-partial" in p.name or p.name.endswith(".tmp")]
+
+
+@pytest.mark.cli
+def test_ssp_refuses_to_write_over_an_fmu(tmp_path):
+    fmus = tmp_path / "fmus"
+    shutil.copytree(FMU_DIR, fmus)
+    before = (fmus / "Pendulum.fmu").read_bytes()
+    result = subprocess.run([sys.executable, "-m", "harness.ssp", str(fmus),
+                             str(fmus / "Pendulum.fmu")], cwd=REPO, capture_output=True,
+                            text=True, timeout=60)
+    assert result.returncode == 2, result.stderr
+    assert "Pendulum.fmu" in result.stderr and "Traceback" not in result.stderr
+    assert (fmus / "Pendulum.fmu").read_bytes() == before
+
+
+@pytest.mark.cli
+def test_ssp_into_a_folder_name_is_refused(tmp_path):
+    from harness.ssp import main
+
+    folder = tmp_path / "loop.ssp"
+    folder.mkdir()
+    assert main([str(FMU_DIR), str(folder)]) == 2
+    assert not any(folder.iterdir()) and not leftovers(tmp_path)
+
+
+@pytest.mark.cli
+def test_ssp_with_an_fmu_missing_writes_nothing(tmp_path):
+    from harness.ssp import main
+
+    fmus = tmp_path / "fmus"
+    shutil.copytree(FMU_DIR, fmus)
+    (fmus / "TwistingController.fmu").unlink()
+    out = tmp_path / "out" / "loop.ssp"
+    assert main([str(fmus), str(out)]) == 2
+    assert not out.exists() and not leftovers(tmp_path)

@@ -33,3 +33,11 @@ def test_factors_between_units_of_one_dimension():
 def test_a_unit_that_cannot_be_used_is_named(unit, said):
     with pytest.raises(ValueError, match=said):
         quantity(unit)
+
+
+@pytest.mark.cli
+def test_a_unit_never_has_a_power_that_is_not_finite():
+    from harness.units import quantity
+    for unit in ("kg**1e400", "kg**(1/1e400)", "m^(1/0)"):
+        with pytest.raises(ValueError, match="exponent"):
+            quantity(unit)

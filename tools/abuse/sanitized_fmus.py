@@ -1,6 +1,6 @@
 """pytest plugin (``-p tools.abuse.sanitized_fmus``, from the repository root) for
 tools/abuse/sanitize.sh: points every FMU fixture of tests/conftest.py at the
-FMUs in $STO_FMU_DIR (FMI 2) and $STO_FMI3_DIR (FMI 3) (the tests in tests/abuse read that variable themselves),
+FMUs in $STO_FMU_DIR (FMI 2) and $STO_FMI3_DIR (FMI 3) (the abuse tests read that variable themselves: abuse_fmi.fmu_dir, tests/cli_runner.py),
 and keeps the sanitizer runtime out of the processes that the tests start
 (compilers, fmpy compile): it is preloaded into this Python process only."""
 from __future__ import annotations

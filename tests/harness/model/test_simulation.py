@@ -3,6 +3,8 @@ itself (the core's C through the term program, and the numpy loop that runs a mo
 beyond the term program's limits)."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import scipy.integrate
@@ -116,3 +118,39 @@ def test_substeps_and_time_constant_follow_the_modes():
     free = linearized(dynamics, np.array([1.0, 0.0, 0.0]), q, np.zeros_like(q),
                       np.zeros_like(q))
     assert time_constant(free) == np.inf  # no mode decays: a free mass
+
+
+# ---- names the generated code shares with the file ----
+
+MODEL = '''[model]
+coordinates = ["{c}"]
+inputs = ["F"]
+equations = ["{eq}"]
+
+[parameters]
+M = {{ nominal = 1 }}
+Fv = {{ nominal = 1 }}
+{extra}'''
+
+
+def model(path: Path, eq: str = "M*der(x,2) + Fv*der(x) = F", c: str = "x",
+          extra: str = "") -> Path:
+    path.write_text(MODEL.format(c=c, eq=eq, extra=extra), encoding="utf-8")
+    return path
+
+
+@pytest.mark.cli
+@pytest.mark.parametrize("name", ["e", "theta_0", "E", "x0"])
+def test_the_simulations_generated_code_names_never_collide_with_the_files(tmp_path, name):
+    """The simulation's compiled function (scores, cross-validation, output error) means
+    the coordinate by the coordinate's name and Euler's number by exp(1)."""
+    from harness.model import read_model
+    from harness.model.simulation import Dynamics
+
+    eq = "M*der({c},2) + Fv*exp(1)*der({c}) + atan({c}) = F"
+    ours = Dynamics(read_model(model(tmp_path / "a.toml", eq.format(c=name), c=name)))
+    plain = Dynamics(read_model(model(tmp_path / "b.toml", eq.format(c="y"), c="y")))
+    rng = np.random.default_rng(2)
+    q, qd, u = (rng.normal(size=(20, 1)) for _ in range(3))
+    theta = np.array([2.0, 0.7])
+    assert np.array_equal(ours(q, qd, u, theta), plain(q, qd, u, theta))

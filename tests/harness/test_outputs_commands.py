@@ -1,6 +1,8 @@
 """Outputs that would overwrite inputs, leave through links, fill a disk, meet a second
 writer or a signal: every command refuses with exit status 2 (naming the file), or
-writes all its files or none, and leaves no temporary behind."""
+writes all its files or none, and leaves no temporary behind.  A Ctrl-C while --out is made or
+filled removes the folder the command created (harness.outputs).
+"""
 from __future__ import annotations
 
 import errno
@@ -99,40 +101,6 @@ def test_fmu_refuses_to_write_over_its_model_file_saying_so_once(tmp_path):
     refused(code, text, "writing it would overwrite the input")
     assert text.count("harness fmu:") == 1 and model.read_bytes() == before
 
-
-def test_ssp_refuses_to_write_over_an_fmu(tmp_path):
-    fmus = tmp_path / "fmus"
-    shutil.copytree(FMU_DIR, fmus)
-    before = (fmus / "Pendulum.fmu").read_bytes()
-    result = subprocess.run([sys.executable, "-m", "harness.ssp", str(fmus),
-                             str(fmus / "Pendulum.fmu")], cwd=REPO, capture_output=True,
-                            text=True, timeout=60)
-    assert result.returncode == 2, result.stderr
-    assert "Pendulum.fmu" in result.stderr and "Traceback" not in result.stderr
-    assert (fmus / "Pendulum.fmu").read_bytes() == before
-
-
-def test_ssp_into_a_folder_name_is_refused(tmp_path):
-    from harness.ssp import main
-
-    folder = tmp_path / "loop.ssp"
-    folder.mkdir()
-    assert main([str(FMU_DIR), str(folder)]) == 2
-    assert not any(folder.iterdir()) and not leftovers(tmp_path)
-
-
-def test_ssp_with_an_fmu_missing_writes_nothing(tmp_path):
-    from harness.ssp import main
-
-    fmus = tmp_path / "fmus"
-    shutil.copytree(FMU_DIR, fmus)
-    (fmus / "TwistingController.fmu").unlink()
-    out = tmp_path / "out" / "loop.ssp"
-    assert main([str(fmus), str(out)]) == 2
-    assert not out.exists() and not leftovers(tmp_path)
-
-
-# ---- links and folders --------------------------------------------------------------------
 
 def test_a_symbolic_link_out_of_the_folder_is_not_followed(tmp_path, finished):
     outside = tmp_path / "precious.csv"
@@ -291,25 +259,6 @@ def test_a_folder_left_by_a_killed_run_is_removed_by_the_next(tmp_path, finished
     assert not stale.exists()
 
 
-# ---- exit status 2 for bad input ----------------------------------------------------------
-
-@pytest.mark.parametrize("param", ["novalue", "h=abc"])
-def test_a_bad_param_exits_2(tmp_path, param):
-    data = recording(tmp_path / "run.csv")
-    code, text = cli(["identify", str(data), "--out", str(tmp_path / "o"), "--param", param])
-    assert code == 2, text
-    refused(code, text, "--param")
-
-
-def test_an_fmu_dir_without_fmus_exits_2(tmp_path):
-    from harness.cli import main
-
-    data = recording(tmp_path / "run.csv")
-    code = main(["--fmu-dir", str(tmp_path), "identify", str(data), "--out",
-                 str(tmp_path / "o")])
-    assert code == 2
-
-
 def test_a_full_disk_under_robot_fmu_parameters_keeps_the_old_file(tmp_path, urdf,
                                                                     monkeypatch):
     from harness.robot import fmu
@@ -394,3 +343,44 @@ def test_the_wrote_line_shows_control_characters_escaped(tmp_path, urdf, command
     assert not any(c in text for c in "\x1b\x07\r"), repr(text)
     wrote = [line for line in text.splitlines() if line.startswith("wrote ")]
     assert wrote and "out\\x1b[2J\\x1b]0;title\\x07\\r\\nx" in wrote[0], repr(text)
+
+
+EMPS = REPO / "examples" / "emps" / "emps.toml"
+
+
+# Outputs' step replaced by one that gets the signal: Ctrl-C at that moment of --out's
+# creation (after the lock, after the handler is set: a folder holding only
+# .sto-harness.lock and the staging folder was left) or at the block's end (before the
+# renames: the staging folder went and the created folder stayed, holding only the lock)
+AT_OUTPUTS_STEP = textwrap.dedent("""
+    import os, signal, sys
+    import harness.cli
+    from harness.outputs import Outputs
+    method, when = sys.argv.pop(1), sys.argv.pop(1)
+    original = getattr(Outputs, method)
+    def interrupted(self, *args, **kwargs):
+        if when == "before":
+            os.kill(os.getpid(), signal.SIGINT)
+        result = original(self, *args, **kwargs)
+        if when == "after":
+            os.kill(os.getpid(), signal.SIGINT)
+        return result
+    setattr(Outputs, method, interrupted)
+    sys.exit(harness.cli.main(sys.argv[1:]))
+""")
+
+
+@pytest.mark.parametrize("method, when", [("_acquire", "after"), ("_catch_signals", "after"),
+                                          ("_commit", "before")])
+def test_ctrl_c_while_the_out_folder_is_made_or_filled_removes_it(tmp_path, method, when):
+    """A folder the command created is removed when it is interrupted, whenever the
+    signal comes (harness.outputs): never left holding only the lock."""
+    script = tmp_path / "interrupted.py"
+    script.write_text(AT_OUTPUTS_STEP)
+    out = tmp_path / "out"
+    result = subprocess.run([sys.executable, str(script), method, when, "--fmu-dir",
+                             str(FMU_DIR), "fmu", "--model", str(EMPS), "--out", str(out)],
+                            cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert result.returncode == 130, result.stderr
+    assert "Traceback" not in result.stderr and "interrupted" in result.stderr
+    assert not out.exists(), sorted(p.name for p in out.iterdir())

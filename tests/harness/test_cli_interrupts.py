@@ -1,6 +1,7 @@
 """Ctrl-C at any moment of a command: outside the command itself too (while the
 harness loads, while the command line is parsed), exit status 130 and one line, never
-a KeyboardInterrupt traceback or death by the signal."""
+a KeyboardInterrupt traceback or death by the signal (harness/cli.py; a Ctrl-C while --out
+is made or filled: test_outputs_commands.py)."""
 from __future__ import annotations
 
 import subprocess
@@ -10,7 +11,8 @@ import textwrap
 import pytest
 from cli_runner import FMU_DIR, REPO
 
-pytestmark = pytest.mark.cli
+pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
+
 
 EMPS = REPO / "examples" / "emps" / "emps.toml"
 
@@ -60,41 +62,3 @@ def test_ctrl_c_while_the_harness_loads_exits_130(tmp_path):
                             cwd=REPO, capture_output=True, text=True, timeout=60, env=env)
     assert result.returncode == 130, result.stderr[-2000:]
     assert "Traceback" not in result.stderr and "interrupted" in result.stderr
-
-
-# Outputs' step replaced by one that gets the signal: Ctrl-C at that moment of --out's
-# creation (after the lock, after the handler is set: a folder holding only
-# .sto-harness.lock and the staging folder was left) or at the block's end (before the
-# renames: the staging folder went and the created folder stayed, holding only the lock)
-AT_OUTPUTS_STEP = textwrap.dedent("""
-    import os, signal, sys
-    import harness.cli
-    from harness.outputs import Outputs
-    method, when = sys.argv.pop(1), sys.argv.pop(1)
-    original = getattr(Outputs, method)
-    def interrupted(self, *args, **kwargs):
-        if when == "before":
-            os.kill(os.getpid(), signal.SIGINT)
-        result = original(self, *args, **kwargs)
-        if when == "after":
-            os.kill(os.getpid(), signal.SIGINT)
-        return result
-    setattr(Outputs, method, interrupted)
-    sys.exit(harness.cli.main(sys.argv[1:]))
-""")
-
-
-@pytest.mark.parametrize("method, when", [("_acquire", "after"), ("_catch_signals", "after"),
-                                          ("_commit", "before")])
-def test_ctrl_c_while_the_out_folder_is_made_or_filled_removes_it(tmp_path, method, when):
-    """A folder the command created is removed when it is interrupted, whenever the
-    signal comes (harness.outputs): never left holding only the lock."""
-    script = tmp_path / "interrupted.py"
-    script.write_text(AT_OUTPUTS_STEP)
-    out = tmp_path / "out"
-    result = subprocess.run([sys.executable, str(script), method, when, "--fmu-dir",
-                             str(FMU_DIR), "fmu", "--model", str(EMPS), "--out", str(out)],
-                            cwd=REPO, capture_output=True, text=True, timeout=60)
-    assert result.returncode == 130, result.stderr
-    assert "Traceback" not in result.stderr and "interrupted" in result.stderr
-    assert not out.exists(), sorted(p.name for p in out.iterdir())

@@ -1,11 +1,12 @@
 """Logs without samples: a CSV of its header row only (with or without blank lines or a
 final line feed) says so as an empty Parquet file does, with one message on the robot
 and the model-file paths and exit status 2.  Logs without an end or a form: a link to a
-device or a FIFO (refused unread), a header row that never ends, and a .mat file that is
-no MATLAB file are each named, exit status 2, never a traceback, a wait or MemoryError."""
+device or a FIFO (refused unread) and a header row that never ends
+are each named, exit status 2, never a traceback, a wait or MemoryError.
+(The malformed .mat files: test_mat_file_malformed.py.)
+"""
 from __future__ import annotations
 
-import io
 import os
 import resource
 import subprocess
@@ -16,7 +17,8 @@ import numpy as np
 import pytest
 from cli_runner import FMU_DIR, REPO, cli, refused
 
-pytestmark = pytest.mark.cli
+pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
+
 
 EMPS = REPO / "examples" / "emps" / "emps.toml"  # columns t, qm, vir
 
@@ -122,42 +124,3 @@ def test_a_header_row_that_never_ends_is_refused_after_a_cap(tmp_path, urdf):
         code, text = cli(["identify", str(log), *args, "--out", str(tmp_path / "o")])
         assert code == 2, text
         refused(code, text, str(log), f"does not end within {MAX_HEADER_BYTES} bytes")
-
-
-def _mat(**kwargs) -> bytes:
-    import scipy.io
-    buffer = io.BytesIO()
-    t = np.arange(100.0)
-    scipy.io.savemat(buffer, {"t": t, "qm": np.sin(t), "vir": np.cos(t)}, **kwargs)
-    return buffer.getvalue()
-
-
-MALFORMED_MAT = {
-    "33 bytes of text": lambda: b"hello, this is not a MATLAB file",  # IndexError in scipy
-    "200 bytes of text": lambda: b"x" * 200,
-    "cut in a variable": lambda: _mat()[:700],  # scipy's "could not read bytes" (OSError)
-    "cut compressed": lambda: _mat(do_compression=True)[:300],
-    "damaged compressed": lambda: (lambda b: b[:200] + bytes(64) + b[264:])(
-        _mat(do_compression=True)),  # zlib.error
-    "forged sizes": lambda: _forged_sizes(_mat()),  # scipy's C reader dies (SIGSEGV)
-}
-
-
-def _forged_sizes(content: bytes) -> bytes:
-    """The last variable's array-flags size and data type overwritten: scipy's reader
-    (its C part) reads out of bounds and the process dies by a segmentation fault."""
-    forged = bytearray(content)
-    start = forged.rindex(b"vir") - 44  # the variable's tag; its name is at byte 44
-    forged[start + 13], forged[start + 49] = 194, 4
-    return bytes(forged)
-
-
-@pytest.mark.parametrize("content", list(MALFORMED_MAT))
-@pytest.mark.parametrize("reader", ["identify --model", "identify --robot", "validate --model"])
-def test_a_malformed_mat_file_is_named(tmp_path, urdf, reader, content):
-    log = tmp_path / "log.mat"
-    log.write_bytes(MALFORMED_MAT[content]())
-    command, *rest = [str(urdf) if a == "URDF" else a for a in READERS[reader]]
-    code, text = cli([command, str(log), *rest, "--out", str(tmp_path / "out")])
-    assert code == 2, text
-    refused(code, text, str(log), "not a readable MATLAB file")

@@ -1,11 +1,13 @@
 """Robot logs as loggers write them: epoch time stamps (rounded by float64), a clock
 that jitters within 1 % (used as it is) or more (resampled, and said so), and what must
 still be refused (a gap, time running back, a word in a number column), each named by
-its line."""
+its line.  A robot's --columns name only the robot's roles (harness/robot/joint_log.py).
+"""
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from cli_runner import cli, refused
 
 from harness.cli import main
 from harness.robot.examples import example_urdf
@@ -114,31 +116,6 @@ def _frame(t):
 
 
 @pytest.mark.parametrize("command", ["identify", "validate"])
-@pytest.mark.parametrize("options, words", [
-    (["--torque-gains", "1,2,3"], ["--torque-gains", "3 gain(s) for a robot of 2 joints"]),
-    (["--torque-gains", "1"], ["--torque-gains", "1 gain(s) for a robot of 2 joints"]),
-    (["--torque-gains", "1,0"], ["--torque-gains", "gain 2 ('0')", "other than 0"]),
-    (["--torque-gains=-1e-9,2"], ["--torque-gains", "gain 1 ('-1e-9')", "+-1e-06"]),
-    (["--torque-gains", "1,nan"], ["--torque-gains", "gain 2 ('nan')"]),
-    (["--torque-gains", "1,inf"], ["--torque-gains", "gain 2 ('inf')"]),
-    (["--torque-gains", "1,amps"], ["--torque-gains", "gain 2 ('amps')"]),
-    (["--torque-gains", "1,,2"], ["--torque-gains", "gain 2 is empty"]),
-    (["--angle-unit", "grad"], ["--angle-unit", "grad"]),
-    (["--time-unit", "h"], ["--time-unit", "'h'"]),
-    (["--length-unit", "mm"], ["--length-unit mm", "no prismatic joint"]),
-])
-def test_bad_units_and_gains_exit_2_naming_them(tmp_path, arm, command, options, words):
-    from cli_runner import cli, refused
-    urdf, _ = arm
-    data = _log(tmp_path / "log.csv", np.arange(6000) * 1e-3)
-    out = tmp_path / "out"
-    code, text = cli([command, str(data), "--robot", str(urdf), "--out", str(out), *options])
-    assert code == 2, text
-    refused(code, text, *words)
-    assert not out.exists()
-
-
-@pytest.mark.parametrize("command", ["identify", "validate"])
 @pytest.mark.parametrize("name", ["log.xlsx", "log.json", "log", "log.csv.gz"])
 def test_other_formats_exit_2_naming_the_file_and_the_formats(tmp_path, arm, command, name):
     from cli_runner import cli, refused
@@ -181,25 +158,6 @@ def test_a_parquet_log_reads_as_its_csv_and_its_problems_are_named(tmp_path, arm
         read_log(tmp_path / "absent.parquet", 2)
 
 
-@pytest.mark.parametrize("options", [["--angle-unit", "deg"], ["--length-unit", "mm"],
-                                     ["--torque-gains", "1,2"], ["--lock", "j1"]])
-def test_robot_unit_options_without_robot_are_refused(tmp_path, options):
-    from cli_runner import cli, refused
-    data = _log(tmp_path / "log.csv", np.arange(6000) * 1e-3)
-    code, text = cli(["identify", str(data), "--out", str(tmp_path / "o"), *options])
-    assert code == 2, text
-    refused(code, text, options[0], "--robot")
-    code, text = cli(["identify", str(data), "--model", "m.toml", "--out", str(tmp_path / "o"),
-                      *options])
-    assert code == 2, text
-    refused(code, text, options[0], "--model", "[units]")
-    code, text = cli(["validate", str(data), "--model", "m.toml", "--out", str(tmp_path / "o"),
-                      *options])
-    assert code == 2, text
-    refused(code, text, options[0], "go with --robot", "[units]")
-    assert not (tmp_path / "o").exists()
-
-
 def test_a_log_in_ms_read_as_seconds_is_warned_of(tmp_path, arm):
     from cli_runner import cli
     urdf, _ = arm
@@ -235,17 +193,14 @@ def test_torques_too_large_for_any_joint_exit_2_naming_the_column(tmp_path, arm,
     assert not out.exists()
 
 
-def test_a_joint_terms_name_beside_the_urdf_that_is_no_file_is_refused(tmp_path, arm):
-    """A folder (or a pipe, a device) named joint_terms.csv beside the URDF: validate
-    would otherwise predict with the URDF alone and say nothing."""
-    import shutil
-
-    from cli_runner import cli, refused
-    urdf, _ = arm
-    copy = tmp_path / "robot.urdf"
-    shutil.copy(urdf, copy)
-    (tmp_path / "joint_terms.csv").mkdir()
-    data = _log(tmp_path / "log.csv", np.arange(6000) * 1e-3)
-    code, text = cli(["validate", str(data), "--robot", str(copy), "--out", str(tmp_path / "o")])
-    assert code == 2, text
-    refused(code, text, "joint_terms.csv", "not a regular file")
+def test_robot_columns_name_only_the_robots_roles(tmp_path):
+    from harness.robot.examples import example_urdf
+    urdf, _ = example_urdf("double_pendulum")
+    t = np.arange(3000) * 1e-3
+    np.savetxt(tmp_path / "log.csv", np.column_stack([t, np.sin(t), np.cos(t), t, t]),
+               delimiter=",", header="t,q1,q2,u1,u2", comments="")
+    for command in ("identify", "validate"):
+        code, text = cli([command, str(tmp_path / "log.csv"), "--robot", str(urdf), "--out",
+                          str(tmp_path / command), "--columns", "q3=q1"])
+        assert code == 2, text
+        refused(code, text, "'q3'", "roles: t, q1, q2, u1, u2")

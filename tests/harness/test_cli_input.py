@@ -1,22 +1,25 @@
-"""Bad input to identify, reproduce, compare and soak.py, as a user types it.
+"""Bad input to identify, reproduce and compare, as a user types it.
 
 Every case must end with a clear message naming the problem and a nonzero
 exit status -- never a traceback -- and write nothing it should not; the
 good cases of the same classes (a BOM, widely spaced samples, epoch
 timestamps) must work.
+
+The options of one command path given to another (the robot's unit options without
+--robot) are refused too.
 """
 from __future__ import annotations
 
 import csv
-import math
 import time
 from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_runner import REPO, cli, refused, shell
+from cli_runner import REPO, cli, refused
 
 pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
+
 
 INT_CASES = ["4294967298", "-4294967294", "2147483648", "-2147483649", "1.5", "2.000001", "nan",
              "inf", "-inf", "1e400", "1e20", "99999999999999999999999"]
@@ -275,31 +278,29 @@ def test_reproduce_out_naming_a_file(tmp_path):
     assert target.read_text() == "x"
 
 
-# ---- tools/abuse/soak.py ------------------------------------------------------------------------
-
-SOAK = "tools.abuse.soak"
-
-
-@pytest.mark.parametrize("args, words", [
-    (["--chunk", "0"], "--chunk = 0.0 must be > 0"), (["--chunk", "-1"], "must be > 0"),
-    (["--chunk", "0.00015"], "whole number of communication steps"),
-    (["--chunk", "nan"], "not finite"), (["--seconds", "0"], "--seconds = 0.0 must be > 0"),
-    (["--seconds", "-5"], "must be > 0"), (["--seconds", "inf"], "not finite"),
-    (["--noise", "-1"], "must be >= 0"), (["--rss-slack", "nan"], "not finite"),
-    (["--scenario", "7.1"], "invalid choice"),
-])
-def test_soak_bad_option(args, words):
-    result = shell(args, module=SOAK, timeout=60)
-    refused(result.returncode, result.stdout + result.stderr, words)
+def _log(path, t, seconds: float = 6.0):
+    """A slow two-joint swing with its gravity torques: enough to identify a payload."""
+    q = np.column_stack([0.8 * np.sin(1.3 * (t - t[0])), 0.6 * np.sin(2.1 * (t - t[0]))])
+    u = np.column_stack([5.0 * np.sin(1.3 * (t - t[0])), 2.0 * np.cos(2.1 * (t - t[0]))])
+    np.savetxt(path, np.column_stack([t, q, u]), delimiter=",", header="t,q1,q2,u1,u2",
+               comments="", fmt="%.17g")
+    return path
 
 
-def test_soak_short_chunks_run_and_check_something(tmp_path):
-    """--chunk 0.001 (10 steps) used to fail with a ValueError; a tiny --seconds runs a chunk."""
-    summary = tmp_path / "soak.json"
-    result = shell(["--chunk", "0.001", "--seconds", "0.0005", "--out", str(summary)],
-                   module=SOAK, timeout=120)
-    assert result.returncode == 0, result.stdout + result.stderr
-    import json
-    data = json.loads(summary.read_text())
-    assert data["macro_steps"] >= 10 and len(data["chunks"]) == 1
-    assert math.isfinite(data["gamma_trace_end"])
+@pytest.mark.parametrize("options", [["--angle-unit", "deg"], ["--length-unit", "mm"],
+                                     ["--torque-gains", "1,2"], ["--lock", "j1"]])
+def test_robot_unit_options_without_robot_are_refused(tmp_path, options):
+    from cli_runner import cli, refused
+    data = _log(tmp_path / "log.csv", np.arange(6000) * 1e-3)
+    code, text = cli(["identify", str(data), "--out", str(tmp_path / "o"), *options])
+    assert code == 2, text
+    refused(code, text, options[0], "--robot")
+    code, text = cli(["identify", str(data), "--model", "m.toml", "--out", str(tmp_path / "o"),
+                      *options])
+    assert code == 2, text
+    refused(code, text, options[0], "--model", "[units]")
+    code, text = cli(["validate", str(data), "--model", "m.toml", "--out", str(tmp_path / "o"),
+                      *options])
+    assert code == 2, text
+    refused(code, text, options[0], "go with --robot", "[units]")
+    assert not (tmp_path / "o").exists()

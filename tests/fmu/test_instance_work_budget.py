@@ -19,8 +19,8 @@ import os
 import time
 
 import pytest
-from fmu.fmi_helpers import RawFMU3
 
+from fmu.fmi_helpers import RawFMU3
 from harness.robot.layout import ParameterLayout
 from tools.abuse.abuse_fmi import ERROR, MODELS, OK, REPO, Raw, assert_usable_after_reset, isolated
 

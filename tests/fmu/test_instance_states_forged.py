@@ -18,10 +18,11 @@ import struct
 from pathlib import Path
 
 import pytest
-from fmu.fmi_helpers import RawFMU3
-from state_layout import field_location
 
+from fmu.fmi_helpers import RawFMU3
 from tools.abuse.abuse_fmi import ERROR, OK, REPO, Raw, assert_usable_after_reset, forge, isolated
+
+from .state_layout import field_location
 
 OBS, ROBOT, MODEL = "SuperTwistingObserver", "RobotObserver", "ModelObserver"
 H = 1e-3
