@@ -1,7 +1,14 @@
 # The Python package's native library (harness.native_library loads it by ctypes):
 # the master loop and the robot batch entry points over the same core objects.
+# Its core is compiled for longer chains than the FMUs' 7 joints (the offline robot
+# path: identify, validate --robot), over the same sources.
+set(STO_NATIVE_MAX_JOINTS 12 CACHE STRING "Joints of a serial robot at most, offline")
+add_library(sto_core_offline STATIC ${core_paths})
+target_include_directories(sto_core_offline PUBLIC "${SRC}/core")
+target_compile_definitions(sto_core_offline PUBLIC RB_MAX_JOINTS=${STO_NATIVE_MAX_JOINTS})
+target_link_libraries(sto_core_offline PUBLIC ${STO_LIBM})
 add_library(sto_native SHARED ${STO_NATIVE_SOURCES})
-target_link_libraries(sto_native PRIVATE sto_core)
+target_link_libraries(sto_native PRIVATE sto_core_offline)
 # The ctypes entry points are its interface; the core stays hidden.
 set_target_properties(sto_native PROPERTIES C_VISIBILITY_PRESET default)
 if(SKBUILD)

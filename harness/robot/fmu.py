@@ -23,11 +23,14 @@ from .base_parameters import base_parameters
 from .joint_log import JointLog
 from .layout import ParameterLayout
 from .native import core_defaults
-from .urdf import Robot
+from .urdf import Robot, UrdfError
 
 INTEGERS = {"n", "identifier", "base_count", "joint_type", "base_columns", "max_internal_steps"}
 IDENTIFIERS = {"off": 0, "lsm": 1, "mff": 2}
 SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
+#: Joints the RobotObserver FMU holds at most (the rows of its arrays: RB_MAX_JOINTS of
+#: the FMUs); the offline path takes longer chains (core_defaults().max_joints)
+FMU_MAX_JOINTS = 7
 
 
 def fmu_parameters(robot: Robot, unknown: str = "all", h: float = 1e-3, f_plus=10.0,
@@ -49,6 +52,11 @@ def fmu_parameters(robot: Robot, unknown: str = "all", h: float = 1e-3, f_plus=1
     every equation is used; None: the core's defaults)."""
     if identifier not in IDENTIFIERS:
         raise ValueError(f"identifier {identifier!r}: one of {', '.join(IDENTIFIERS)}")
+    if robot.n > FMU_MAX_JOINTS:
+        raise UrdfError(f"{robot.source}: {robot.n} moving joints; the RobotObserver FMU holds "
+                        f"at most {FMU_MAX_JOINTS} (identify and validate --robot take up to "
+                        f"{core_defaults().max_joints}): name a shorter chain with --joints, or "
+                        "lock joints with --lock")
     defaults = core_defaults()
     min_speed = defaults.min_speed if min_speed is None else min_speed
     reversal_margin = defaults.reversal_margin if reversal_margin is None else reversal_margin

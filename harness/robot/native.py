@@ -65,7 +65,9 @@ def load() -> ctypes.CDLL:
     return dll
 
 
-_JOINTS = 7  # RB_MAX_JOINTS, checked against the library by the Structure's size
+#: RB_MAX_JOINTS of the native library (cmake/native.cmake's STO_NATIVE_MAX_JOINTS; the
+#: FMUs keep 7), checked against the library by the Structure's size
+_JOINTS = 12
 _PARAMETERS = 12 * _JOINTS  # RRI_MAX_PARAMETERS
 
 
@@ -153,7 +155,7 @@ def observe_adaptive(q: np.ndarray, h: float, acceleration_bound, tau: float = 0
     return AdaptiveVelocities(velocity, acceleration, noise, bandwidth, position)
 
 
-STATUS = {-1: "the number of joints is not between 1 and 7",
+STATUS = {-1: f"the number of joints is not between 1 and {_JOINTS}",
           -2: "a joint type is neither revolute nor prismatic",
           -3: "a joint axis is zero or not finite",
           -4: "a placement, inertial, friction or gravity value is not finite"}

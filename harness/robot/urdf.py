@@ -1,8 +1,8 @@
 """Reading a robot's URDF into the flat arrays of the C rigid-body model (rigid_body.h).
 
-A URDF is accepted when it describes a serial chain of at most 7 revolute,
+A URDF is accepted when it describes a serial chain of at most 12 revolute,
 continuous or prismatic joints from a fixed base: fixed joints (and joints the
-caller locks, at position 0) are merged into the moving body they hang from, and
+caller locks, at 0 or a given position) are merged into the moving body they hang from, and
 branches that carry no moving joint (sensors, tool frames) are allowed.  Every
 problem is a UrdfError whose message names the file and the joint or link: also a
 document type declaration (entities are never expanded, so a file that declares

@@ -24,7 +24,11 @@
 #ifndef RIGID_BODY_H
 #define RIGID_BODY_H
 
+/* Joints of a chain at most: 7 in the FMUs, whose variable tables it sizes; the
+ * native library of the offline path is compiled with more (cmake/native.cmake). */
+#ifndef RB_MAX_JOINTS
 #define RB_MAX_JOINTS 7
+#endif
 #define RB_LINK_PARAMETERS 10
 #define RB_JOINT_FRICTION 2
 #define RB_PARAMETERS_PER_JOINT (RB_LINK_PARAMETERS + RB_JOINT_FRICTION)

@@ -74,7 +74,7 @@ def test_unreadable_files(tmp_path, text, message):
 
 def test_bad_robots(tmp_path):
     cases = [
-        (dict(joints=8), "8 moving joints; at most 7"),
+        (dict(joints=13), "13 moving joints; at most 12"),
         (dict(mass=-1.0), "negative mass -1"),
         (dict(moments=(0.1, -0.1, 0.1)), "not positive definite"),
         (dict(moments=(0.1, 0.1, 0.3)), "triangle inequality"),
