@@ -204,11 +204,12 @@ void rn_default_settings(int n, RobotSettings *settings) { *settings = rp_defaul
  * that starts there, an FMU's output at the next communication point).  With an
  * identifier the identifier runs from sample `start` on and delta, std_error,
  * stats = (trace of Gamma, excitation) are solved at the end, and `published`
- * (2 p + 2) holds what the FMU publishes after the last sample under the same
+ * (3 p + 2) holds what the FMU publishes after the last sample under the same
  * schedule (statistics_job.h: a snapshot every statistics_interval seconds, its work
  * spread over the following samples): the estimate Delta (the fresher of the running
- * solution and the last completed solve), the standard errors, trace of Gamma and the
- * excitation of the last completed solve (before any: 0, p / rho and 0).  weight
+ * solution and the last completed solve), the standard errors, trace of Gamma, the
+ * excitation and each parameter's column excitation of the last completed solve
+ * (before any: 0, p / rho, 0 and 0).  weight
  * (count x n): the weight of each sample's joint equations, acceleration (count x n):
  * the observer's q'' at each sample (the last sample's of both: NaN, not known yet).
  * Returns the number of samples at which M was not positive definite, -1 for bad
@@ -258,6 +259,8 @@ long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, const RobotSet
         for (int k = 0; k < p; ++k) published[p + k] = solved ? job->std_error[k] : 0.0;
         published[2 * p] = solved ? job->gamma_trace : p / settings->rho;
         published[2 * p + 1] = solved ? job->excitation : 0.0;
+        for (int k = 0; k < p; ++k)
+            published[2 * p + 2 + k] = solved ? job->column_excitation[k] : 0.0;
         if (ri_solve(&run->identifier) != 0) return -3;
         ri_statistics(&run->identifier);
         memcpy(delta, run->identifier.delta, (size_t)p * sizeof(double));

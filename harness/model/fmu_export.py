@@ -11,9 +11,11 @@ carry the model's names and units, the others left out:
 - inputs: each coordinate by its name (the measured position, in its unit) and each
   known input by its name;
 - outputs: ``der(c)`` the velocity estimate of coordinate c and ``c_hat`` its position
-  estimate, each unknown parameter by its name (in its unit) and ``<name>_std`` its
-  standard error; ``observer.converged``, ``observer.identifier_active``,
-  ``observer.excitation``, ``observer.input_hold``, ``observer.coarse_inputs``;
+  estimate, each unknown parameter by its name (in its unit), ``<name>_std`` its
+  standard error and ``<name>_excitation`` the share of its regressor column the others
+  do not explain (identify's excitation figure); ``observer.converged``,
+  ``observer.identifier_active``, ``observer.excitation``,
+  ``observer.parameters_not_excited``, ``observer.input_hold``, ``observer.coarse_inputs``;
 - parameters: the observer's settings under ``observer.`` (``observer.h`` the internal
   step, ``observer.f_plus_<c>`` the gains' bound of coordinate c, ...).
 
@@ -43,7 +45,8 @@ _BASE_UNITS = {"[mass]": "kg", "[length]": "m", "[time]": "s", "[current]": "A",
 #: The generic variables that are the model's own: prefix -> what they are one of.
 _PREFIXES = {"position_": "coordinates", "position_estimate_": "coordinates",
              "velocity_": "coordinates", "f_plus_": "coordinates", "input_": "inputs",
-             "theta_": "parameters", "theta_std_": "parameters"}
+             "theta_": "parameters", "theta_std_": "parameters",
+             "theta_excitation_": "parameters"}
 
 
 class ExportError(ValueError):
@@ -102,8 +105,14 @@ def _rename(model: Model, name: str) -> tuple[str | None, str, str]:
         return None, "", ""
     if _PREFIXES[prefix] == "parameters":
         p = model.parameters[i]
-        return ((p.name, p.unit, f"Estimate of the unknown {p.name}") if prefix == "theta_"
-                else (f"{p.name}_std", p.unit, f"Standard error of {p.name} (1 sigma)"))
+        return {
+            "theta_": (p.name, p.unit, f"Estimate of the unknown {p.name}"),
+            "theta_std_": (f"{p.name}_std", p.unit, f"Standard error of {p.name} (1 sigma)"),
+            "theta_excitation_": (
+                f"{p.name}_excitation", "",
+                f"Share of {p.name}'s regressor column the others do not explain, 0 to 1 "
+                "(below 0.001 the log does not determine it)"),
+        }[prefix]
     owner = owners[i]
     unit = model.units.get(owner, "")
     per = {"velocity_": "/s", "f_plus_": "/s^2"}.get(prefix, "")
@@ -188,7 +197,8 @@ def model_description(model: Model, template: bytes, fmi_version: int,
     clash = sorted({n for n in kept.values() if list(kept.values()).count(n) > 1})
     if clash:
         raise ExportError(f"the FMU's variables would share the names {', '.join(clash)}: "
-                          "rename the model's names (a parameter X beside another named X_std?)")
+                          "rename the model's names (a parameter X beside another named X_std or "
+                          "X_excitation?)")
     _unit_definitions(root, units)
     _model_structure(root, fmi_version, old_index, {v.get("valueReference") for v in variables})
     etree.indent(root, space="  ")
@@ -278,5 +288,5 @@ def fmu_command(args) -> int:
     print(f"wrote {shown(outputs.written[0])} (FMI {args.fmi_version}.0 co-simulation): inputs "
           f"{', '.join((*model.coordinates, *model.inputs))}; outputs "
           f"{', '.join(f'der({c})' for c in model.coordinates)}, "
-          f"{', '.join(p.name for p in model.parameters)} and their _std")
+          f"{', '.join(p.name for p in model.parameters)} with their _std and _excitation")
     return 0

@@ -147,8 +147,8 @@ def run_fmu(fmu: str | Path, parameters: dict[str, Any], log: JointLog,
 
     Returns {"velocity": qd_hat after each step (the estimate for t_k + s h, shape
     (N / s, n)),
-    "velocity_sample": qd_sample (the estimate for t_k), "base_estimate", "base_std" (at
-    the end), "excitation", "gamma_trace"}."""
+    "velocity_sample": qd_sample (the estimate for t_k), "base_estimate", "base_std",
+    "base_excitation" (at the end), "excitation", "gamma_trace"}."""
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
     description = read_model_description(str(fmu))
@@ -182,7 +182,7 @@ def run_fmu(fmu: str | Path, parameters: dict[str, Any], log: JointLog,
             slave.doStep(currentCommunicationPoint=float(log.t[0] + k * h),
                          communicationStepSize=samples_per_step * h)
             velocity[row] = slave.getReal(qd_refs)
-        names = ("base_estimate", "base_std")
+        names = ("base_estimate", "base_std", "base_excitation")
         result = {"velocity": velocity[:, :n], "velocity_sample": velocity[:, n:]}
         for name in names:
             result[name] = np.array(slave.getReal([references[f"{name}[{k + 1}]"]

@@ -295,7 +295,7 @@ class RigidBody:
             settings.torque_scale[:n] = np.broadcast_to(np.asarray(scale, float), (n,)).tolist()
         settings.identifier = {"lsm": 1, "mff": 2}[options.get("kind", "lsm")] if identify else 0
         delta, std, stats = np.zeros(len(columns)), np.zeros(len(columns)), np.zeros(2)
-        published = np.zeros(2 * len(columns) + 2)
+        published = np.zeros(3 * len(columns) + 2)
         run = ctypes.create_string_buffer(dll.rn_robot_run_size())
         failures = dll.rn_robot_observe(
             self._buffer, run, ctypes.byref(settings), len(q), int(options.get("start", 0)), q, u,
@@ -319,7 +319,8 @@ class RigidBody:
             result.update(delta=delta, std_error=std, gamma_trace=stats[0], excitation=stats[1],
                           published={"delta": published[:p], "std_error": published[p:2 * p],
                                      "gamma_trace": published[2 * p],
-                                     "excitation": published[2 * p + 1]})
+                                     "excitation": published[2 * p + 1],
+                                     "column_excitation": published[2 * p + 2:]})
         return result
 
     def regressor(self, q, qd, qdd) -> np.ndarray:

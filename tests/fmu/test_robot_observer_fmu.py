@@ -56,6 +56,9 @@ def test_the_fmu_runs_the_offline_path_exactly(case):
     np.testing.assert_allclose(result["base_std"], published["std_error"], rtol=1e-12)
     assert result["gamma_trace"] == pytest.approx(published["gamma_trace"], rel=1e-12)
     assert result["excitation"] == pytest.approx(published["excitation"], rel=1e-12)
+    np.testing.assert_allclose(result["base_excitation"], published["column_excitation"],
+                               rtol=1e-12)
+    assert np.all((published["column_excitation"] > 0) & (published["column_excitation"] <= 1))
     # which is the full solve at a snapshot a few samples before the end (here the
     # statistics change by up to 2.4 % a sample)
     body = read_urdf(example_urdf("double_pendulum")[0]).rigid_body(
@@ -82,7 +85,7 @@ def test_the_estimates_do_not_depend_on_the_communication_step(case):
     fine = run_fmu(fmu_path("RobotObserver"), parameters, steady)
     coarse = run_fmu(fmu_path("RobotObserver"), parameters, steady, samples_per_step=10)
     np.testing.assert_array_equal(fine["velocity"][9::10], coarse["velocity"])
-    for name in ("base_estimate", "base_std", "gamma_trace", "excitation"):
+    for name in ("base_estimate", "base_std", "base_excitation", "gamma_trace", "excitation"):
         np.testing.assert_array_equal(fine[name], coarse[name], err_msg=name)
 
 

@@ -55,4 +55,17 @@ static inline double stats_excitation(double norm, double rho, double lambda, do
     return excitation > 0.0 ? excitation : 0.0;
 }
 
+/* A parameter's column excitation from the diagonal entries P_kk and Gamma_kk
+ * = (P^-1)_kk of an information P = A + rho I: 1 / Gamma_kk - rho is what of
+ * the column's energy A_kk the other columns leave unexplained (with the ridge),
+ * so the result is sqrt(1 - R_k^2), the figure identify reports.  0 for a
+ * column whose energy is lost in the ridge's rounding. */
+static inline double stats_column_excitation(double P_kk, double Gamma_kk, double rho)
+{
+    const double energy = P_kk - rho;
+    if (!(energy > 1e-9 * P_kk) || !(Gamma_kk > 0.0)) return 0.0;
+    const double share = (1.0 / Gamma_kk - rho) / energy;
+    return share > 0.0 ? sqrt(share < 1.0 ? share : 1.0) : 0.0;
+}
+
 #endif

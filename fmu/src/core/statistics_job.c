@@ -43,6 +43,7 @@ void sj_start(StatisticsJob *job, const RegressorIdentifier *id)
     for (int j = 0; j < p; ++j) { /* the upper triangles, row by row */
         memcpy(&job->factor[j][j], &id->P[j][j], (size_t)(p - j) * sizeof(double));
         memcpy(&job->score_power[j][j], &id->score_power[j][j], (size_t)(p - j) * sizeof(double));
+        job->diagonal[j] = id->P[j][j];
     }
     memcpy(job->work_delta, id->b, (size_t)p * sizeof(double));
     job->rho = id->rho;
@@ -73,6 +74,7 @@ static void complete(StatisticsJob *job, int iterations)
     const int p = job->p;
     memcpy(job->delta, job->work_delta, (size_t)p * sizeof(double));
     memcpy(job->std_error, job->work_std, (size_t)p * sizeof(double));
+    memcpy(job->column_excitation, job->work_column_excitation, (size_t)p * sizeof(double));
     job->gamma_trace = job->work_trace;
     job->excitation = stats_excitation(job->norm, job->rho, job->lambda, job->h, job->active_time);
     job->iterations = iterations;
@@ -104,6 +106,8 @@ static int unit(StatisticsJob *job)
         job->column[job->index] = 1.0;
         cholesky_solve(L, p, RRI_MAX_PARAMETERS, job->column);
         job->work_trace += job->column[job->index];
+        job->work_column_excitation[job->index] =
+            stats_column_excitation(job->diagonal[job->index], job->column[job->index], job->rho);
         job->stage = SJ_SANDWICH;
         return 0;
     case SJ_SANDWICH: {

@@ -17,7 +17,9 @@
  * (warm start) and stops when its estimate changes by less than
  * STATS_EIGEN_TOLERANCE (relative; at most STATS_EIGEN_ITERATIONS iterations), as
  * ri_statistics' does from its own start: the excitations agree to that
- * tolerance, the other results exactly.
+ * tolerance, the other results exactly.  Each parameter's column excitation
+ * comes with its column of Gamma: the Schur complement 1 / Gamma_kk is what of
+ * P_kk the other columns do not explain.
  * Plain C, no allocation; the offline path (native/robot_native.c) runs the same
  * schedule as the RobotObserver FMU. */
 #ifndef STATISTICS_JOB_H
@@ -52,12 +54,18 @@ typedef struct {
     double work_delta[RRI_MAX_PARAMETERS];  /* b, then Delta_hat */
     double column[RRI_MAX_PARAMETERS];      /* the Gamma column in work */
     double work_std[RRI_MAX_PARAMETERS], work_trace;
+    double diagonal[RRI_MAX_PARAMETERS];     /* the snapshot's diagonal of P */
+    double work_column_excitation[RRI_MAX_PARAMETERS];
     double eigenvector[RRI_MAX_PARAMETERS], norm; /* kept between jobs: the warm start */
     /* the last completed job */
     double completed;           /* jobs completed */
     double age;                 /* internal steps since its snapshot */
     double delta[RRI_MAX_PARAMETERS], std_error[RRI_MAX_PARAMETERS];
     double gamma_trace, excitation;
+    /* per parameter, the share of its regressor column that the others do not
+     * explain, sqrt(1 - R_k^2) of the information without the ridge rho I:
+     * 0 (never excited, or a combination of the others) .. 1 (orthogonal) */
+    double column_excitation[RRI_MAX_PARAMETERS];
     double iterations;          /* inverse iterations it took */
 } StatisticsJob;
 

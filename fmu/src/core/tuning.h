@@ -98,9 +98,12 @@
                                      * the excitation's iteration, the fed-back estimate),
                                      * on the instance's clock: a long communication step
                                      * equals its single steps, at a 32nd of the cost */
-#define MP_WARNING_DELAY 1.0        /* [s] the published model creates energy, or holds
-                                     * parameters at their ranges, this long before the
-                                     * warning: not every transient estimate */
+#define MP_WARNING_DELAY 1.0        /* [s] the published model creates energy, holds
+                                     * parameters at their ranges or leaves some not
+                                     * excited this long before the warning: not every
+                                     * transient estimate */
+#define MP_NOT_EXCITED 1e-3         /* a parameter's column excitation below this is not
+                                     * excited: the threshold identify refuses below */
 
 /* ---- the inputs' cadence (input_cadence.h) ----------------------------------------- */
 #define CADENCE_WINDOW 2.0          /* [s] over which the shortest hold of the inputs counts

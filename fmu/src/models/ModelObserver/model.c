@@ -48,6 +48,10 @@ typedef struct {
     int held_seen;        /* the count at the last communication point ... */
     double held_since;    /* [s] ... since this time */
     int held[MAX_P];      /* per parameter -1, 0, 1 (box_projection.h) */
+    double theta_excitation[MAX_P]; /* per parameter (statistics_job.h) */
+    int parameters_not_excited; /* column excitation below MP_NOT_EXCITED */
+    int weak_logged, weak_seen; /* as held_logged, held_seen, held_since */
+    double weak_since;
     int negative_damping; /* the published model creates energy (model_damping.h) */
     int damping_logged;   /* the warning stands */
     int energy_seen;      /* it did at the last communication point ... */
@@ -146,6 +150,11 @@ static const ModelVariable VARIABLES[] = {
     SEVEN(OUTPUT, "velocity", 310, velocity, NULL, "Velocity estimate"),
     THIRTY_TWO(OUTPUT, "theta", 400, theta, "Parameter estimate (the model file's unit)"),
     THIRTY_TWO(OUTPUT, "theta_std", 440, theta_std, "Standard error of the parameter estimate"),
+    THIRTY_TWO(OUTPUT, "theta_excitation", 480, theta_excitation,
+               "Share of the parameter's regressor column that the others do not explain, "
+               "sqrt(1 - R^2) of the identifier's information: 0 (not excited, or a "
+               "combination of the others) to 1 (orthogonal); below 0.001 its estimate is "
+               "not determined by the log. 0 until the first solve"),
     {.name = "identifier_active", .vr = 361, .type = TYPE_BOOLEAN,
      .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
      .offset = OFF(identifier_active), .description = "The identifier is integrating"},
@@ -164,6 +173,12 @@ static const ModelVariable VARIABLES[] = {
      .description = "Parameters the estimate holds at an end of the range the model file "
                     "declares (positive = true, range = [a, b]): the identifier's least "
                     "squares lie outside it; their theta_std is 0. 0 without ranges"},
+    {.name = "parameters_not_excited", .vr = 370, .type = TYPE_INTEGER,
+     .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
+     .offset = OFF(parameters_not_excited),
+     .description = "Parameters whose theta_excitation is below 0.001 while the identifier "
+                    "runs: the log so far does not tell them from the others (their estimates "
+                    "and theta_std mean little). 0 before the first solve"},
     {.name = "identifier_cutoff", .vr = 369, .type = TYPE_REAL,
      OUTPUT(.offset = OFF(identifier_cutoff), .unit = "Hz",
      .description = "Cut-off of the fixed-lag window the identifier regresses through "
@@ -214,6 +229,13 @@ static void publish(ModelData *d)
     mp_estimates(&d->pipe, &d->program, d->theta, d->theta_std, d->held);
     d->parameters_held = 0;
     for (int k = 0; k < d->program.p; ++k) d->parameters_held += d->held[k] != 0;
+    const StatisticsJob *job = &d->pipe.statistics;
+    const int solved = d->pipe.identifying && job->completed > 0.0;
+    d->parameters_not_excited = 0;
+    for (int k = 0; k < d->program.p; ++k) {
+        d->theta_excitation[k] = solved ? job->column_excitation[k] : 0.0;
+        d->parameters_not_excited += solved && d->theta_excitation[k] < MP_NOT_EXCITED;
+    }
     for (int i = 0; i < n; ++i) {
         d->position[i] = mp_position(&d->pipe, i);
         d->velocity[i] = mp_velocity(&d->pipe, i); /* for the end of the step, as x1_hat */
@@ -285,6 +307,8 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     d->coarse_logged = 0;
     d->held_logged = d->held_seen = 0;
     d->held_since = 0.0;
+    d->weak_logged = d->weak_seen = 0;
+    d->weak_since = 0.0;
     d->damping_logged = d->energy_seen = 0;
     d->energy_since = 0.0;
     d->work_per_step = step_work(d);
@@ -325,14 +349,26 @@ static double standing(int value, double t, int *seen, double *since)
     return t - *since;
 }
 
+/* Whether a count of parameters has grown beyond the last one logged and stood
+ * MP_WARNING_DELAY (then it becomes the one logged); a count that falls is
+ * remembered, so that growing again is said again. */
+static int grown(int count, double t, int *logged, int *seen, double *since)
+{
+    const double stood = standing(count, t, seen, since);
+    if (count < *logged) *logged = count;
+    if (count > *logged && stood >= MP_WARNING_DELAY) {
+        *logged = count;
+        return 1;
+    }
+    return 0;
+}
+
 /* A warning each time more parameters have been held at their ranges' ends for
  * MP_WARNING_DELAY, naming the first: the log pushes the estimate outside what the
  * file declares (the transient's first estimates often are, briefly). */
 static void log_held(ModelData *d, double t, const ModelLogger *log)
 {
-    const double stood = standing(d->parameters_held, t, &d->held_seen, &d->held_since);
-    if (d->parameters_held < d->held_logged) d->held_logged = d->parameters_held;
-    if (d->parameters_held > d->held_logged && stood >= MP_WARNING_DELAY) {
+    if (grown(d->parameters_held, t, &d->held_logged, &d->held_seen, &d->held_since)) {
         int k = 0;
         while (!d->held[k]) ++k;
         log->log(log->context, MODEL_WARNING,
@@ -341,7 +377,24 @@ static void log_held(ModelData *d, double t, const ModelLogger *log)
                  "outside the range (a model term missing, or a parameter the log does not "
                  "excite yet)", t, d->parameters_held, d->held_since, d->program.names[k],
                  d->held[k] < 0 ? "lower" : "upper", d->theta[k]);
-        d->held_logged = d->parameters_held;
+    }
+}
+
+/* A warning each time more parameters have not been excited for MP_WARNING_DELAY,
+ * naming the least excited: its estimate is the log's noise or the nominal value. */
+static void log_not_excited(ModelData *d, double t, const ModelLogger *log)
+{
+    if (grown(d->parameters_not_excited, t, &d->weak_logged, &d->weak_seen, &d->weak_since)) {
+        int k = 0;
+        for (int j = 1; j < d->program.p; ++j)
+            if (d->theta_excitation[j] < d->theta_excitation[k]) k = j;
+        log->log(log->context, MODEL_WARNING,
+                 "t = %g: %d parameter(s) not excited since t = %g, the least %s (excitation "
+                 "%.2g, below %g): its regressor column is zero so far or a combination of the "
+                 "others, so the log does not determine its estimate %g or its theta_std. "
+                 "Excite the motion that this term describes", t, d->parameters_not_excited,
+                 d->weak_since, d->program.names[k], d->theta_excitation[k], MP_NOT_EXCITED,
+                 d->theta[k]);
     }
 }
 
@@ -383,6 +436,7 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
     publish(d);
     log_cadence(&d->coarse_logged, d->coarse_inputs, d->input_hold, d->pipe.h, t, log);
     log_held(d, t, log);
+    log_not_excited(d, t, log);
     log_damping(d, t, log);
     for (int i = 0; i < d->program.n; ++i) {
         if (!isfinite(d->position[i]) || !isfinite(d->velocity[i])) {
@@ -412,7 +466,7 @@ static ModelStatus communication_point(void *data, double t, const ModelLogger *
 static const StateField STATE_FIELDS[] = {
     D(alpha1), D(alpha2), I(reset_seen, 0, 1), IC_STATE_FIELDS(ModelData, cadence),
     I(coarse_logged, 0, 1), I(held_logged, 0, MAX_P), I(held_seen, 0, MAX_P),
-    I(held, -1, 1),
+    I(held, -1, 1), I(weak_logged, 0, MAX_P), I(weak_seen, 0, MAX_P),
     I(damping_logged, 0, 1), I(energy_seen, 0, 1), D(pipe.gain), D(pipe.warm_up),
     I(pipe.identifying, 0, 1), I(pipe.started, 0, 1), I(pipe.warm_samples, 0, 1000000000),
     R(pipe.singular_steps, 0.0, NAN), I(pipe.nonfinite, MP_FINITE, MP_NONFINITE_IDENTIFIER),

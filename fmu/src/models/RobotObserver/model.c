@@ -54,7 +54,8 @@ typedef struct {
     double q[MAX_N], u[MAX_N];
     int identifier_reset;
     /* outputs */
-    double q_hat[MAX_N], qd_hat[MAX_N], qd_sample[MAX_N], base_estimate[MAX_P], base_std[MAX_P];
+    double q_hat[MAX_N], qd_hat[MAX_N], qd_sample[MAX_N], base_estimate[MAX_P], base_std[MAX_P],
+        base_excitation[MAX_P];
     double gamma_trace, excitation, input_hold;
     int identifier_active, converged, coarse_inputs;
     /* state */
@@ -216,6 +217,12 @@ static const ModelVariable VARIABLES[] = {
      OUTPUT(.offset = OFF(base_std),
      .description = "Standard errors of base_estimate (sandwich formula, at the snapshot of "
                     "the last completed solve with statistics)")},
+    {.name = "base_excitation", .vr = 1100, .rows = MAX_P, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(base_excitation),
+     .description = "Share of each base parameter's regressor column that the others do not "
+                    "explain, sqrt(1 - R^2) of the identifier's information: 0 (not excited, "
+                    "or a combination of the others) to 1 (orthogonal); below 0.001 the log "
+                    "does not determine it. At the last completed solve with statistics")},
     {.name = "gamma_trace", .vr = 1000, .type = TYPE_REAL,
      OUTPUT(.offset = OFF(gamma_trace), .description = "Trace of the identifier's Gamma")},
     {.name = "excitation", .vr = 1001, .type = TYPE_REAL,
@@ -375,7 +382,10 @@ static void publish_estimates(RobotData *d)
     const double *delta = sj_freshest_estimate(job, &d->id);
     if (d->identifier && job->completed > d->statistics_seen) {
         d->statistics_seen = job->completed;
-        for (int k = 0; k < d->base_count; ++k) d->base_std[k] = job->std_error[k];
+        for (int k = 0; k < d->base_count; ++k) {
+            d->base_std[k] = job->std_error[k];
+            d->base_excitation[k] = job->column_excitation[k];
+        }
         d->gamma_trace = job->gamma_trace;
         d->excitation = job->excitation;
     }
@@ -418,6 +428,7 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
     if (d->identifier && check_columns(d, log) != MODEL_OK) return MODEL_ERROR;
     if (init_pipeline(d, log) != MODEL_OK) return MODEL_ERROR;
     memset(d->base_std, 0, sizeof d->base_std);
+    memset(d->base_excitation, 0, sizeof d->base_excitation);
     memset(d->base_estimate, 0, sizeof d->base_estimate);
     d->gamma_trace = d->identifier ? d->id.gamma_trace : 0.0;
     d->excitation = 0.0;
