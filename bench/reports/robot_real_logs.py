@@ -597,7 +597,8 @@ def _drive_section(rows: list[dict]) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true",
-                        help="8 s training logs instead of 40 s (about 2 minutes)")
+                        help="8 s training logs instead of 40 s (about 2 minutes, and as much "
+                             "again for cases e to f2)")
     parser.add_argument("--cases", default=",".join(c.key for c in CASES),
                         help="comma-separated cases to run, e.g. a,d (default: all)")
     parser.add_argument("--out", type=Path, default=REPORTS / "robot_real_logs.md",
