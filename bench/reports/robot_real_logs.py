@@ -20,7 +20,20 @@ Cases (the robots of bench/reports/robots.py, their truth from `truth_of`: links
      offset per joint in the truth (outside the identified model's class);
   c2 case c's logs identified with --joint-terms offset,asymmetric-coulomb (the model
      class then holds the truth; the least-squares baseline gets the same columns);
-  d  the UR5 at 1 kHz, 17 bit: the clean reference.
+  d  the UR5 at 1 kHz, 17 bit: the clean reference;
+  e  the UR5 (6 joints) at ~100 Hz on a jittering clock (steps 8-12 ms), motor currents
+     (--torque-gains), 17 bit, with a drive inertia (armature, Ia_i q_i'' added to joint
+     i's torque) and a constant torque offset per joint in the truth, identified with
+     identify's defaults;
+  e2 case e's logs identified with --joint-terms auto;
+  f, f2  as e, e2 for the Panda (7 joints, fingers locked).
+Cases e to f2 are also judged on their own targets: every link mass of identified.urdf
+within a factor 1.5 of the truth's, identified.urdf's validation error within 2 %
+(relative) of the estimate's and at most the least squares'.  Their truth's armature is
+a fraction 0.1..0.5 of the diagonal of the URDF's inertia matrix at q = 0, its offsets
+0.3..0.6 of the joint's Coulomb level, either sign; their link masses are the truth's of
+every case (the URDF's scaled by 0.8..1.2).  A case with an auto twin simulates its logs
+once per run: the twin (e2, f2) reuses them when both are run.
 Training logs of 40 s (--quick: 8 s), validation logs half as long.
 A jittered log is given to identify as it is (identify resamples it itself); only if that
 fails does the bench resample it onto its mean step (cubic spline of q, linear
@@ -70,6 +83,10 @@ REPO = Path(__file__).resolve().parents[2]
 FINE_STEP = 1e-3       # the simulation's step before sampling a jittered clock [s]
 UR5_GAINS = (13.2, 13.2, 13.2, 9.8, 9.8, 9.8)  # drive gains [N.m/A] of case a
 TARGET_RELATIVE = 0.05  # identified.urdf within 5 % (relative) of the estimate's error
+PANDA_GAINS = (20.0, 20.0, 20.0, 20.0, 8.0, 8.0, 8.0)  # drive gains [N.m/A] of case f
+ARM_JITTER = (0.008, 0.012)  # clock steps of cases e and f [s]: ~100 Hz
+DRIVE_MASS_FACTOR = 1.5  # cases e to f2: every identified mass within x1.5 of the truth's
+DRIVE_RELATIVE = 0.02    # and identified.urdf within 2 % (relative) of the estimate's error
 
 
 @dataclass
@@ -88,6 +105,8 @@ class Case:
     pd: tuple[float, float] = (400.0, 40.0)
     window: float | None = None       # identify's and validate's --window [s] (None: theirs)
     joint_terms: str | None = None    # identify's --joint-terms (None: the core's model)
+    drive: bool = False               # armature (drive inertia) and a torque offset
+    logs_from: str | None = None      # reuse this case's logs when it ran before in the run
     results: dict = field(default_factory=dict)
 
 
@@ -107,6 +126,14 @@ CASES = (
     Case("c2", "ur5", 1000.0, "case c's logs, identify --joint-terms offset,asymmetric-coulomb",
          outside_class=True, joint_terms="offset,asymmetric-coulomb"),
     Case("d", "ur5", 1000.0, "UR5, 1 kHz, 17 bit (clean reference)"),
+    Case("e", "ur5", 100.0, "UR5, ~100 Hz, clock steps 8-12 ms, motor currents, 17 bit, "
+         "armature + torque offset", jitter=ARM_JITTER, gains=UR5_GAINS, drive=True),
+    Case("e2", "ur5", 100.0, "case e's logs, identify --joint-terms auto",
+         jitter=ARM_JITTER, gains=UR5_GAINS, drive=True, joint_terms="auto", logs_from="e"),
+    Case("f", "panda", 100.0, "Panda, ~100 Hz, clock steps 8-12 ms, motor currents, 17 bit, "
+         "armature + torque offset", jitter=ARM_JITTER, gains=PANDA_GAINS, drive=True),
+    Case("f2", "panda", 100.0, "case f's logs, identify --joint-terms auto",
+         jitter=ARM_JITTER, gains=PANDA_GAINS, drive=True, joint_terms="auto", logs_from="f"),
 )
 
 
@@ -116,8 +143,19 @@ def _truth(case: Case, robot: Robot, path: Path, locked: tuple[str, ...]):
     """forward(q, qd, tau) of the simulated robot and what it adds to the model class."""
     rng = np.random.default_rng(1)
     link, friction, _ = truth_of(case.robot, robot, rng)
-    forward = pinocchio_truth(path, locked, link, friction)
+    # the drive's inertia: a fraction of the URDF's inertia matrix's diagonal at q = 0
+    armature = (np.diag(robot.rigid_body().mass_matrix(np.zeros(robot.n))[0])
+                * rng.uniform(0.1, 0.5, robot.n)) if case.drive else np.zeros(robot.n)
+    forward = pinocchio_truth(path, locked, link, friction, armature if case.drive else None)
     extra: dict = {"true_masses": link[:, 0].tolist()}
+    if case.drive:
+        # and a constant offset: tau_i = ... + Ia_i q_i'' + offset_i
+        offset = friction[:, 1] * rng.uniform(0.3, 0.6, robot.n) * rng.choice([-1, 1], robot.n)
+        extra.update(armature=armature.tolist(), torque_offset=offset.tolist())
+        inside = forward
+
+        def forward(q, qd, tau):  # noqa: ANN001, ANN202
+            return inside(q, qd, tau - offset)
     if case.outside_class:
         # Coulomb f_c + d for q' > 0, f_c - d for q' < 0, and a constant offset
         asymmetry = friction[:, 1] * rng.uniform(0.2, 0.4, robot.n) * rng.choice([-1, 1], robot.n)
@@ -303,14 +341,22 @@ def read_estimate(parameters: Path, base) -> np.ndarray:
     return np.array([float(r["estimate"]) for r in rows])
 
 
-def run_case(case: Case, train_seconds: float, work: Path) -> dict:
+def run_case(case: Case, train_seconds: float, work: Path, logs: dict | None = None) -> dict:
+    """One row; `logs` (by case key) holds the simulated logs of the cases run before, for a
+    case whose logs_from names one of them (and receives this case's)."""
     path, locked = example_urdf(case.robot)
     robot = read_urdf(path, locked=locked)
-    forward, extra = _truth(case, robot, path, locked)
-    started = time.perf_counter()
-    train, _ = joint_log(case, robot, forward, train_seconds, seed=1)
-    check, true_states = joint_log(case, robot, forward, train_seconds / 2, seed=101)
-    simulated = time.perf_counter() - started
+    logs = {} if logs is None else logs
+    if case.logs_from in logs:
+        extra, train, check, true_states = logs[case.logs_from]
+        simulated = 0.0
+    else:
+        forward, extra = _truth(case, robot, path, locked)
+        started = time.perf_counter()
+        train, _ = joint_log(case, robot, forward, train_seconds, seed=1)
+        check, true_states = joint_log(case, robot, forward, train_seconds / 2, seed=101)
+        simulated = time.perf_counter() - started
+    logs[case.key] = (extra, train, check, true_states)
     folder = work / case.key
     folder.mkdir(parents=True, exist_ok=True)
     row: dict = {"case": case.key, "describe": case.describe, "robot": case.robot,
@@ -349,7 +395,12 @@ def run_case(case: Case, train_seconds: float, work: Path) -> dict:
     identified = read_urdf(out / "identified.urdf", locked=locked)
     # the model class identify was given: the URDF's, or with the joint terms (then the
     # identified model's terms come from its sidecar, as validate reads them)
-    terms = None if case.joint_terms is None else parse_terms(case.joint_terms, None)
+    asked = case.joint_terms
+    if asked == "auto":  # the class identify chose by cross-validation
+        asked = summary["joint_terms_choice"]["chosen"]
+        row["joint_terms_chosen"] = asked
+        asked = None if asked == "none" else asked
+    terms = None if asked is None else parse_terms(asked, None)
     sidecar = None
     if terms is not None:
         base = base_parameters(body, robot.arrays()["types"], robot.joint_names, "all",
@@ -385,6 +436,16 @@ def run_case(case: Case, train_seconds: float, work: Path) -> dict:
         "masses within x2 of URDF": bool(np.all((masses / masses_urdf <= 2.0)
                                                 & (masses / masses_urdf >= 0.5))),
         "not worse than URDF without warning": e["identified"] <= e["urdf"] or warned}
+    if case.drive:
+        identified_masses = identified.arrays()["link"][:, core_layout().mass]
+        over_truth = identified_masses / np.asarray(extra["true_masses"])
+        row["identified_mass_over_truth"] = over_truth.tolist()
+        row["drive_targets"] = {
+            "every identified.urdf mass within x1.5 of the truth's": bool(np.all(
+                (over_truth <= DRIVE_MASS_FACTOR) & (over_truth >= 1 / DRIVE_MASS_FACTOR))),
+            "identified within 2 % of estimate": abs(e["identified"] - e["estimate"])
+            <= DRIVE_RELATIVE * e["estimate"],
+            "identified <= OLS": e["identified"] <= e["ols"]}
     return row
 
 
@@ -478,7 +539,7 @@ def document(run: dict) -> str:
                          + ("; identify took the log as it is" if taken else
                             f": `{r['raw_log']['stderr'][:400]}`; the bench then resampled "
                             f"the log onto its mean step ({r['mean_step_ms']:.3f} ms)"))
-    extra = [r for r in run["rows"] if "torque_offset" in r["truth_extra"]]
+    extra = [r for r in run["rows"] if "coulomb_asymmetry" in r["truth_extra"]]
     for r in extra:
         lines.append(f"- case {r['case']}, outside the model class: Coulomb asymmetry (N.m) "
                      + ", ".join(f"{x:+.3f}" for x in r["truth_extra"]["coulomb_asymmetry"])
@@ -488,13 +549,56 @@ def document(run: dict) -> str:
     lines.append("identify commands (the training log written by the bench): ")
     for r in run["rows"]:
         lines.append(f"- {r['case']}: `{r['identify_command']}`")
+    drive = [r for r in run["rows"] if "drive_targets" in r]
+    if drive:
+        lines += ["", *_drive_section(drive)]
     return "\n".join(lines) + "\n"
+
+
+def _drive_section(rows: list[dict]) -> list[str]:
+    """Cases e to f2: drive inertias and torque offsets in the truth, their targets."""
+    lines = ["## Drive inertias and torque offsets (6 and 7 joints, ~100 Hz, currents)", "",
+             "The truth holds, beyond the URDF's model class, an armature Ia_i (Ia_i q_i'' "
+             "added to joint i's torque) and a constant torque offset per joint; its link "
+             "masses are the URDF's scaled by 0.8..1.2. Targets: every link mass of "
+             "identified.urdf within a factor 1.5 of the truth's; identified.urdf's "
+             "validation error within 2 % (relative) of the estimate's and at most the "
+             "least squares' (OLS, with the same joint-term columns as the estimate).", "",
+             "| case | joint terms | identify time | identified.urdf | estimate | OLS | "
+             "identified / estimate - 1 | masses of identified.urdf / truth's | masses "
+             "x1.5 | within 2 % | <= OLS |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        s = r["scores"]
+        e = {k: s[k]["pooled"] for k in ("identified", "estimate", "ols")}
+        terms = "defaults" if "joint_terms_chosen" not in r else \
+            f"auto: {r['joint_terms_chosen']}"
+        t = list(r["drive_targets"].values())
+        lines.append(
+            f"| {r['case']} | {terms} | {r['identify_s']:.1f} s | {_pct(e['identified'])} | "
+            f"{_pct(e['estimate'])} | {_pct(e['ols'])} | "
+            f"{100 * (e['identified'] / e['estimate'] - 1):+.2f} % | "
+            + ", ".join(f"{x:.2f}" for x in r["identified_mass_over_truth"])
+            + " | " + " | ".join(_yes(v) for v in t) + " |")
+    lines.append("")
+    seen = set()
+    for r in rows:
+        x = r["truth_extra"]
+        key = (r["robot"], tuple(x["armature"]))
+        if key in seen:
+            continue
+        seen.add(key)
+        lines.append(f"- {r['robot']} truth (case {r['case']}): armature (kg.m^2) "
+                     + ", ".join(f"{a:.4g}" for a in x["armature"]) + "; torque offset (N.m) "
+                     + ", ".join(f"{o:+.3f}" for o in x["torque_offset"]))
+    return lines
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true",
-                        help="8 s training logs instead of 40 s (about 2 minutes)")
+                        help="8 s training logs instead of 40 s (about 2 minutes, and as much "
+                             "again for cases e to f2)")
     parser.add_argument("--cases", default=",".join(c.key for c in CASES),
                         help="comma-separated cases to run, e.g. a,d (default: all)")
     parser.add_argument("--out", type=Path, default=REPORTS / "robot_real_logs.md",
@@ -517,8 +621,9 @@ def main(argv: list[str] | None = None) -> int:
     started = time.perf_counter()
     with tempfile.TemporaryDirectory() as temporary:
         work = args.keep or Path(temporary)
+        logs: dict = {}
         for case in chosen:
-            row = run_case(case, seconds, work)
+            row = run_case(case, seconds, work, logs)
             run["rows"].append(row)
             s = row.get("scores", {})
             print(f"{case.key}: " + ", ".join(f"{k} {_pct(v['pooled'])}" for k, v in s.items())

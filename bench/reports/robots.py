@@ -81,13 +81,17 @@ def truth_of(name: str, robot, rng):
     return link, friction, unknown
 
 
-def pinocchio_truth(path, locked, link, friction):
+def pinocchio_truth(path, locked, link, friction, armature=None):
+    """forward(q, qd, tau) of the robot with these link parameters and friction, and with
+    `armature` (n,) drive inertias, Ia_i q_i'' added to joint i's torque, if given."""
     model = pin.buildModelFromUrdf(str(path))
     if locked:
         model = pin.buildReducedModel(model, [model.getJointId(j) for j in locked],
                                       pin.neutral(model))
     for i in range(1, model.njoints):
         model.inertias[i] = pin.Inertia.FromDynamicParameters(link[i - 1])
+    if armature is not None:  # aba and crba add it to the inertia matrix's diagonal
+        model.armature = np.asarray(armature, dtype=float)
     data = model.createData()
 
     def forward(q, qd, tau):
