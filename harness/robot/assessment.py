@@ -84,10 +84,12 @@ def implausible_masses(consistent: np.ndarray, nominal: np.ndarray,
 
 
 def choose_model(predictions: dict[str, Prediction], consistent: np.ndarray,
-                 nominal: np.ndarray, link_names: list[str] | None = None) -> Choice:
+                 nominal: np.ndarray, link_names: list[str] | None = None,
+                 missing_terms: tuple[str, ...] = ()) -> Choice:
     """The consistent parameters, or the URDF's (nominal) if the consistent model
     predicts the training log worse than the URDF; warnings for both cases of the
-    module's description.  predictions: "urdf", "estimate" and "consistent"."""
+    module's description.  predictions: "urdf", "estimate" and "consistent";
+    missing_terms: joint terms the fitted class leaves out (the warning names them)."""
     urdf, estimate, model = (predictions[k].pooled for k in ("urdf", "estimate", "consistent"))
     if model > urdf:
         return Choice(nominal.copy(), "urdf", predictions, [
@@ -104,7 +106,11 @@ def choose_model(predictions: dict[str, Prediction], consistent: np.ndarray,
             f"{100 * CONSISTENT_MARGIN:.0f} %): no physically consistent model of this "
             f"URDF's kinematics fits the data as well (unmodelled effects, wrong kinematics "
             f"or units, a joint whose torque is not in the log); identified.urdf is "
-            f"written all the same")
+            f"written all the same" + (
+                f". The model class has no {', '.join(missing_terms)}: a drive's inertia or "
+                "a torque offset that the links must stand in for bends their masses; "
+                "--joint-terms auto chooses the joint terms by cross-validation"
+                if missing_terms else ""))
     if link_names:
         warnings += implausible_masses(consistent, nominal, link_names)
     return Choice(consistent, "consistent", predictions, warnings)

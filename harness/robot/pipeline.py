@@ -299,9 +299,11 @@ def _identified(robot: Robot, rows: Rows, base: BaseParameters, Y: np.ndarray,
         # the left-out equations' predictions do not count: Yb is 0 there
         "estimate": prediction_error(known_torque + Yb @ fit.theta, torque, mask, names),
         "consistent": prediction_error(Y @ projection.pi, torque, mask, names)}
+    missing = tuple(name for name, present in (("offset", terms.offset),
+                                               ("armature", terms.armature)) if not present)
     choice = choose_model(predictions, projection.pi,
                           np.concatenate([nominal, np.zeros(terms.count(robot.n))]),
-                          [joint.child_link for joint in robot.joints])
+                          [joint.child_link for joint in robot.joints], missing)
     return base, fit, choice.pi, projection, choice
 
 

@@ -218,6 +218,13 @@ def test_the_choice_between_the_consistent_model_the_estimate_and_the_urdf():
                         "consistent": _prediction(0.106)}, consistent, nominal)
     assert far.written == "consistent" and np.array_equal(far.pi, consistent)
     assert len(far.warnings) == 1 and "6 % worse than the base-parameter estimate" in far.warnings[0]
+    assert "--joint-terms auto" not in far.warnings[0]
+    # a class without offsets or drive inertia: the warning names them and the way out
+    bare = choose_model({"urdf": _prediction(0.3), "estimate": _prediction(0.10),
+                         "consistent": _prediction(0.106)}, consistent, nominal,
+                        missing_terms=("offset", "armature"))
+    assert "has no offset, armature" in bare.warnings[0]
+    assert "--joint-terms auto chooses" in bare.warnings[0]
     worse = choose_model({"urdf": _prediction(0.3), "estimate": _prediction(0.10),
                           "consistent": _prediction(0.31)}, consistent, nominal)
     assert worse.written == "urdf" and np.array_equal(worse.pi, nominal)
