@@ -8,25 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from cli_runner import cli, refused
+from model_text import model
 
 pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
-
-
-MODEL = '''[model]
-coordinates = ["{c}"]
-inputs = ["F"]
-equations = ["{eq}"]
-
-[parameters]
-M = {{ nominal = 1 }}
-Fv = {{ nominal = 1 }}
-{extra}'''
-
-
-def model(path: Path, eq: str = "M*der(x,2) + Fv*der(x) = F", c: str = "x",
-          extra: str = "") -> Path:
-    path.write_text(MODEL.format(c=c, eq=eq, extra=extra), encoding="utf-8")
-    return path
 
 
 def mass_log(path: Path, scale: float = 1.0, seconds: float = 8.0) -> Path:

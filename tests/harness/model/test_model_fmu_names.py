@@ -3,30 +3,13 @@ escaped, so the FMU stays readable (harness/model/fmu_export.py)."""
 from __future__ import annotations
 
 import zipfile
-from pathlib import Path
 
 import numpy as np
 import pytest
 from cli_runner import cli
+from model_text import model
 
 pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
-
-
-MODEL = '''[model]
-coordinates = ["{c}"]
-inputs = ["F"]
-equations = ["{eq}"]
-
-[parameters]
-M = {{ nominal = 1 }}
-Fv = {{ nominal = 1 }}
-{extra}'''
-
-
-def model(path: Path, eq: str = "M*der(x,2) + Fv*der(x) = F", c: str = "x",
-          extra: str = "") -> Path:
-    path.write_text(MODEL.format(c=c, eq=eq, extra=extra), encoding="utf-8")
-    return path
 
 
 @pytest.mark.parametrize("name", ["m\nsizes 7 7 7\n.toml", "m\x01\x1b[31m.toml", "m\u2028.toml"])

@@ -3,11 +3,10 @@ itself (the core's C through the term program, and the numpy loop that runs a mo
 beyond the term program's limits)."""
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 import scipy.integrate
+from model_text import model
 
 from harness.model import parse_model
 from harness.model.simulation import (
@@ -121,22 +120,6 @@ def test_substeps_and_time_constant_follow_the_modes():
 
 
 # ---- names the generated code shares with the file ----
-
-MODEL = '''[model]
-coordinates = ["{c}"]
-inputs = ["F"]
-equations = ["{eq}"]
-
-[parameters]
-M = {{ nominal = 1 }}
-Fv = {{ nominal = 1 }}
-{extra}'''
-
-
-def model(path: Path, eq: str = "M*der(x,2) + Fv*der(x) = F", c: str = "x",
-          extra: str = "") -> Path:
-    path.write_text(MODEL.format(c=c, eq=eq, extra=extra), encoding="utf-8")
-    return path
 
 
 @pytest.mark.cli

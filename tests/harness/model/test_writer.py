@@ -2,28 +2,10 @@
 header's comment."""
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
+from model_text import model
 
 pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
-
-
-MODEL = '''[model]
-coordinates = ["{c}"]
-inputs = ["F"]
-equations = ["{eq}"]
-
-[parameters]
-M = {{ nominal = 1 }}
-Fv = {{ nominal = 1 }}
-{extra}'''
-
-
-def model(path: Path, eq: str = "M*der(x,2) + Fv*der(x) = F", c: str = "x",
-          extra: str = "") -> Path:
-    path.write_text(MODEL.format(c=c, eq=eq, extra=extra), encoding="utf-8")
-    return path
 
 
 def test_a_log_name_with_toml_in_it_stays_in_the_comment(tmp_path):

@@ -2,29 +2,11 @@
 status 2; a term that is nearly but not zero is kept (harness/model/zero_terms.py)."""
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
 from cli_runner import cli, refused
+from model_text import model
 
 pytestmark = pytest.mark.cli  # the command line, not the FMUs' C code
-
-
-MODEL = '''[model]
-coordinates = ["{c}"]
-inputs = ["F"]
-equations = ["{eq}"]
-
-[parameters]
-M = {{ nominal = 1 }}
-Fv = {{ nominal = 1 }}
-{extra}'''
-
-
-def model(path: Path, eq: str = "M*der(x,2) + Fv*der(x) = F", c: str = "x",
-          extra: str = "") -> Path:
-    path.write_text(MODEL.format(c=c, eq=eq, extra=extra), encoding="utf-8")
-    return path
 
 
 @pytest.mark.parametrize("term", ["K*(sin(x)^2 + cos(x)^2 - 1)", "K*(cosh(x)^2 - sinh(x)^2 - 1)",
