@@ -296,6 +296,10 @@ def _pct(x: float | None) -> str:
     return "n/a" if x is None else f"{100 * x:.2f} %"
 
 
+def _figure(x: float | None) -> str:
+    return "n/a" if x is None else f"{x:.3g}"
+
+
 def _agree(a: float, b: float) -> str:
     gap = abs(a - b) / min(abs(a), abs(b))
     return f"{100 * gap:.1f} % apart: " + ("yes" if gap <= AGREE else "**NO**")
@@ -332,9 +336,11 @@ def document(run_: dict) -> str:
         f"{r['model_pipeline']['chosen']['cutoff_hz']:.3g} Hz, decimation "
         f"{r['model_pipeline']['chosen']['decimation']}, {r['model_method']}; "
         f"least squares {r['ls_seconds']:.2f} s",
-        "- the model path's candidates (blocked cross-validation, relative simulation "
-        "error): " + "; ".join(
-            f"{c['label']} {_pct(c['score'])}" for c in r["model_pipeline"]["candidates"]),
+        "- the model path's candidates (blocked cross-validation: relative simulation "
+        "error, input error relative to the reference pipeline's, their product relative "
+        "to the best): " + "; ".join(
+            f"{c['label']} {_pct(c['score'])}, {_figure(c.get('input_score'))}, "
+            f"{_figure(c.get('combined'))}" for c in r["model_pipeline"]["candidates"]),
         "",
         "Validation log. True states: the independent scorer (each estimate's torques at the "
         "run's true q, q', q''; joint 1: RMS error over RMS torque; joint 2, whose torque is "

@@ -158,11 +158,16 @@ def _print_choice(choice: Choice, refined: bool) -> None:
     out is said: a warning when least squares are the answer, a remark when the output
     error (which no band limits) refined them."""
     if choice.candidates:
-        print(f"  derivative pipeline by {choice.method}; relative simulation error per "
-              "candidate:")
+        scored = any(np.isfinite(c.input_score) for c in choice.candidates)
+        print(f"  derivative pipeline by {choice.method}; per candidate, relative simulation "
+              "error" + (", input error relative to the reference's, their product relative "
+                         "to the best:" if scored else ":"))
         for c in choice.candidates:
             mark = "  <- chosen" if c.settings == choice.settings else ""
             figure = f"{100 * c.score:.4g} %" if np.isfinite(c.score) else "failed"
+            if scored:
+                figure = (f"{figure:>10}  {c.input_score:8.4g}  {c.combined:8.4g}"
+                          if np.isfinite(c.combined) else f"{figure:>10}  failed")
             print(f"    {c.label:<58} {figure}{mark}")
     else:
         print(f"  derivative pipeline: {choice.method}")
