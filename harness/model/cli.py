@@ -28,6 +28,7 @@ from ..json_files import write_json
 from ..messages import note
 from ..names import plain
 from ..outputs import Outputs, shown
+from .as_good import CLASS_TOLERANCE
 from .errors import ModelFileError
 from .estimates import Estimates
 from .fit import relative_errors
@@ -43,7 +44,7 @@ from .log import LogFileError, ModelLog, read_log
 from .model import Model
 from .reader import read_model
 from .scores import independent_scores
-from .selection import CLASS_TOLERANCE, POWER_ABOVE, Choice
+from .selection import POWER_ABOVE, Choice
 from .zero_phase import Regression, derivatives, regression
 
 #: A pooled relative error above this on the estimation log: the model explains little.

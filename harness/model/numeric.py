@@ -1,11 +1,17 @@
-"""Numbers from the symbolic regressor: Y and r over many samples at once (numpy)."""
+"""Numbers from the symbolic regressor: Y and r over many samples at once (numpy).
+
+sympy is imported where a model's expressions are compiled, not with the module: the
+robot path and the least squares (rms_columns) use none of it, and sympy costs about
+0.8 s to import."""
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import sympy
+
+if TYPE_CHECKING:
+    import sympy
 
 
 def compile_numpy(arguments: Sequence[sympy.Symbol],
@@ -17,6 +23,7 @@ def compile_numpy(arguments: Sequence[sympy.Symbol],
     generated code holds no name of the model's: dummify names the arguments _Dummy_N, and
     the constants (E, pi), which numpy's printer writes as the bare names e and pi that
     lambdify also binds to the model's symbols of those names, are written as numbers."""
+    import sympy
     items = [expressions] if isinstance(expressions, sympy.Basic) else list(expressions)
     constants: set[sympy.Basic] = set()
     for item in items:

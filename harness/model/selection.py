@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.signal
 
+from .as_good import CLASS_TOLERANCE, as_good
 from .fit import estimate
 from .held_out_inputs import HeldOutInputs
 from .log import LogFileError, ModelLog
@@ -282,12 +283,6 @@ def pick(runs: dict[str, np.ndarray], combined: dict[str, np.ndarray]) -> str | 
                key=lambda label: float(np.mean(runs[label])))
 
 
-#: A model class that scores within this fraction of the best one scored, or within one
-#: standard error of the blocks' differences from it, is as good: the one with fewer
-#: unknowns is kept (the one-standard-error rule of cross-validation).
-CLASS_TOLERANCE = 0.01
-
-
 @dataclass(frozen=True)
 class ClassChoice:
     """The unknowns kept (``free``), the optional ones left out, every class scored
@@ -351,18 +346,6 @@ def choose_class(model: Model, log: ModelLog, rows: Regression, border: int,
     weak = tuple(names[k] for k in optional if excitation[k] < too_weak)
     return ClassChoice(current, tuple(names[k] for k in optional if not current[k]), scores,
                        costs, weak)
-
-
-def as_good(candidate: np.ndarray, best: np.ndarray) -> bool:
-    """Whether a class's block scores are as good as the best class's: its mean within
-    CLASS_TOLERANCE of the best mean, or within one standard error of the paired block
-    differences."""
-    if not np.all(np.isfinite(candidate)):
-        return False
-    difference = candidate - best
-    standard_error = float(np.std(difference, ddof=1) / np.sqrt(len(difference)))
-    return float(np.mean(difference)) <= max(CLASS_TOLERANCE * float(np.mean(best)),
-                                             standard_error)
 
 
 def _without(mask: np.ndarray, k: int) -> np.ndarray:

@@ -7,7 +7,7 @@ rows over which residuals are correlated, and scored on the held-out block: the 
 the predicted minus the measured torques over the RMS of the measured ones, over the
 joint equations the regression uses. The class kept has the fewest terms among those
 as good as the best (its mean within 1 % or one standard error of the paired block
-differences, harness.model.selection.as_good), the lower mean breaking a tie.
+differences, harness.model.as_good), the lower mean breaking a tie.
 """
 from __future__ import annotations
 
@@ -21,8 +21,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..log_signals import LogSignalsError
+from ..model.as_good import as_good
 from ..model.fit import estimate
-from ..model.selection import as_good
 from .base_parameters import BaseParameters
 from .joint_terms import OPTION_ITEMS, JointTerms, check_directions
 
