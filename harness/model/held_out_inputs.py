@@ -43,8 +43,9 @@ class HeldOutInputs:
     def _rms(self, take: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """Each equation's residual RMS over the reference rows ``take`` (its kept rows)."""
         mask = self.mask[take]
-        residual = (self.r[take] - self.Y[take] @ theta) * mask
-        return np.sqrt(np.sum(residual ** 2, axis=0) / np.maximum(mask.sum(axis=0), 1))
+        with np.errstate(all="ignore"):  # an overflow scores inf: the candidate loses
+            residual = (self.r[take] - self.Y[take] @ theta) * mask
+            return np.sqrt(np.sum(residual ** 2, axis=0) / np.maximum(mask.sum(axis=0), 1))
 
     def scores(self, folds: np.ndarray) -> np.ndarray:
         """Per block, the relative input error of its estimate (``folds`` (blocks, p), each
