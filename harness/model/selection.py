@@ -14,8 +14,9 @@ reconstructs on the block through one reference pipeline
 the candidate's filter, so a pipeline cannot win by smoothing away what it fails to
 explain. Each sees what the other misses (the runs: a cut-off below a resonance; the
 input: an inertia or a friction level off, which coarse positions hide from the runs), so
-the candidate chosen is that of the lowest product of its two mean scores, each relative
-to the best candidate's; all scores are reported.
+the candidates whose product of the two scores (each relative to the best candidate's) is
+as good as the lowest (:func:`harness.model.as_good.as_good`) are kept, and of them the
+one of the best simulation score is chosen; all scores are reported.
 """
 from __future__ import annotations
 
