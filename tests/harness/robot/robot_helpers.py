@@ -86,3 +86,13 @@ def random_chain_urdf(rng, kinds: list[str], fixed_between: bool = True) -> str:
                           f'<child link="sensor{i}"/>{_origin(rng)}</joint>')
             parent = f"f{i}"
     return '<robot name="chain">' + "".join(links + joints) + "</robot>"
+
+
+def swing_log(path: Path, t: np.ndarray) -> Path:
+    """A CSV log (t, q1, q2, u1, u2) of a slow two-joint swing with torques of its size at
+    the times t: enough for the readers and for identifying a payload."""
+    q = np.column_stack([0.8 * np.sin(1.3 * (t - t[0])), 0.6 * np.sin(2.1 * (t - t[0]))])
+    u = np.column_stack([5.0 * np.sin(1.3 * (t - t[0])), 2.0 * np.cos(2.1 * (t - t[0]))])
+    np.savetxt(path, np.column_stack([t, q, u]), delimiter=",", header="t,q1,q2,u1,u2",
+               comments="", fmt="%.17g")
+    return path

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from cli_runner import cli, refused
+from robot_helpers import swing_log
 
 from harness.robot.examples import example_urdf
 from harness.robot.urdf import read_urdf
@@ -89,15 +90,6 @@ def arm():
     return path, read_urdf(path)
 
 
-def _log(path, t, seconds: float = 6.0):
-    """A slow two-joint swing with its gravity torques: enough to identify a payload."""
-    q = np.column_stack([0.8 * np.sin(1.3 * (t - t[0])), 0.6 * np.sin(2.1 * (t - t[0]))])
-    u = np.column_stack([5.0 * np.sin(1.3 * (t - t[0])), 2.0 * np.cos(2.1 * (t - t[0]))])
-    np.savetxt(path, np.column_stack([t, q, u]), delimiter=",", header="t,q1,q2,u1,u2",
-               comments="", fmt="%.17g")
-    return path
-
-
 @pytest.mark.parametrize("command", ["identify", "validate"])
 @pytest.mark.parametrize("options, words", [
     (["--torque-gains", "1,2,3"], ["--torque-gains", "3 gain(s) for a robot of 2 joints"]),
@@ -115,7 +107,7 @@ def _log(path, t, seconds: float = 6.0):
 def test_bad_units_and_gains_exit_2_naming_them(tmp_path, arm, command, options, words):
     from cli_runner import cli, refused
     urdf, _ = arm
-    data = _log(tmp_path / "log.csv", np.arange(6000) * 1e-3)
+    data = swing_log(tmp_path / "log.csv", np.arange(6000) * 1e-3)
     out = tmp_path / "out"
     code, text = cli([command, str(data), "--robot", str(urdf), "--out", str(out), *options])
     assert code == 2, text

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from cli_runner import cli, refused
+from robot_helpers import swing_log
 
 from harness.cli import main
 from harness.robot.examples import example_urdf
@@ -23,20 +24,11 @@ def arm():
     return path, read_urdf(path)
 
 
-def _log(path, t, seconds: float = 6.0):
-    """A slow two-joint swing with its gravity torques: enough to identify a payload."""
-    q = np.column_stack([0.8 * np.sin(1.3 * (t - t[0])), 0.6 * np.sin(2.1 * (t - t[0]))])
-    u = np.column_stack([5.0 * np.sin(1.3 * (t - t[0])), 2.0 * np.cos(2.1 * (t - t[0]))])
-    np.savetxt(path, np.column_stack([t, q, u]), delimiter=",", header="t,q1,q2,u1,u2",
-               comments="", fmt="%.17g")
-    return path
-
-
 def test_epoch_time_stamps_at_1_khz_are_accepted(tmp_path, arm):
     t = 1.7e9 + np.arange(6000) * 1e-3  # float64 rounds these steps by up to 2.4e-7 s
     steps = np.diff(t)
     assert steps.max() - steps.min() > 1e-7  # what a 1e-6 relative tolerance refused
-    log = read_log(_log(tmp_path / "epoch.csv", t), 2)
+    log = read_log(swing_log(tmp_path / "epoch.csv", t), 2)
     assert log.step == pytest.approx(1e-3, rel=1e-7)  # the stamps resolve 2.4e-7 s
     assert log.t[0] == t[0]  # the stamps as written
 
@@ -44,7 +36,7 @@ def test_epoch_time_stamps_at_1_khz_are_accepted(tmp_path, arm):
 def test_a_clock_jittering_within_one_percent_is_used_as_it_is(tmp_path):
     rng = np.random.default_rng(3)
     t = np.arange(6000) * 1e-3 + rng.uniform(-4e-6, 4e-6, 6000)
-    log = read_log(_log(tmp_path / "jitter.csv", t), 2)
+    log = read_log(swing_log(tmp_path / "jitter.csv", t), 2)
     assert log.step == pytest.approx(1e-3, rel=1e-5)
 
 
@@ -54,7 +46,7 @@ def test_a_real_time_loggers_clock_is_resampled_and_said_so(tmp_path, arm, capsy
     urdf, _ = arm
     rng = np.random.default_rng(5)
     t = np.concatenate([[0.0], np.cumsum(rng.uniform(0.008, 0.013, 1999))])
-    path = _log(tmp_path / "rt.csv", t)
+    path = swing_log(tmp_path / "rt.csv", t)
     log = read_log(path, 2)
     assert log.resampled and "resampled onto even steps" in log.resampled
     assert np.allclose(np.diff(log.t), log.step, rtol=1e-9)
@@ -72,12 +64,12 @@ def test_a_real_time_loggers_clock_is_resampled_and_said_so(tmp_path, arm, capsy
 def test_gaps_and_time_running_back_are_refused_with_their_line(tmp_path, change, message):
     t = change(np.arange(6000) * 1e-3)
     with pytest.raises(LogError, match=message):
-        read_log(_log(tmp_path / "bad.csv", t), 2)
+        read_log(swing_log(tmp_path / "bad.csv", t), 2)
 
 
 def test_a_word_in_a_number_column_is_named_with_its_line(tmp_path, arm, capsys):
     urdf, _ = arm
-    path = _log(tmp_path / "word.csv", np.arange(6000) * 1e-3)
+    path = swing_log(tmp_path / "word.csv", np.arange(6000) * 1e-3)
     lines = path.read_text().splitlines()
     lines[50] = lines[50].split(",", 1)[0] + ",abc," + lines[50].split(",", 2)[2]
     path.write_text("\n".join(lines) + "\n")
@@ -86,7 +78,7 @@ def test_a_word_in_a_number_column_is_named_with_its_line(tmp_path, arm, capsys)
 
 
 def test_a_file_without_a_header_has_the_roles_in_order(tmp_path):
-    path = _log(tmp_path / "plain.csv", np.arange(6000) * 1e-3)
+    path = swing_log(tmp_path / "plain.csv", np.arange(6000) * 1e-3)
     path.write_text("\n".join(path.read_text().splitlines()[1:]) + "\n")  # the header gone
     log = read_log(path, 2)
     assert log.q.shape == (6000, 2) and log.t[0] == 0.0
@@ -96,7 +88,7 @@ def test_a_file_without_a_header_has_the_roles_in_order(tmp_path):
 
 def test_columns_by_number_in_the_robots_own_order(tmp_path):
     t = np.arange(6000) * 1e-3
-    path = _log(tmp_path / "log.csv", t)
+    path = swing_log(tmp_path / "log.csv", t)
     plain = read_log(path, 2)
     # the robot's own order: u2, q2, t, u1, q1, without a header row
     rows = np.loadtxt(path, delimiter=",", skiprows=1)[:, [4, 2, 0, 3, 1]]
@@ -121,7 +113,7 @@ def test_other_formats_exit_2_naming_the_file_and_the_formats(tmp_path, arm, com
     from cli_runner import cli, refused
     urdf, _ = arm
     data = tmp_path / name
-    _log(data, np.arange(6000) * 1e-3)  # CSV text, whatever the name says
+    swing_log(data, np.arange(6000) * 1e-3)  # CSV text, whatever the name says
     code, text = cli([command, str(data), "--robot", str(urdf), "--out", str(tmp_path / "o")])
     assert code == 2, text
     refused(code, text, str(data), "CSV (.csv, .txt), Parquet (.parquet, .pq), MATLAB (.mat)")
@@ -161,7 +153,7 @@ def test_a_parquet_log_reads_as_its_csv_and_its_problems_are_named(tmp_path, arm
 def test_a_log_in_ms_read_as_seconds_is_warned_of(tmp_path, arm):
     from cli_runner import cli
     urdf, _ = arm
-    data = _log(tmp_path / "ms.csv", np.arange(6000) * 1.0)  # ms, no --time-unit
+    data = swing_log(tmp_path / "ms.csv", np.arange(6000) * 1.0)  # ms, no --time-unit
     code, text = cli(["identify", str(data), "--robot", str(urdf), "--out", str(tmp_path / "o"),
                       "--unknown", "payload"])
     # read as seconds the swing is a thousand times slower: too slow for the friction
@@ -182,7 +174,7 @@ def test_torques_too_large_for_any_joint_exit_2_naming_the_column(tmp_path, arm,
     from cli_runner import cli, refused
     urdf, _ = arm
     t = np.arange(6000) * 1e-3
-    data = _log(tmp_path / "log.csv", t)
+    data = swing_log(tmp_path / "log.csv", t)
     values = np.loadtxt(data, delimiter=",", skiprows=1)
     values[:, 3] *= scale
     np.savetxt(data, values, delimiter=",", header="t,q1,q2,u1,u2", comments="", fmt="%.17g")

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from cli_runner import REPO, cli, refused
+from robot_helpers import swing_log
 
 from harness.robot.examples import example_urdf
 from harness.robot.urdf import read_urdf
@@ -99,15 +100,6 @@ def arm():
     return path, read_urdf(path)
 
 
-def _log(path, t, seconds: float = 6.0):
-    """A slow two-joint swing with its gravity torques: enough to identify a payload."""
-    q = np.column_stack([0.8 * np.sin(1.3 * (t - t[0])), 0.6 * np.sin(2.1 * (t - t[0]))])
-    u = np.column_stack([5.0 * np.sin(1.3 * (t - t[0])), 2.0 * np.cos(2.1 * (t - t[0]))])
-    np.savetxt(path, np.column_stack([t, q, u]), delimiter=",", header="t,q1,q2,u1,u2",
-               comments="", fmt="%.17g")
-    return path
-
-
 def test_a_joint_terms_name_beside_the_urdf_that_is_no_file_is_refused(tmp_path, arm):
     """A folder (or a pipe, a device) named joint_terms.csv beside the URDF: validate
     would otherwise predict with the URDF alone and say nothing."""
@@ -118,7 +110,7 @@ def test_a_joint_terms_name_beside_the_urdf_that_is_no_file_is_refused(tmp_path,
     copy = tmp_path / "robot.urdf"
     shutil.copy(urdf, copy)
     (tmp_path / "joint_terms.csv").mkdir()
-    data = _log(tmp_path / "log.csv", np.arange(6000) * 1e-3)
+    data = swing_log(tmp_path / "log.csv", np.arange(6000) * 1e-3)
     code, text = cli(["validate", str(data), "--robot", str(copy), "--out", str(tmp_path / "o")])
     assert code == 2, text
     refused(code, text, "joint_terms.csv", "not a regular file")
