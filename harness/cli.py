@@ -30,6 +30,7 @@ import sys
 from collections.abc import Mapping
 from pathlib import Path
 
+from .blas_threads import one_blas_thread
 from .fmus import FMUError
 from .inputs import InputError
 from .json_files import write_json
@@ -529,7 +530,8 @@ def _validate(args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     """Runs the command line; returns the exit status (see the module documentation)."""
     try:
-        return _main(argv)
+        with one_blas_thread():
+            return _main(argv)
     except KeyboardInterrupt as interrupt:  # Ctrl-C outside a command (parsing, the console)
         print("\nharness: interrupted", file=sys.stderr)
         return 143 if isinstance(interrupt, Terminated) else 130

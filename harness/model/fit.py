@@ -232,8 +232,9 @@ def _solve(Y: np.ndarray, r: np.ndarray, nominal: np.ndarray, scales: np.ndarray
     theta, the regularized and the plain normal matrix, the normalized rows and sides."""
     Z = _weighted(Y, weights) / scales[None, None, :]
     rw = r / weights[None, :]
-    A = np.einsum("sek,sel->kl", Z, Z)
-    b = np.einsum("sek,se->k", Z, rw)
+    flat = Z.reshape(-1, Z.shape[2])  # one matrix product: BLAS, not an einsum loop
+    A = flat.T @ flat
+    b = flat.T @ rw.reshape(-1)
     # relative to the rows' size; a regressor that is zero on the whole log (a coordinate
     # that never moves) keeps the nominal values, for the excitation check to name
     lam = ridge * (float(np.mean(np.diag(A))) or 1.0)

@@ -477,14 +477,29 @@ def test_a_massless_urdf_link_gets_a_regular_prior(tmp_path):
     assert regularized_prior(real, reference) is real  # a link with a body: unchanged
 
 
+def test_the_next_settings_are_tried_when_the_solver_stops_short(monkeypatch):
+    """Clarabel stopped after one iteration with the first settings: the next ones solve
+    the same program to its tolerances, and the projection says which did."""
+    from harness.robot import consistency
+    robot, _, base, truth = _ur5()
+    beta = base.project(truth)
+    covariance = np.diag((0.01 * np.abs(beta) + 1e-3) ** 2)
+    reference = consistent_parameters(robot, base, beta, covariance)
+    monkeypatch.setattr(consistency, "SOLVER_ATTEMPTS", ({"max_iter": 1}, {}))
+    second = consistent_parameters(robot, base, beta, covariance)
+    assert second.status == "optimal" and second.settings == {}
+    assert second.as_json()["solver_settings"] == {}
+    assert np.array_equal(second.pi, reference.pi)
+
+
 def test_a_solver_failure_is_a_named_error_and_exit_status_2(tmp_path, monkeypatch, capsys):
     """Clarabel stopped after one iteration: ProjectionError, not a fallback; identify
     says so and exits with status 2, writing nothing."""
     from harness.robot import consistency
     robot, _, base, truth = _ur5()
     beta = base.project(truth)
-    monkeypatch.setattr(consistency, "SOLVER_SETTINGS", {"max_iter": 1})
-    with pytest.raises(consistency.ProjectionError, match="not optimal"):
+    monkeypatch.setattr(consistency, "SOLVER_ATTEMPTS", ({"max_iter": 1}, {"max_iter": 2}))
+    with pytest.raises(consistency.ProjectionError, match="not optimal, with each of its 2"):
         consistent_parameters(robot, base, beta, np.diag((0.01 * np.abs(beta) + 1e-3) ** 2))
     path, _ = example_urdf("double_pendulum")
     arm = read_urdf(path)
