@@ -57,13 +57,16 @@ def add_chain_arguments(group, unmeasured: bool = True) -> None:
     """--lock, --joints (the chain) and, for commands that read a log, --unmeasured."""
     group.add_argument("--lock", action="append", type=_lock, default=[],
                        metavar="JOINT[=POSITION]",
-                       help="a URDF joint held at 0 (e.g. gripper fingers), or at POSITION "
-                            "[rad, or m for a prismatic joint: a lift or a joint the log holds "
-                            "still]; repeatable")
+                       help="a URDF joint held out of the chain (e.g. gripper fingers) at "
+                            "POSITION [rad, or m for a prismatic joint: a lift or a joint the "
+                            "log holds still]; without one, at its logged position when the "
+                            "log has a column named as the joint, else at 0; repeatable")
     group.add_argument("--joints", type=_joint_names, default=None, metavar="JOINT,...",
                        help="the chain's moving joints, from the root outward (the log's q1, "
-                            "q2, ...): every other joint of the URDF is held at 0, so that a "
-                            "branching robot (a mobile base's wheels) reduces to one arm")
+                            "q2, ...): every other joint of the URDF is held, at its logged "
+                            "position when the log has a column named as the joint, else at "
+                            "0, so that a branching robot (a mobile base's wheels) reduces to "
+                            "one arm")
     if not unmeasured:
         return
     group.add_argument("--unmeasured", type=_joint_names, default=None, metavar="JOINT,...",
@@ -72,21 +75,23 @@ def add_chain_arguments(group, unmeasured: bool = True) -> None:
                             "stay in the other joints' equations")
 
 
-def _lock(text: str) -> tuple[str, float]:
-    """--lock JOINT or JOINT=POSITION."""
+def _lock(text: str) -> tuple[str, float | None]:
+    """--lock JOINT (no position: logged or 0, harness.robot.held_joints) or
+    JOINT=POSITION."""
     name, sign, value = text.partition("=")
     if not name.strip():
         raise argparse.ArgumentTypeError(f"{text!r}: the joint name is empty")
     if not sign:
-        return name.strip(), 0.0
+        return name.strip(), None
     try:
         return name.strip(), real(f"--lock {name.strip()}", value.strip())
     except ValueError as error:
         raise argparse.ArgumentTypeError(str(error)) from None
 
 
-def locked_joints(locks: list[tuple[str, float]]) -> dict[str, float]:
-    """The --lock options as joint -> position; a joint locked twice is an error."""
+def locked_joints(locks: list[tuple[str, float | None]]) -> dict[str, float | None]:
+    """The --lock options as joint -> position (None: none given); a joint locked twice is
+    an error."""
     from .urdf import UrdfError
     names = [name for name, _ in locks]
     twice = sorted({name for name in names if names.count(name) > 1})
@@ -143,11 +148,13 @@ def _gains(text: str) -> tuple[float, ...]:
         raise argparse.ArgumentTypeError(str(error).partition(": ")[2]) from None
 
 
-def units_of(args, robot):
-    """The LogUnits of the command's unit options for `robot` (UnitError names a bad one)."""
+def units_of(args, robot, held=()):
+    """The LogUnits of the command's unit options for `robot` and the `held` joints' columns
+    the log holds (HeldColumn; UnitError names a bad option)."""
     from .log_units import log_units
     return log_units([joint.kind for joint in robot.joints], time=args.time_unit,
-                     angle=args.angle_unit, length=args.length_unit, gains=args.torque_gains)
+                     angle=args.angle_unit, length=args.length_unit, gains=args.torque_gains,
+                     held=[column.kind for column in held])
 
 
 def _non_negative(text: str) -> float:
@@ -193,8 +200,10 @@ def column_mapping(text: str, command: str) -> dict[str, str] | None:
 
 
 def robot_and_log(args, mapping: dict[str, str]):
-    """The robot of --robot (with --lock) and its log in SI units (--columns mapped, the
+    """The robot of --robot (with --lock and --joints, its held joints at their logged
+    positions where the log holds them) and its log in SI units (--columns mapped, the
     unit options applied): what identify and validate --robot both read first."""
+    from .held_joints import held_without_position, hold_at_logged, logged_columns
     from .joint_log import LogError, read_log
     from .urdf import read_urdf
     if args.sample_rate is not None and args.time_unit is not None:
@@ -205,19 +214,24 @@ def robot_and_log(args, mapping: dict[str, str]):
              *(f"u{i}" for i in range(1, robot.n + 1))]
     unmeasured = unmeasured_indices(args.unmeasured, robot)
     roles = [role for role in roles if role not in {f"u{i + 1}" for i in unmeasured}]
-    unknown = [role for role in mapping if role not in roles]
+    unknown = [role for role in mapping if role not in roles and role not in robot.locked]
     if unknown:  # a role of another robot (or an unmeasured torque) would be left unread
+        still = held_without_position(robot)
         raise LogError(f"--columns names {', '.join(map(repr, unknown))}, which "
                        f"{'is' if len(unknown) == 1 else 'are'} not a role of this "
                        f"{robot.n}-joint robot (roles: {', '.join(roles)}"
-                       f"{'; --unmeasured leaves out the others' if unmeasured else ''})")
-    return robot, read_log(args.data, robot.n, mapping, units=units_of(args, robot),
-                           sample_rate=args.sample_rate, unmeasured=unmeasured)
+                       f"{'; --unmeasured leaves out the others' if unmeasured else ''}"
+                       f"{'; held joints: ' + ', '.join(still) if still else ''})")
+    held = logged_columns(args.data, robot, mapping, roles)
+    log = read_log(args.data, robot.n, mapping, units=units_of(args, robot, held),
+                   sample_rate=args.sample_rate, unmeasured=unmeasured, held=held)
+    return hold_at_logged(robot, log, args.joints, args.data), log
 
 
 def identify_command(args) -> int:
     from ..outputs import Outputs, shown
     from .consistency import ProjectionError
+    from .held_joints import logged_lines
     from .joint_log import LogError
     from .joint_terms import JointTermsError, parse_terms
     from .layout import ParameterLayout
@@ -257,6 +271,8 @@ def identify_command(args) -> int:
     print(f"wrote {shown(*(outputs.final(path) for path in written))}")
     if log.resampled:
         print(f"  {args.data}: {log.resampled}")
+    for line in logged_lines(robot, log):
+        print(f"  {line}")
     if args.window is None:
         print(f"  regression window {result.window:.3g} s (the joints' longest velocity "
               f"window, at least 0.05 s; --window sets it)")

@@ -33,6 +33,13 @@ class LogUnits:
     position: np.ndarray
     torque: np.ndarray
     time_unit: str | None = None  # as given (None: s by default, not stated)
+    angle: float = 1.0   # [rad per unit] of every revolute joint's position column
+    length: float = 1.0  # [m per unit] of every prismatic joint's position column
+
+    def of(self, kind: str) -> float:
+        """The factor of a position column of a joint of this URDF type (a held joint's:
+        "revolute", "continuous" or "prismatic")."""
+        return self.length if kind == "prismatic" else self.angle
 
 
 def parse_gains(text: str) -> tuple[float, ...]:
@@ -61,11 +68,14 @@ def parse_gains(text: str) -> tuple[float, ...]:
 
 
 def log_units(kinds: Sequence[str], time: str | None = None, angle: str | None = None,
-              length: str | None = None, gains: Sequence[float] | None = None) -> LogUnits:
+              length: str | None = None, gains: Sequence[float] | None = None,
+              held: Sequence[str] = ()) -> LogUnits:
     """The factors for a robot whose joints are `kinds` ("revolute" or "prismatic"):
     `time`, `angle`, `length` the units of the time, the revolute and the prismatic
     joints' position columns (None: s, rad, m); `gains` one drive gain per joint when
-    the torque columns hold currents.  UnitError names the option at fault."""
+    the torque columns hold currents; `held` the kinds of the held joints whose positions
+    the log also holds (their columns take the same units).  UnitError names the option
+    at fault."""
     def unit(value: str | None, choices: Sequence[str], target: str, option: str) -> float:
         if value is None:
             return 1.0
@@ -76,10 +86,11 @@ def log_units(kinds: Sequence[str], time: str | None = None, angle: str | None =
     seconds = unit(time, TIME_UNITS, "s", "--time-unit")
     radians = unit(angle, ANGLE_UNITS, "rad", "--angle-unit")
     metres = unit(length, LENGTH_UNITS, "m", "--length-unit")
-    if length is not None and "prismatic" not in kinds:
+    read = [*kinds, *("prismatic" if kind == "prismatic" else "revolute" for kind in held)]
+    if length is not None and "prismatic" not in read:
         raise UnitError(f"--length-unit {length}: the robot has no prismatic joint (the "
                         "revolute joints' unit is --angle-unit)")
-    if angle is not None and "revolute" not in kinds:
+    if angle is not None and "revolute" not in read:
         raise UnitError(f"--angle-unit {angle}: the robot has no revolute joint (the "
                         "prismatic joints' unit is --length-unit)")
     position = np.array([metres if kind == "prismatic" else radians for kind in kinds])
@@ -94,4 +105,4 @@ def log_units(kinds: Sequence[str], time: str | None = None, angle: str | None =
         if bad.size:
             raise UnitError(f"--torque-gains: gain {bad[0] + 1} ({torque[bad[0]]!r}) is not "
                             f"a number from +-{GAIN_RANGE[0]:g} to +-{GAIN_RANGE[1]:g}")
-    return LogUnits(seconds, position, torque, time)
+    return LogUnits(seconds, position, torque, time, radians, metres)

@@ -11,6 +11,7 @@ from ..json_files import write_json
 from .consistency import (
     write_identified_urdf,
 )
+from .held_joints import locked_record
 from .joint_log import JointLog
 from .joint_terms import (
     SIDECAR_NAME,
@@ -124,7 +125,7 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
         "samples_used": int(len(result.used)),
         "regression_window_s": result.window,
         "resampled": log.resampled,
-        "locked_joints": robot.locked_at,
+        "locked_joints": locked_record(robot, log),
         **_assessment_json(result),
         **_terms_json(result, names),
         **({} if result.velocity_window is None else

@@ -66,8 +66,13 @@ class Robot:
     joints: list[ChainJoint]
     locked: tuple[str, ...] = ()
     gravity: np.ndarray = field(default_factory=lambda: np.array(DEFAULT_GRAVITY))
-    #: each locked joint's position (rad or m): 0 unless --lock JOINT=POSITION says
+    #: each locked joint's position (rad or m): 0 unless a position is given or logged
     locked_at: dict[str, float] = field(default_factory=dict)
+    #: where each locked joint's position comes from: "given" (--lock JOINT=POSITION),
+    #: "log" (the median of its log column, harness.robot.held_joints) or "default" (0)
+    locked_from: dict[str, str] = field(default_factory=dict)
+    #: each locked joint's URDF type ("revolute", "continuous", "prismatic" or "fixed")
+    locked_kinds: dict[str, str] = field(default_factory=dict)
 
     @property
     def n(self) -> int:
@@ -232,14 +237,17 @@ def parse_urdf(source: Path, remove_blank_text: bool = False):
     return tree
 
 
-def read_urdf(path: str | Path, locked: Sequence[str] | Mapping[str, float] = (),
-              gravity=DEFAULT_GRAVITY, joints_used: Sequence[str] | None = None) -> Robot:
+def read_urdf(path: str | Path, locked: Sequence[str] | Mapping[str, float | None] = (),
+              gravity=DEFAULT_GRAVITY, joints_used: Sequence[str] | None = None,
+              origins: Mapping[str, str] | None = None) -> Robot:
     """Read and validate a URDF as a serial chain; `locked` joints are fixed at 0, or at
-    the position (rad or m) a mapping gives each. `joints_used` (None: every moving joint
-    not locked): the chain's moving joints, from the root outward; every other joint is
-    fixed at 0, so that a branching robot (a mobile base's wheels, a second arm) reduces
-    to the chain of one arm."""
-    positions = dict(locked) if isinstance(locked, Mapping) else dict.fromkeys(locked, 0.0)
+    the position (rad or m) a mapping gives each (None: 0, as for a sequence). `joints_used`
+    (None: every moving joint not locked): the chain's moving joints, from the root
+    outward; every other joint is fixed at 0, so that a branching robot (a mobile base's
+    wheels, a second arm) reduces to the chain of one arm. `origins`: where a locked
+    position comes from, by joint (a phrase for the message that refuses it)."""
+    given = dict(locked) if isinstance(locked, Mapping) else dict.fromkeys(locked)
+    positions = {name: 0.0 if value is None else float(value) for name, value in given.items()}
     locked = list(positions)
     source = Path(path)
     root = parse_urdf(source).getroot()
@@ -276,7 +284,7 @@ def read_urdf(path: str | Path, locked: Sequence[str] | Mapping[str, float] = ()
         raise UrdfError(f"{source}: locked joint(s) {', '.join(map(repr, unknown))} not in the "
                         f"URDF (its joints: {', '.join(joints)})")
     for name, position in positions.items():
-        _check_lock_position(source, joints[name], position)
+        _check_lock_position(source, joints[name], position, (origins or {}).get(name))
     if joints_used is not None:
         locked = [*locked, *_others_locked(source, joints, list(joints_used), locked)]
     roots = [name for name in links if name not in parent_joint]
@@ -298,7 +306,9 @@ def read_urdf(path: str | Path, locked: Sequence[str] | Mapping[str, float] = ()
                         f"link meets them in the order {','.join(j.name for j in chain.joints)}"
                         f"; give them in that order (and map the log's columns with --columns)")
     robot = Robot(root.get("name", source.stem), source, roots[0], chain.joints, tuple(locked),
-                  np.asarray(gravity, dtype=float), positions)
+                  np.asarray(gravity, dtype=float), positions,
+                  {name: "default" if given.get(name) is None else "given" for name in locked},
+                  {name: joints[name].get("type") for name in locked})
     for joint in robot.joints:  # merged bodies: sums of bounded numbers, still finite?
         if not all(np.all(np.isfinite(x)) for x in (joint.xyz, joint.rpy, joint.link)):
             raise UrdfError(f"{source}: joint {joint.name!r}: its body's position or inertia "
@@ -321,10 +331,13 @@ def joint_indices(names: Sequence[str], moving: Sequence[str], where: str) -> li
     return found
 
 
-def _check_lock_position(source: Path, joint, position: float) -> None:
+def _check_lock_position(source: Path, joint, position: float,
+                         origin: str | None = None) -> None:
     """A joint locked at a position other than 0 moves (a fixed joint has no position) and
-    the position lies within its <limit> (a revolute or prismatic joint's, when given)."""
+    the position lies within its <limit> (a revolute or prismatic joint's, when given);
+    `origin` says where the position comes from in the message."""
     where = f"{source}: joint {joint.get('name')!r}"
+    said = f" ({origin})" if origin else ""
     if not np.isfinite(position):
         raise UrdfError(f"{where}: locked at {position!r}, not a finite position")
     if position == 0.0:
@@ -338,7 +351,7 @@ def _check_lock_position(source: Path, joint, position: float) -> None:
     lower, upper = (_floats(limit, key, 1, "0", where)[0] for key in ("lower", "upper"))
     if lower < upper and not lower <= position <= upper:
         unit = "m" if kind == "prismatic" else "rad"
-        raise UrdfError(f"{where}: locked at {position:g} {unit}, outside its limits "
+        raise UrdfError(f"{where}: locked at {position:g} {unit}{said}, outside its limits "
                         f"[{lower:g}, {upper:g}] {unit}")
 
 

@@ -180,6 +180,7 @@ def validate_command(args) -> int:
 
     from ..outputs import Outputs, shown
     from .cli import column_mapping, robot_and_log
+    from .held_joints import logged_lines
     from .log_units import UnitError
     from .urdf import UrdfError
 
@@ -220,6 +221,8 @@ def validate_command(args) -> int:
         print(f"  {terms_file} holds no joint terms: the URDF's model alone")
     if log.resampled:
         print(f"  {args.data}: {log.resampled}")
+    for line in logged_lines(robot, log):
+        print(f"  {line}")
     for name, relative in per_joint.items():
         print(f"  {name}: relative torque error {_percent(relative, 3, name in unmeasured)}")
     print(f"  pooled: {100 * pooled:.3f} % (Savitzky-Golay window {window:.3g} s)")

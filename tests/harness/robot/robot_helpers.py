@@ -88,11 +88,48 @@ def random_chain_urdf(rng, kinds: list[str], fixed_between: bool = True) -> str:
     return '<robot name="chain">' + "".join(links + joints) + "</robot>"
 
 
-def swing_log(path: Path, t: np.ndarray) -> Path:
+def swing_log(path: Path, t: np.ndarray, extra: dict[str, np.ndarray] | None = None) -> Path:
     """A CSV log (t, q1, q2, u1, u2) of a slow two-joint swing with torques of its size at
-    the times t: enough for the readers and for identifying a payload."""
+    the times t: enough for the readers and for identifying a payload; `extra` columns
+    (name -> values at t) follow them."""
     q = np.column_stack([0.8 * np.sin(1.3 * (t - t[0])), 0.6 * np.sin(2.1 * (t - t[0]))])
     u = np.column_stack([5.0 * np.sin(1.3 * (t - t[0])), 2.0 * np.cos(2.1 * (t - t[0]))])
-    np.savetxt(path, np.column_stack([t, q, u]), delimiter=",", header="t,q1,q2,u1,u2",
-               comments="", fmt="%.17g")
+    extra = extra or {}
+    columns = [t, q, u, *(np.broadcast_to(values, t.shape) for values in extra.values())]
+    np.savetxt(path, np.column_stack(columns), delimiter=",",
+               header=",".join(["t", "q1", "q2", "u1", "u2", *extra]), comments="",
+               fmt="%.17g")
     return path
+
+
+def _add_link(root, name: str, parent: str, kind: str, xyz: str) -> None:
+    from lxml import etree
+    link = etree.SubElement(root, "link", name=name)
+    inertial = etree.SubElement(link, "inertial")
+    etree.SubElement(inertial, "origin", xyz="0.01 0.02 0.03", rpy="0 0 0")
+    etree.SubElement(inertial, "mass", value="1.7")
+    etree.SubElement(inertial, "inertia", ixx="0.01", ixy="0", ixz="0", iyy="0.02", iyz="0",
+                     izz="0.03")
+    joint = etree.SubElement(root, "joint", name=f"{name}_joint", type=kind)
+    etree.SubElement(joint, "parent", link=parent)
+    etree.SubElement(joint, "child", link=name)
+    etree.SubElement(joint, "origin", xyz=xyz, rpy="0 0 0")
+    etree.SubElement(joint, "axis", xyz="0 1 0")
+
+
+def branching_urdf(folder: Path) -> Path:
+    """The double pendulum on a base with two wheels (continuous joints wheel_left_joint,
+    wheel_right_joint) and with a finger on its last link (a prismatic finger_joint), as
+    folder/mobile.urdf."""
+    from lxml import etree
+
+    from harness.robot.examples import example_urdf
+    arm, _ = example_urdf("double_pendulum")
+    tree = etree.parse(str(arm))
+    root = tree.getroot()
+    _add_link(root, "wheel_left", "base_link", "continuous", "0 0.3 0")
+    _add_link(root, "wheel_right", "base_link", "continuous", "0 -0.3 0")
+    _add_link(root, "finger", "link2", "prismatic", "0.1 0 0")
+    branching = folder / "mobile.urdf"
+    tree.write(str(branching))
+    return branching

@@ -5,24 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from lxml import etree
+from robot_helpers import branching_urdf
 
 from harness.cli import main
 from harness.robot.examples import example_urdf
 from harness.robot.urdf import UrdfError, matrix_rpy, read_urdf, rpy_matrix
-
-
-def _add_link(root, name: str, parent: str, kind: str, xyz: str) -> None:
-    link = etree.SubElement(root, "link", name=name)
-    inertial = etree.SubElement(link, "inertial")
-    etree.SubElement(inertial, "origin", xyz="0.01 0.02 0.03", rpy="0 0 0")
-    etree.SubElement(inertial, "mass", value="1.7")
-    etree.SubElement(inertial, "inertia", ixx="0.01", ixy="0", ixz="0", iyy="0.02", iyz="0",
-                     izz="0.03")
-    joint = etree.SubElement(root, "joint", name=f"{name}_joint", type=kind)
-    etree.SubElement(joint, "parent", link=parent)
-    etree.SubElement(joint, "child", link=name)
-    etree.SubElement(joint, "origin", xyz=xyz, rpy="0 0 0")
-    etree.SubElement(joint, "axis", xyz="0 1 0")
 
 
 @pytest.fixture(scope="module")
@@ -31,14 +18,7 @@ def urdfs(tmp_path_factory):
     its last link (a prismatic joint)."""
     folder = tmp_path_factory.mktemp("chain")
     arm, _ = example_urdf("double_pendulum")
-    tree = etree.parse(str(arm))
-    root = tree.getroot()
-    _add_link(root, "wheel_left", "base_link", "continuous", "0 0.3 0")
-    _add_link(root, "wheel_right", "base_link", "continuous", "0 -0.3 0")
-    _add_link(root, "finger", "link2", "prismatic", "0.1 0 0")
-    branching = folder / "mobile.urdf"
-    tree.write(str(branching))
-    return arm, branching, folder
+    return arm, branching_urdf(folder), folder
 
 
 def test_a_branching_urdf_names_the_option(urdfs):
