@@ -100,7 +100,7 @@ def hold_at_logged(robot: Robot, log: JointLog, joints_used: Sequence[str] | Non
 
 
 def locked_record(robot: Robot, log: JointLog) -> dict[str, dict]:
-    """summary.json's locked_joints: each held joint's position, where it comes from
+    """summary.json's held_joints: each held joint's position, where it comes from
     ("given", "log" or "default") and, for a logged one, its column and extremes."""
     record: dict[str, dict] = {}
     for name in robot.locked:

@@ -125,7 +125,8 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
         "samples_used": int(len(result.used)),
         "regression_window_s": result.window,
         "resampled": log.resampled,
-        "locked_joints": locked_record(robot, log),
+        "locked_joints": robot.locked_at,
+        "held_joints": locked_record(robot, log),
         **_assessment_json(result),
         **_terms_json(result, names),
         **({} if result.velocity_window is None else

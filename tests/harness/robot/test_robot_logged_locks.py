@@ -69,7 +69,9 @@ def test_summary_json_says_where_each_position_comes_from(mobile, tmp_path):
     code, text = cli(["identify", str(data), "--robot", str(mobile), "--out", str(out),
                       "--unknown", "payload", *CHAIN, "--lock", "wheel_left_joint=0.3"])
     assert code in (0, 1), text  # 1: identify's warnings on a short swing
-    locked = json.loads((out / "summary.json").read_text())["locked_joints"]
+    summary = json.loads((out / "summary.json").read_text())
+    locked = summary["held_joints"]
+    assert summary["locked_joints"] == {name: entry["position"] for name, entry in locked.items()}
     finger = locked.pop("finger_joint")
     assert finger["source"] == "log" and finger["column"] == "finger_joint"
     assert finger["position"] == pytest.approx(FINGER, abs=2e-4)
