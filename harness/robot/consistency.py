@@ -310,22 +310,23 @@ def _solve(problem: cp.Problem, z: cp.Expression):
     unpacked into the variables, with the first of SOLVER_ATTEMPTS that ends optimal;
     ProjectionError if none does."""
     conic, chain, inverse = problem.get_problem_data(cp.CLARABEL, solver_opts={})
+    ended = []
     for settings in SOLVER_ATTEMPTS:
         try:
             solution = chain.solve_via_data(problem, conic, solver_opts=dict(settings))
             with warnings.catch_warnings():  # an inaccurate solution is our error, below
                 warnings.filterwarnings("ignore", "Solution may be inaccurate", UserWarning)
                 problem.unpack_results(solution, chain, inverse)
-        except cp.error.SolverError as error:
-            raise ProjectionError(f"the consistent parameters: the solver Clarabel failed "
-                                  f"({error})") from None
+        except cp.error.SolverError:  # a numerical failure: the next settings may pass
+            ended.append("failed")
+            continue
         if problem.status == cp.OPTIMAL and z.value is not None:
             return solution, settings
+        ended.append(f"status {problem.status!r}")
     raise ProjectionError(
-        f"the consistent parameters: the solver Clarabel ended with status "
-        f"{problem.status!r}, not optimal, with each of its {len(SOLVER_ATTEMPTS)} settings "
-        f"(the estimate's covariance or the URDF's values may span too many orders of "
-        f"magnitude): no model is written")
+        f"the consistent parameters: the solver Clarabel ended {', '.join(ended)} with its "
+        f"{len(SOLVER_ATTEMPTS)} settings, never optimal (the estimate's covariance or the "
+        f"URDF's values may span too many orders of magnitude): no model is written")
 
 
 def _gap(solution) -> float:

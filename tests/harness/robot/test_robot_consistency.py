@@ -499,7 +499,7 @@ def test_a_solver_failure_is_a_named_error_and_exit_status_2(tmp_path, monkeypat
     robot, _, base, truth = _ur5()
     beta = base.project(truth)
     monkeypatch.setattr(consistency, "SOLVER_ATTEMPTS", ({"max_iter": 1}, {"max_iter": 2}))
-    with pytest.raises(consistency.ProjectionError, match="not optimal, with each of its 2"):
+    with pytest.raises(consistency.ProjectionError, match="ended status 'user_limit', status 'user_limit' with its 2 settings, never optimal"):
         consistent_parameters(robot, base, beta, np.diag((0.01 * np.abs(beta) + 1e-3) ** 2))
     path, _ = example_urdf("double_pendulum")
     arm = read_urdf(path)
