@@ -17,15 +17,17 @@ Cases (the robots of bench/reports/robots.py, their truth from `truth_of`: links
   b2 case b's logs with identify --window 0.05 and validate --window 0.05 (the fixed
      window of earlier versions, which differentiates the 0.01 rad steps into noise);
   c  the UR5 at 1 kHz, 17 bit, with asymmetric Coulomb friction and a constant torque
-     offset per joint in the truth (outside the identified model's class);
+     offset per joint in the truth, identified with --joint-terms none (the truth outside
+     the identified model's class);
   c2 case c's logs identified with --joint-terms offset,asymmetric-coulomb (the model
      class then holds the truth; the least-squares baseline gets the same columns);
   d  the UR5 at 1 kHz, 17 bit: the clean reference;
   e  the UR5 (6 joints) at ~100 Hz on a jittering clock (steps 8-12 ms), motor currents
      (--torque-gains), 17 bit, with a drive inertia (armature, Ia_i q_i'' added to joint
      i's torque) and a constant torque offset per joint in the truth, identified with
-     identify's defaults;
-  e2 case e's logs identified with --joint-terms auto;
+     --joint-terms none (the core's model alone, identify's default before the joint terms
+     were chosen by cross-validation);
+  e2 case e's logs identified with identify's defaults (--joint-terms auto);
   f, f2  as e, e2 for the Panda (7 joints, fingers locked).
 Cases e to f2 are also judged on their own targets: every link mass of identified.urdf
 within a factor 1.5 of the truth's, identified.urdf's validation error within 2 %
@@ -104,7 +106,7 @@ class Case:
     outside_class: bool = False       # asymmetric Coulomb friction and a torque offset
     pd: tuple[float, float] = (400.0, 40.0)
     window: float | None = None       # identify's and validate's --window [s] (None: theirs)
-    joint_terms: str | None = None    # identify's --joint-terms (None: the core's model)
+    joint_terms: str | None = None    # identify's --joint-terms (None: its default, auto)
     drive: bool = False               # armature (drive inertia) and a torque offset
     logs_from: str | None = None      # reuse this case's logs when it ran before in the run
     results: dict = field(default_factory=dict)
@@ -121,19 +123,21 @@ CASES = (
          "case b's logs, identify and validate with --window 0.05",
          jitter=(0.9 / 200, 1.1 / 200), bits=None, resolution=0.01, passive=(1,),
          pd=(50.0, 5.0), window=0.05),
-    Case("c", "ur5", 1000.0, "UR5, 1 kHz, 17 bit, asymmetric Coulomb + torque offset",
-         outside_class=True),
+    Case("c", "ur5", 1000.0, "UR5, 1 kHz, 17 bit, asymmetric Coulomb + torque offset, "
+         "identify --joint-terms none", outside_class=True, joint_terms="none"),
     Case("c2", "ur5", 1000.0, "case c's logs, identify --joint-terms offset,asymmetric-coulomb",
          outside_class=True, joint_terms="offset,asymmetric-coulomb"),
     Case("d", "ur5", 1000.0, "UR5, 1 kHz, 17 bit (clean reference)"),
     Case("e", "ur5", 100.0, "UR5, ~100 Hz, clock steps 8-12 ms, motor currents, 17 bit, "
-         "armature + torque offset", jitter=ARM_JITTER, gains=UR5_GAINS, drive=True),
-    Case("e2", "ur5", 100.0, "case e's logs, identify --joint-terms auto",
-         jitter=ARM_JITTER, gains=UR5_GAINS, drive=True, joint_terms="auto", logs_from="e"),
+         "armature + torque offset, identify --joint-terms none", jitter=ARM_JITTER,
+         gains=UR5_GAINS, drive=True, joint_terms="none"),
+    Case("e2", "ur5", 100.0, "case e's logs, identify's defaults (--joint-terms auto)",
+         jitter=ARM_JITTER, gains=UR5_GAINS, drive=True, logs_from="e"),
     Case("f", "panda", 100.0, "Panda, ~100 Hz, clock steps 8-12 ms, motor currents, 17 bit, "
-         "armature + torque offset", jitter=ARM_JITTER, gains=PANDA_GAINS, drive=True),
-    Case("f2", "panda", 100.0, "case f's logs, identify --joint-terms auto",
-         jitter=ARM_JITTER, gains=PANDA_GAINS, drive=True, joint_terms="auto", logs_from="f"),
+         "armature + torque offset, identify --joint-terms none", jitter=ARM_JITTER,
+         gains=PANDA_GAINS, drive=True, joint_terms="none"),
+    Case("f2", "panda", 100.0, "case f's logs, identify's defaults (--joint-terms auto)",
+         jitter=ARM_JITTER, gains=PANDA_GAINS, drive=True, logs_from="f"),
 )
 
 
@@ -396,10 +400,10 @@ def run_case(case: Case, train_seconds: float, work: Path, logs: dict | None = N
     # the model class identify was given: the URDF's, or with the joint terms (then the
     # identified model's terms come from its sidecar, as validate reads them)
     asked = case.joint_terms
-    if asked == "auto":  # the class identify chose by cross-validation
+    if "joint_terms_choice" in summary:  # the class identify chose by cross-validation
         asked = summary["joint_terms_choice"]["chosen"]
         row["joint_terms_chosen"] = asked
-        asked = None if asked == "none" else asked
+    asked = None if asked == "none" else asked
     terms = None if asked is None else parse_terms(asked, None)
     sidecar = None
     if terms is not None:
@@ -571,7 +575,7 @@ def _drive_section(rows: list[dict]) -> list[str]:
     for r in rows:
         s = r["scores"]
         e = {k: s[k]["pooled"] for k in ("identified", "estimate", "ols")}
-        terms = "defaults" if "joint_terms_chosen" not in r else \
+        terms = "none" if "joint_terms_chosen" not in r else \
             f"auto: {r['joint_terms_chosen']}"
         t = list(r["drive_targets"].values())
         lines.append(

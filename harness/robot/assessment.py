@@ -109,7 +109,8 @@ def choose_model(predictions: dict[str, Prediction], consistent: np.ndarray,
             f"written all the same" + (
                 f". The model class has no {', '.join(missing_terms)}: a drive's inertia or "
                 "a torque offset that the links must stand in for bends their masses; "
-                "--joint-terms auto chooses the joint terms by cross-validation"
+                "--joint-terms names them (without the option the log chooses them by "
+                "cross-validation)"
                 if missing_terms else ""))
     if link_names:
         warnings += implausible_masses(consistent, nominal, link_names)

@@ -43,9 +43,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--joint-terms", default=None, metavar="TERM,...",
                        help="extra terms of every joint, identified with the rest: offset "
                             "(a constant torque), armature (reflected rotor inertia, x q''), "
-                            "asymmetric-coulomb (a Coulomb level per direction), or auto (the "
-                            "combination of these the log supports, by cross-validation); "
-                            "written to DIR/joint_terms.csv, which validate --robot reads")
+                            "asymmetric-coulomb (a Coulomb level per direction), none, or "
+                            "auto (the combination of these the log supports, by "
+                            "cross-validation: the default, unless --smooth-coulomb is "
+                            "given); written to DIR/joint_terms.csv, which validate --robot "
+                            "reads")
     group.add_argument("--smooth-coulomb", type=_positive("--smooth-coulomb"), default=None,
                        metavar="VS",
                        help="Coulomb friction as fc tanh(q'/VS) instead of fc sign(q') "
@@ -242,7 +244,10 @@ def identify_command(args) -> int:
     mapping = column_mapping(args.columns, "identify")
     if mapping is None:
         return 2
-    auto = (args.joint_terms or "").strip() == "auto"
+    # auto unless the terms are named (none: the core's model alone) or --smooth-coulomb
+    # gives the symmetric Coulomb friction its own shape
+    named = (args.joint_terms or "").strip()
+    auto = named == "auto" or (not named and args.smooth_coulomb is None)
     try:
         if auto and args.smooth_coulomb is not None:
             raise JointTermsError("--joint-terms auto chooses among offset, armature and "
@@ -259,8 +264,9 @@ def identify_command(args) -> int:
             speed = {} if args.min_speed is None else {"min_speed": args.min_speed}
             if args.urdf_tolerance is not None:
                 speed["urdf_tolerance"] = args.urdf_tolerance
+            choose = ("required" if named == "auto" else "default") if auto else None
             result = identify_robot(robot, log, unknown=args.unknown, method=args.velocity,
-                                    window=args.window, terms=terms, choose_terms=auto,
+                                    window=args.window, terms=terms, choose_terms=choose,
                                     **speed)
             # the name goes into identified.urdf's comment: one line of printable text
             written = write_results(outputs.staging, robot, log, result,
@@ -300,6 +306,9 @@ def identify_command(args) -> int:
 def _print_terms_choice(choice) -> None:
     """--joint-terms auto: every class's cross-validated error and the one kept."""
     from .model_class import ABSENCE_REPORTED, BLOCKS, label
+    if choice.note is not None:
+        print(f"  joint terms: {choice.note}")
+        return
     print(f"  joint terms by cross-validation (held-out torque error, mean of {BLOCKS} "
           "blocks):")
     for name, score in choice.scores.items():

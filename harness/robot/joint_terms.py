@@ -223,15 +223,18 @@ def _filtered(momentum: np.ndarray, rest: np.ndarray, h: float, tau: float,
 
 
 def parse_terms(items: str | None, smooth: float | None) -> JointTerms:
-    """JointTerms of --joint-terms ITEM,... (offset, armature, asymmetric-coulomb) and
-    --smooth-coulomb VS; JointTermsError names a bad item or combination."""
+    """JointTerms of --joint-terms ITEM,... (offset, armature, asymmetric-coulomb; none:
+    no extra term) and --smooth-coulomb VS; JointTermsError names a bad item or
+    combination."""
+    if items is not None and items.strip() == "none":
+        return JointTerms(smooth_coulomb=smooth)
     switches: dict[str, bool] = {}
     for item in (part.strip() for part in (items or "").split(",")):
         if not item:
             continue
         if item not in OPTION_ITEMS:
             raise JointTermsError(f"--joint-terms item {item!r} is not one of "
-                                  f"{', '.join(OPTION_ITEMS)}")
+                                  f"{', '.join(OPTION_ITEMS)} (or none, or auto alone)")
         switches[OPTION_ITEMS[item]] = True
     if items is not None and not switches:
         raise JointTermsError(f"--joint-terms {items!r} names no term (one or more of "

@@ -8,6 +8,11 @@ the predicted minus the measured torques over the RMS of the measured ones, over
 joint equations the regression uses. The class kept has the fewest terms among those
 as good as the best (its mean within 1 % or one standard error of the paired block
 differences, harness.model.as_good), the lower mean breaking a tie.
+
+A class whose fit on the whole log puts a term that physics keeps >= 0 (an armature, a
+Coulomb level) below zero by more than CONTRADICTED standard errors is not a candidate:
+the log contradicts it (a torque that a negative rotor inertia would explain is some
+other effect), and no physically consistent model of that class exists near its estimate.
 """
 from __future__ import annotations
 
@@ -22,9 +27,10 @@ import numpy as np
 
 from ..log_signals import LogSignalsError
 from ..model.as_good import as_good
-from ..model.fit import estimate
+from ..model.fit import estimate, fit
 from .base_parameters import BaseParameters
 from .joint_terms import OPTION_ITEMS, JointTerms, check_directions
+from .layout import ParameterLayout
 
 if TYPE_CHECKING:
     from .pipeline import Rows
@@ -33,6 +39,9 @@ if TYPE_CHECKING:
 BLOCKS = 5
 #: A term whose absence raises the best cross-validated error by more than this is named.
 ABSENCE_REPORTED = 0.01
+#: A term kept >= 0 by physics estimated below zero by more than this many standard
+#: errors: the log contradicts the class.
+CONTRADICTED = 3.0
 #: Every class: each combination of the terms --joint-terms names.
 CANDIDATES = tuple(JointTerms(**dict(zip(OPTION_ITEMS.values(), switches)))
                    for switches in itertools.product((False, True), repeat=len(OPTION_ITEMS)))
@@ -52,6 +61,7 @@ class TermsChoice:
     terms: JointTerms
     scores: dict[str, float | None]
     reasons: dict[str, str]
+    note: str | None = None  # why the classes were not compared (the core's model kept)
 
     def absence_costs(self) -> dict[str, float]:
         """Per term of the class kept, how much worse the class scores without it
@@ -68,7 +78,7 @@ class TermsChoice:
 
     def as_dict(self) -> dict[str, object]:
         return {"chosen": label(self.terms), "scores": self.scores, "refused": self.reasons,
-                "absence_costs": self.absence_costs(),
+                "absence_costs": self.absence_costs(), "note": self.note,
                 "definition": f"mean over {BLOCKS} contiguous held-out blocks of the RMS of "
                               "(predicted - measured torque) over the RMS of the measured "
                               "torque, the model fitted outside each block",
@@ -76,14 +86,19 @@ class TermsChoice:
 
 
 def choose_joint_terms(rows: Rows, base_for: Callable[[JointTerms], BaseParameters],
-                       nominal: np.ndarray, joint_names: list[str]) -> TermsChoice:
+                       nominal: np.ndarray, joint_names: list[str],
+                       required: bool = True) -> TermsChoice:
     """The model class of CANDIDATES the log supports (see the module); ``base_for`` gives
-    a class's base parameters, ``nominal`` the URDF's 12 n standard parameters."""
+    a class's base parameters, ``nominal`` the URDF's 12 n standard parameters.
+    LogSignalsError if no class can be fitted on the blocks; unless ``required``, the
+    core's model alone is kept instead, with a note that says why."""
     n = len(joint_names)
     blocks: dict[str, np.ndarray] = {}
     reasons: dict[str, str] = {}
     for terms in CANDIDATES:
         one_way = check_directions(terms, rows.speed, rows.mask, joint_names)
+        if one_way is None:
+            one_way = _contradicted(rows, base_for(terms), terms, nominal, joint_names)
         if one_way is not None:
             reasons[label(terms)] = one_way
             continue
@@ -91,8 +106,11 @@ def choose_joint_terms(rows: Rows, base_for: Callable[[JointTerms], BaseParamete
     means = {key: float(np.mean(errors)) for key, errors in blocks.items()}
     finite = {key: value for key, value in means.items() if math.isfinite(value)}
     if not finite:
-        raise LogSignalsError("--joint-terms auto: no model class can be fitted on this "
-                              "log's blocks (too few joint equations in each); name the terms")
+        why = "no model class can be fitted on this log's blocks (too few joint equations in each)"
+        if required:
+            raise LogSignalsError(f"--joint-terms auto: {why}; name the terms")
+        return TermsChoice(JointTerms(), dict.fromkeys(map(label, CANDIDATES)), reasons,
+                           f"{why}: the core's model alone (--joint-terms names the terms)")
     best = min(finite, key=lambda key: finite[key])
     by_label = {label(terms): terms for terms in CANDIDATES}
     good = [key for key in finite if as_good(blocks[key], blocks[best])]
@@ -103,16 +121,47 @@ def choose_joint_terms(rows: Rows, base_for: Callable[[JointTerms], BaseParamete
     return TermsChoice(by_label[chosen], scores, reasons)
 
 
-def _block_errors(rows: Rows, base: BaseParameters, terms: JointTerms, nominal: np.ndarray,
-                  n: int) -> np.ndarray:
-    """Each block's held-out relative torque error of the class ``terms``."""
+def _regression(rows: Rows, base: BaseParameters, terms: JointTerms, nominal: np.ndarray,
+                n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The class's base regressor, the torques left to it and the URDF's base values."""
     from .pipeline import known_columns
 
     Y = rows.extend(terms)
     known = known_columns(n, base)
     z = rows.torque - Y[:, :, known] @ nominal[known]
-    Yb = base.regressor(Y)
-    start = base.project(np.concatenate([nominal, np.zeros(terms.count(n))]))
+    return base.regressor(Y), z, base.project(np.concatenate([nominal, np.zeros(terms.count(n))]))
+
+
+def _contradicted(rows: Rows, base: BaseParameters, terms: JointTerms, nominal: np.ndarray,
+                  joint_names: list[str]) -> str | None:
+    """Why the log contradicts the class (a term kept >= 0 by physics, alone in its base
+    parameter, estimated below -CONTRADICTED standard errors), or None."""
+    n = len(joint_names)
+    if not terms.kinds:
+        return None
+    start = ParameterLayout(n, len(terms.kinds)).standard_size
+    signed = start + np.flatnonzero(terms.nonnegative(n))
+    alone = [k for k, column in enumerate(base.base)
+             if column in signed and not np.any(base.K[k])]
+    if not alone:
+        return None
+    Yb, z, nominal_beta = _regression(rows, base, terms, nominal, n)
+    try:
+        result = fit(Yb, z, nominal_beta, batch=rows.correlation, mask=rows.mask)
+    except (ValueError, np.linalg.LinAlgError):
+        return None  # the blocks' fits say what cannot be fitted
+    for k in alone:
+        value, error = result.theta[k], result.std_error[k]
+        if value < -CONTRADICTED * error:
+            return (f"{base.names[k]} = {value:.4g} +- {error:.2g} is negative: the log "
+                    f"contradicts it")
+    return None
+
+
+def _block_errors(rows: Rows, base: BaseParameters, terms: JointTerms, nominal: np.ndarray,
+                  n: int) -> np.ndarray:
+    """Each block's held-out relative torque error of the class ``terms``."""
+    Yb, z, start = _regression(rows, base, terms, nominal, n)
     count = len(z)
     errors = np.full(BLOCKS, math.inf)
     for b, block in enumerate(np.array_split(np.arange(count), BLOCKS)):

@@ -140,7 +140,7 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
                    window: float | None = None, tau: float = 0.02, max_samples: int = 20000,
                    skip: float = 0.5, min_speed: float | None = None,
                    urdf_tolerance: float = DEFAULT_URDF_TOLERANCE,
-                   terms: JointTerms | None = None, choose_terms: bool = False
+                   terms: JointTerms | None = None, choose_terms: str | None = None
                    ) -> Identification:
     """Identify the unknown parameters ("all" or "payload") from the log.
 
@@ -157,7 +157,9 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     (assessment.py).  A joint whose torque is 0 throughout is passive: its equation
     (torque = 0) constrains the parameters like any other.  terms: the extra joint terms
     (harness.robot.joint_terms; None: the core's model alone), identified with the rest;
-    choose_terms: the terms chosen from the log instead (harness.robot.model_class);
+    choose_terms: the terms chosen from the log instead (harness.robot.model_class):
+    "required" (LogSignalsError if no class can be compared) or "default" (then the
+    core's model alone, said in the choice's note);
     the URDF's prediction is the core's model with the URDF's values."""
     if log.q.shape[1] != robot.n:
         raise LogError(f"the log has {log.q.shape[1]} joints, the robot {robot.n}")
@@ -193,8 +195,9 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
             bases[model] = base_parameters(body, types, robot.joint_names, unknown, terms=model)
         return bases[model]
     choice = None
-    if choose_terms:
-        choice = choose_joint_terms(rows, base_for, robot.parameters(), robot.joint_names)
+    if choose_terms is not None:
+        choice = choose_joint_terms(rows, base_for, robot.parameters(), robot.joint_names,
+                                    required=choose_terms == "required")
         terms = choice.terms
     terms = terms or JointTerms()
     one_way = check_directions(terms, rows.speed, rows.mask, robot.joint_names)

@@ -34,7 +34,7 @@ def test_the_readme_figures(logs):
     """Measured: validation 13.73 % (URDF), 4.06 % (URDF's class), 0.022 % (with the
     terms); the elbow's armature 0.02999 for 0.03, every offset within 1e-3 N.m."""
     out, truth = logs
-    for name, extra in (("plain", []), ("est", ["--joint-terms", "offset,armature"])):
+    for name, extra in (("plain", ["--joint-terms", "none"]), ("est", [])):
         code = main(["identify", str(out / "arm.csv"), "--robot", str(EXAMPLE / "arm.urdf"),
                      "--out", str(out / name), *UNITS, *extra])
         warnings = json.loads((out / name / "summary.json").read_text())["warnings"]
@@ -46,7 +46,9 @@ def test_the_readme_figures(logs):
     plain = pooled(out, str(out / "plain" / "identified.urdf"), "val_plain")
     terms = pooled(out, str(out / "est" / "identified.urdf"), "val_est")
     assert terms < 0.001 < 0.02 < plain < 0.06 < 0.1 < urdf, (terms, plain, urdf)
-    values = json.loads((out / "est" / "summary.json").read_text())["joint_terms"]["values"]
+    summary = json.loads((out / "est" / "summary.json").read_text())
+    assert summary["joint_terms_choice"]["chosen"] == "offset,armature"  # by default
+    values = summary["joint_terms"]["values"]
     plus, minus = truth["coulomb_positive"], truth["coulomb_negative"]
     for i, joint in enumerate(("base_yaw", "shoulder", "elbow")):
         # the offset holds half the difference of the two Coulomb levels (README)

@@ -224,7 +224,7 @@ def test_the_choice_between_the_consistent_model_the_estimate_and_the_urdf():
                          "consistent": _prediction(0.106)}, consistent, nominal,
                         missing_terms=("offset", "armature"))
     assert "has no offset, armature" in bare.warnings[0]
-    assert "--joint-terms auto chooses" in bare.warnings[0]
+    assert "--joint-terms names them" in bare.warnings[0]
     worse = choose_model({"urdf": _prediction(0.3), "estimate": _prediction(0.10),
                           "consistent": _prediction(0.31)}, consistent, nominal)
     assert worse.written == "urdf" and np.array_equal(worse.pi, nominal)

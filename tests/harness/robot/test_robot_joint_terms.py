@@ -104,7 +104,7 @@ def test_armature_and_the_two_coulomb_levels_are_recovered(tmp_path, arm):
     assert {f"{j}.{k}" for j in names for k in ("armature", "coulomb_positive",
                                                  "coulomb_negative")} <= listed
     on = consistent_error(summary)
-    off = consistent_error(identify(tmp_path, urdf, data, "off"))
+    off = consistent_error(identify(tmp_path, urdf, data, "off", "--joint-terms", "none"))
     assert on < 0.005 and off > 0.2, (on, off)   # measured 0.00035 and 0.29
 
 
@@ -194,8 +194,8 @@ def test_an_identification_without_terms_leaves_an_empty_sidecar(tmp_path, arm):
     data = drive_log(tmp_path / "log.csv", robot, offset=False, seconds=4.0)
     identify(tmp_path, urdf, data, "id", "--joint-terms", "armature")
     assert sidecar_rows(tmp_path / "id" / "joint_terms.csv")
-    summary = identify(tmp_path, urdf, data, "id")
-    assert "joint_terms" not in summary
+    summary = identify(tmp_path, urdf, data, "id", "--joint-terms", "none")
+    assert "joint_terms" not in summary and "joint_terms_choice" not in summary
     assert sidecar_rows(tmp_path / "id" / "joint_terms.csv") == {}
     assert not read_sidecar(tmp_path / "id" / "joint_terms.csv", robot.joint_names).terms.any
 
@@ -214,8 +214,11 @@ def test_auto_chooses_the_terms_the_drives_have(tmp_path, arm, capsys, drive, ch
     summary = identify(tmp_path, urdf, data, "auto", "--joint-terms", "auto")
     record = summary["joint_terms_choice"]
     assert record["chosen"] == chosen, record["scores"]
-    assert len(record["scores"]) == 8 and all(v is not None for v in record["scores"].values())
-    best = min(record["scores"].values())
+    # every class scored, or refused with the reason (a Coulomb level the log puts below
+    # zero where the truth has an offset: the log contradicts the class)
+    assert len(record["scores"]) == 8
+    assert all((v is None) == (k in record["refused"]) for k, v in record["scores"].items())
+    best = min(v for v in record["scores"].values() if v is not None)
     assert record["scores"][chosen] <= 1.01 * best + 1e-3, record["scores"]
     printed = capsys.readouterr().out
     assert "joint terms by cross-validation" in printed and f"{chosen:<36}" in printed
@@ -233,8 +236,41 @@ def test_auto_chooses_the_terms_the_drives_have(tmp_path, arm, capsys, drive, ch
         assert costs["offset"] > 0.01, costs
 
 
+def test_the_terms_are_chosen_by_default_and_none_names_the_core_model(tmp_path, arm):
+    """Without --joint-terms the log chooses (as with auto); none and --smooth-coulomb
+    alone give the core's model without a choice."""
+    urdf, robot = arm
+    data = drive_log(tmp_path / "log.csv", robot, asymmetric=False, seconds=8.0, noise=0.02)
+    default = identify(tmp_path, urdf, data, "default")
+    assert default["joint_terms_choice"]["chosen"] == "offset,armature"
+    assert set(default["joint_terms"]["values"]["joint1"]) == {"offset", "armature"}
+    none = identify(tmp_path, urdf, data, "none", "--joint-terms", "none")
+    assert "joint_terms_choice" not in none and "joint_terms" not in none
+    smooth = identify(tmp_path, urdf, data, "smooth", "--smooth-coulomb", "0.1")
+    assert "joint_terms_choice" not in smooth
+
+
+def test_a_class_the_log_contradicts_is_not_a_candidate(tmp_path, arm):
+    """Torques unrelated to the motion (two sines): a negative armature explains them
+    exactly, which no drive has; those classes are refused with the reason and the
+    choice falls on a class without it."""
+    urdf, _ = arm
+    t = np.arange(6000) * 1e-3
+    q = np.column_stack([0.8 * np.sin(1.3 * t), 0.6 * np.sin(2.1 * t)])
+    u = np.column_stack([5.0 * np.sin(1.3 * t), 2.0 * np.cos(2.1 * t)])
+    data = tmp_path / "log.csv"
+    np.savetxt(data, np.column_stack([t, q, u]), delimiter=",", header="t,q1,q2,u1,u2",
+               comments="", fmt="%.17g")
+    record = identify(tmp_path, urdf, data, "out")["joint_terms_choice"]
+    assert "armature" not in record["chosen"]
+    for name in ("armature", "offset,armature", "offset,armature,asymmetric-coulomb"):
+        assert "joint1.armature = -3.698" in record["refused"][name]
+        assert "the log contradicts it" in record["refused"][name]
+
+
 @pytest.mark.parametrize("options, message", [
     (["--joint-terms", "auto", "--smooth-coulomb", "0.1"], "cannot join that choice"),
+    (["--joint-terms", "none,offset"], "'none' is not one of"),
     (["--joint-terms", "offset,stiction"], "'stiction' is not one of"),
     (["--joint-terms", ","], "names no term"),
     (["--smooth-coulomb", "0"], "--smooth-coulomb"),
