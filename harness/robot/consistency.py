@@ -61,6 +61,7 @@ import scipy.stats
 from lxml import etree
 
 from .base_parameters import BaseParameters
+from .consistent_errors import consistent_covariance
 from .joint_terms import JointTerms
 from .layout import ParameterLayout
 from .urdf import Robot, UrdfError, body_inertial, check_inertia, inertia_matrix, parse_urdf
@@ -108,6 +109,7 @@ class Projection:
     tolerance: float        # the stated relative tolerance of the URDF's values
     status: str             # the solver's status (cvxpy's: "optimal")
     gap: float              # |primal - dual objective| / max(1, |primal|) (NaN: unknown)
+    base_std: np.ndarray    # (r,) standard errors of the consistent base parameters
     settings: dict[str, float]  # the solver's settings that reached it (SOLVER_ATTEMPTS)
     seconds: float          # building and solving the program
     error: float            # score(beta(pi)): the training-log error (0 without a score)
@@ -293,6 +295,14 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
     problem = cp.Problem(cp.Minimize(data + links_prior + terms_prior), constraints)
     solution, settings = _solve(problem, z)
     pi = fixed + A @ z.value
+    # the joint terms held at their bounds do not move with the estimate
+    held = np.zeros(len(joint), dtype=bool)
+    values = np.asarray(u.value)
+    if np.any(nonnegative):
+        at = np.flatnonzero(nonnegative)
+        held[at] = values[at] <= lower + 1e-7 * np.maximum(1.0, np.abs(lower))
+    base_covariance = consistent_covariance([np.asarray(x.value) for x in X], ~held, weight,
+                                            M, whiten, A, projector, covariance)
     distance = float(np.sum((whiten @ (projector @ pi - beta)) ** 2))
     per_link = np.zeros(n)
     for i, J0 in zip(links, priors):
@@ -301,7 +311,8 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
     return Projection(
         pi, distance, float(scipy.stats.chi2.ppf(CONFIDENCE, len(beta))),
         2 * weight * float(per_link.sum()), weight * float(deviation @ deviation), per_link,
-        tolerance, str(problem.status), _gap(solution), settings,
+        tolerance, str(problem.status), _gap(solution),
+        np.sqrt(np.maximum(np.diag(base_covariance), 0.0)), settings,
         time.perf_counter() - started, float(score(projector @ pi)) if score is not None else 0.0)
 
 

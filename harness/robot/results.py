@@ -89,15 +89,19 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
     n = robot.n
     extra = result.terms.count(n)
     nominal_beta = result.base.project(np.concatenate([robot.parameters(), np.zeros(extra)]))
-    consistent_beta = result.base.project(result.pi if result.projection is None
-                                          else result.projection.pi)
+    projection = result.projection
+    consistent_beta = result.base.project(result.pi if projection is None else projection.pi)
+    # without a projection the consistent values are the estimate's, as are their errors
+    consistent_std = result.fit.std_error if projection is None else projection.base_std
     with parameters.open("w", newline="") as handle:
         writer = csv.writer(handle)
-        writer.writerow(["parameter", "urdf", "estimate", "std_error", "consistent", "definition"])
+        writer.writerow(["parameter", "urdf", "estimate", "std_error", "consistent",
+                         "consistent_std_error", "definition"])
         for k in range(result.base.count):
             writer.writerow([result.base.names[k], f"{nominal_beta[k]:.10g}",
                              f"{result.fit.theta[k]:.10g}", f"{result.fit.std_error[k]:.3g}",
-                             f"{consistent_beta[k]:.10g}", result.base.description(k)])
+                             f"{consistent_beta[k]:.10g}", f"{consistent_std[k]:.3g}",
+                             result.base.description(k)])
     urdf = out / "identified.urdf"
     kept = result.urdf_kept
     standard = result.standard(n)
