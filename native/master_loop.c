@@ -7,7 +7,7 @@
  *   for each link into it: value = source output (or signal[k]) + noise[k]; set it
  *   fmi2DoStep(t, H)
  * then, every `decimation` steps, the probes are read into the next record row: one
- * fmi2GetReal for each run of consecutive probes of one FMU (22 outputs of identify's
+ * fmi2GetReal for each run of consecutive probes of one FMU (the 20 outputs of identify's
  * observer a sample: one call each was half the loop's time). */
 #include <stddef.h>
 
