@@ -201,8 +201,10 @@ def _every(decimation: int, index: int, stamps, columns: Mapping[str, np.ndarray
     is a multiple of ``decimation``: t (the stamps as written) and the columns."""
     if decimation == 1:
         return {"t": stamps, **columns}
-    chosen = np.arange(-index % decimation, len(stamps), decimation)
-    return {"t": stamps.take(chosen), **{k: v[chosen] for k, v in columns.items()}}
+    from .tables import as_arrow
+
+    chosen = np.arange(-index % decimation, len(stamps), decimation, dtype=np.int64)
+    return {"t": stamps.take(as_arrow(chosen)), **{k: v[chosen] for k, v in columns.items()}}
 
 
 def _block_step(block: Block) -> float:

@@ -6,7 +6,9 @@
  * One macro step k (time t = t0 + k*H), for each FMU in step order:
  *   for each link into it: value = source output (or signal[k]) + noise[k]; set it
  *   fmi2DoStep(t, H)
- * then, every `decimation` steps, the probes are read into the next record row. */
+ * then, every `decimation` steps, the probes are read into the next record row: one
+ * fmi2GetReal for each run of consecutive probes of one FMU (the 20 outputs of identify's
+ * observer a sample: one call each was half the loop's time). */
 #include <stddef.h>
 
 typedef int (*DoStepFn)(void *, double, double, int);
@@ -43,6 +45,7 @@ typedef struct {
 } LoopFailure;
 
 #define FMI2_ERROR 3
+#define PROBE_BATCH 64 /* probes read by one fmi2GetReal at most */
 
 /* The value a link delivers at step k; returns the FMI status of the read. */
 static int link_value(const LoopFMU *fmus, const LoopLink *link, const double *signals,
@@ -96,13 +99,19 @@ long loop_run(const LoopFMU *fmus, const int *order, int n_order, const LoopLink
         if ((k + 1) % decimation == 0) {
             double *row = records + rows * (long)(n_probes + 1);
             row[0] = t0 + (double)(k + 1) * H;
-            for (int p = 0; p < n_probes; ++p) {
-                const LoopFMU *src = &fmus[probes[p].fmu];
-                const int status = src->get_real(src->component, &probes[p].vr, 1, &row[p + 1]);
+            for (int p = 0; p < n_probes;) {
+                const int fmu = probes[p].fmu;
+                unsigned vrs[PROBE_BATCH];
+                int n = 0;
+                for (; p + n < n_probes && n < PROBE_BATCH && probes[p + n].fmu == fmu; ++n)
+                    vrs[n] = probes[p + n].vr;
+                const LoopFMU *src = &fmus[fmu];
+                const int status = src->get_real(src->component, vrs, (size_t)n, &row[p + 1]);
                 if (status >= FMI2_ERROR) {
-                    *failure = (LoopFailure){k, probes[p].fmu, 1, status};
+                    *failure = (LoopFailure){k, fmu, 1, status};
                     return -1;
                 }
+                p += n;
             }
             ++rows;
         }

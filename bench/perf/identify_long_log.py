@@ -5,7 +5,7 @@
 
 Writes a log of N samples at 1 kHz (a pendulum-like y, a two-tone u; about 55
 bytes a row) into a temporary folder, then runs the command line on it in a
-child process and reports the child's wall time and peak resident memory
+child process and reports the child's wall time, CPU time and peak resident memory
 (its own rusage from wait4: ru_maxrss).  The log is written by another child,
 and this process imports neither numpy nor pyarrow: Linux carries the peak
 memory of the process that starts a program over into the program's
@@ -75,6 +75,9 @@ def main() -> int:
         print(f"identify: {wall:.1f} s wall, peak resident memory {peak:.0f} MB, "
               f"{table.name} {written:.0f} MB (every {args.csv_decimation}. row), "
               f"exit status {returncode}")
+        # CPU time depends less on other jobs than the wall time on a shared machine
+        print(f"CPU time {usage.ru_utime:.1f} s user, {usage.ru_stime:.1f} s system; "
+              f"load average {os.getloadavg()[0]:.1f}")
         print(f"{args.samples / wall / 1e6:.2f} million samples per second")
     return 0
 

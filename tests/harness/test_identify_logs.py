@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 
 import numpy as np
 import pandas as pd
@@ -121,6 +123,21 @@ def test_long_logs_are_decimated_in_the_csv(tmp_path, observer_fmu):
     frame = pd.read_csv(out / "estimates.csv")
     assert len(frame) == 2000
     np.testing.assert_array_equal(frame["t"].to_numpy(), t[::10])
+
+
+def test_a_csv_log_is_identified_without_pandas_or_pint(tmp_path, observer_fmu):
+    """pyarrow's to_numpy and pyarrow.array load pandas (50 MB, a third of a second), pint
+    a quarter of a second: neither is needed for a log in seconds, decimated or not."""
+    path, *_ = _log(tmp_path / "r.csv", np.arange(3000) * 1e-3)
+    code = ("import sys; from harness.cli import main; main(sys.argv[1:]); "
+            "print('loaded:', *(m for m in ('pandas', 'pint') if m in sys.modules))")
+    for decimation in ("1", "7"):
+        result = subprocess.run(
+            [sys.executable, "-c", code, "identify", str(path), "--out",
+             str(tmp_path / decimation), "--csv-decimation", decimation, "--quiet",
+             "--fmu-dir", str(observer_fmu.parent)], capture_output=True, text=True)
+        assert result.returncode in (0, 1), result.stderr
+        assert result.stdout.splitlines()[-1] == "loaded:", result.stdout
 
 
 def test_estimates_as_parquet(tmp_path, observer_fmu):

@@ -31,3 +31,18 @@ def test_a_stream_writes_its_blocks_in_order_as_csv_or_parquet(tmp_path):
             assert [float(r) for r in rows] == [0, 1, 2, 3, 4, 5]
         else:
             assert pq.read_table(tmp_path / name).column("k").to_pylist() == [0, 1, 2, 3, 4, 5]
+
+
+def test_a_stream_writes_the_text_of_the_plain_writer_runs_of_equal_values_or_not(tmp_path):
+    rng = np.random.default_rng(1)
+    changing = rng.normal(size=12) * 10.0 ** rng.integers(-30, 30, size=12)
+    runs = np.repeat([0.0, -0.0, 1 / 3, np.nan, np.inf, -np.inf, 1e-7, 1e21, 5e-324, 0.0],
+                     [3, 2, 4, 2, 1, 1, 3, 2, 1, 5])
+    blocks = [{"t": np.arange(24.0), "a[1,1]": runs[:24], "b": np.concatenate([changing] * 2)},
+              {"t": np.arange(24.0, 36.0), "a[1,1]": changing, "b": runs[:12]},
+              {"t": np.array([36.0]), "a[1,1]": np.array([-0.0]), "b": np.array([7.5])}]
+    with CsvStream(tmp_path / "s.csv") as stream:
+        for block in blocks:
+            stream.write(block)
+    whole = {k: np.concatenate([b[k] for b in blocks]) for k in blocks[0]}
+    assert (tmp_path / "s.csv").read_bytes() == write_csv(tmp_path / "w.csv", whole).read_bytes()
