@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import os
 import stat
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import numpy as np
@@ -21,7 +21,7 @@ from . import csv_columns
 from .csv_columns import CHUNK_ROWS, Header, column_of, uneven_step
 
 __all__ = ["FORMATS", "MAX_HEADER_BYTES", "Header", "LogColumnError", "check_column_roles",
-           "check_log_file", "column_of", "log_format", "mean_step",
+           "check_distinct_columns", "check_log_file", "column_of", "log_format", "mean_step",
            "note_slow_step",
            "read_columns", "read_header", "uneven_step"]
 
@@ -57,6 +57,25 @@ def note_slow_step(path: Path, step: float, hint: str) -> None:
         from .messages import note
         note(f"{path}: samples {step:g} s apart, the time column read as seconds: if it is "
              f"in milliseconds (or us, ns), {hint}")
+
+
+def check_distinct_columns(where: str, header: list[str], chosen: list[tuple[str, int]],
+                           key: Callable[[str], str] = str) -> None:
+    """LogColumnError when a role's column (``chosen``: role, index into ``header``) has a
+    name the header gives more than once (which is meant cannot be told) or two roles
+    read one column (one signal would be taken for two); names compared by ``key``.
+    ``where`` starts the message (the file, and its line for a CSV header)."""
+    names = [key(name) for name in header]
+    first: dict[int, str] = {}
+    for role, index in chosen:
+        if names.count(names[index]) > 1:
+            columns = ", ".join(str(i + 1) for i, n in enumerate(names) if n == names[index])
+            raise LogColumnError(f"{where}: the header names {header[index]!r} ({role}) more "
+                                 f"than once (columns {columns}); rename all but one")
+        if index in first:
+            raise LogColumnError(f"{where}: {first[index]} and {role} are both read from the "
+                                 f"column {header[index]!r}; each needs its own column")
+        first[index] = role
 
 
 def check_column_roles(text: str, option: str = "--columns", fold_case: bool = False) -> None:

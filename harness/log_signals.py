@@ -19,6 +19,7 @@ from .clock import ClockError, even_steps
 from .log_columns import (
     Header,
     LogColumnError,
+    check_distinct_columns,
     column_of,
     log_format,
     mean_step,
@@ -146,20 +147,6 @@ def _missing(path: Path, column: Column, found: str, hint: str) -> LogSignalsErr
                            f"{found}){hint}")
 
 
-def _one_column_each(path: Path, wanted: list[Column], names: list[str]) -> None:
-    """LogSignalsError when two roles read one column (`names`: the file's column of each,
-    a number resolved to its name): one signal would be taken for two."""
-    first: dict[str, Column] = {}
-    for column, name in zip(wanted, names):
-        if name in first:
-            other = first[name]
-            given = ("" if other.column == column.column else
-                     f" (given as {other.column!r} and {column.column!r})")
-            raise LogSignalsError(f"{path}: {other.role} and {column.role} are both read from "
-                                  f"the column {name!r}{given}; each needs its own column")
-        first[name] = column
-
-
 def _read_table(path: Path, header: Header, wanted: list[Column], hint: str) -> np.ndarray:
     """The columns of a CSV or Parquet log, (N, len(wanted))."""
     names = []
@@ -169,13 +156,10 @@ def _read_table(path: Path, header: Header, wanted: list[Column], hint: str) -> 
             found = (", ".join(header) if header.present
                      else f"{len(header)} unnamed columns")
             raise _missing(path, column, found, hint)
-        if header.count(name) > 1:  # which of them is meant cannot be told
-            where = ", ".join(str(i + 1) for i, h in enumerate(header) if h == name)
-            raise LogSignalsError(f"{path}: the header names {name!r} ({column.role}) more "
-                                  f"than once (columns {where}); rename all but one")
         names.append(str(name))
-    _one_column_each(path, wanted, names)
     try:
+        check_distinct_columns(str(path), header, [(c.role, header.index(name))
+                                                   for c, name in zip(wanted, names)])
         return read_columns(path, header, names, [c.role for c in wanted])
     except LogColumnError as error:
         raise LogSignalsError(str(error)) from None
@@ -187,7 +171,12 @@ def _read_mat(path: Path, wanted: list[Column], hint: str) -> np.ndarray:
         data = load_mat(path)
     except MatFileError as error:
         raise LogSignalsError(str(error)) from None
-    _one_column_each(path, wanted, [c.column for c in wanted])
+    variables = list(dict.fromkeys(c.column for c in wanted))  # each name once: no header
+    try:
+        check_distinct_columns(str(path), variables,
+                               [(c.role, variables.index(c.column)) for c in wanted])
+    except LogColumnError as error:
+        raise LogSignalsError(str(error)) from None
     available = ", ".join(sorted([*data, *data.others])) or "nothing"
     columns = []
     for column in wanted:

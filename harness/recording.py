@@ -128,22 +128,17 @@ def _locate(path: Path, header: list[str], columns: Mapping[str, str]) -> dict[s
         if index is None:
             missing.append(columns.get(role, role))
             continue
-        if names.count(names[index]) > 1:  # which of them is meant cannot be told
-            where = ", ".join(str(i + 1) for i, n in enumerate(names) if n == names[index])
-            raise DataError(f"{path} line 1: the header names {header[index]!r} ({role}) more "
-                            f"than once (columns {where}); rename all but one")
         found[role] = index
     if missing:
         raise DataError(f"{path} line 1: missing column(s) {', '.join(missing)}; the header "
                         f"must name t (or time), y and u, or map them with --columns "
                         f"t=NAME,y=NAME,u=NAME (found: {', '.join(header) or 'nothing'})")
-    roles: dict[int, str] = {}
-    for role, index in found.items():  # "u=y": u mapped onto the column y is read from
-        if index in roles:
-            raise DataError(f"{path}: {roles[index]} and {role} are both read from the "
-                            f"column {header[index]!r}; map each role to its own column "
-                            f"with --columns t=NAME,y=NAME,u=NAME")
-        roles[index] = role
+    from .log_columns import LogColumnError, check_distinct_columns
+    try:  # "u=y": u mapped onto the column y is read from
+        check_distinct_columns(f"{path} line 1", header, list(found.items()),
+                               key=lambda name: name.strip().lower())
+    except LogColumnError as error:
+        raise DataError(f"{error} (--columns t=NAME,y=NAME,u=NAME maps the roles)") from None
     return found
 
 

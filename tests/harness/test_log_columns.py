@@ -97,3 +97,15 @@ def test_the_mean_step_of_extreme_times_does_not_overflow():
         warnings.simplefilter("error")
         assert mean_step(np.array([-1.7e308, 0.0, 1.7e308])) == 1.7e308
         assert mean_step(np.array([-1.7e308, 1.7e308])) == np.inf
+
+
+def test_distinct_columns_refuse_a_repeated_name_and_a_shared_column():
+    from harness.log_columns import LogColumnError, check_distinct_columns
+    header = ["t", "Pos", "pos ", "u"]
+    check_distinct_columns("log.csv", header, [("t", 0), ("y", 1), ("u", 3)])  # exact names
+    with pytest.raises(LogColumnError, match=r"log.csv line 1: the header names 'Pos' \(y\) "
+                                             r"more than once \(columns 2, 3\)"):
+        check_distinct_columns("log.csv line 1", header, [("y", 1)],
+                               key=lambda name: name.strip().lower())
+    with pytest.raises(LogColumnError, match="y and u are both read from the column 'u'"):
+        check_distinct_columns("log.csv", header, [("t", 0), ("y", 3), ("u", 3)])
