@@ -8,7 +8,7 @@ import json
 
 import numpy as np
 import pytest
-from robot_helpers import FRICTION, multisine_log, payload_link
+from robot_helpers import FRICTION, multisine_log, payload_link, swing_log
 
 from harness.cli import main
 from harness.robot.base_parameters import base_parameters, random_states
@@ -255,12 +255,7 @@ def test_a_class_the_log_contradicts_is_not_a_candidate(tmp_path, arm):
     exactly, which no drive has; those classes are refused with the reason and the
     choice falls on a class without it."""
     urdf, _ = arm
-    t = np.arange(6000) * 1e-3
-    q = np.column_stack([0.8 * np.sin(1.3 * t), 0.6 * np.sin(2.1 * t)])
-    u = np.column_stack([5.0 * np.sin(1.3 * t), 2.0 * np.cos(2.1 * t)])
-    data = tmp_path / "log.csv"
-    np.savetxt(data, np.column_stack([t, q, u]), delimiter=",", header="t,q1,q2,u1,u2",
-               comments="", fmt="%.17g")
+    data = swing_log(tmp_path / "log.csv", np.arange(6000) * 1e-3)
     record = identify(tmp_path, urdf, data, "out")["joint_terms_choice"]
     assert "armature" not in record["chosen"]
     for name in ("armature", "offset,armature", "offset,armature,asymmetric-coulomb"):
