@@ -98,12 +98,21 @@ static double even(const FixedLag *f, int half, const double k[], int s)
     return sum;
 }
 
-void fl_push(FixedLag *f, const double y[], const double u[])
+int fl_add_term(FixedLag *f, int held, int tag)
+{
+    if (f->terms >= FL_MAX_TERMS) return -1;
+    f->term_held[f->terms] = held != 0;
+    f->term_tag[f->terms] = tag;
+    return f->terms++;
+}
+
+void fl_push(FixedLag *f, const double y[], const double u[], const double terms[])
 {
     f->newest = f->newest + 1 < FL_RING ? f->newest + 1 : 0;
-    for (int s = 0; s < f->signals; ++s)
+    for (int s = 0; s < f->signals + f->terms; ++s)
         f->ring[s][f->newest] = f->ring[s][f->newest + FL_RING] =
-            s < f->coordinates ? y[s] : u[s - f->coordinates];
+            s < f->coordinates ? y[s] : s < f->signals ? u[s - f->coordinates]
+                                                       : terms[s - f->signals];
     if (f->filled < FL_RING) ++f->filled;
     if (f->chosen >= 0) return; /* the choice is made: no more statistics needed */
     if (f->filled >= 2 * FL_PROBE_HALF + 1) {
@@ -153,7 +162,19 @@ int fl_ready(const FixedLag *f)
     return f->chosen >= 0 && f->filled >= 2 * f->half[f->chosen] + 1 + f->inputs_held;
 }
 
-void fl_at_lag(const FixedLag *f, double q[], double qd[], double qdd[], double u[])
+/* Signal s smoothed as an input: sampled (k0) or held over each sample. */
+static double as_input(const FixedLag *f, int s, int held)
+{
+    const int c = f->chosen, half = f->half[c];
+    if (!held) return even(f, half, f->k0[c], s);
+    const double *w = centre(f, half, s), *kernel = f->held[c];
+    double sum = 0.0;
+    for (int m = 0; m <= half; ++m) sum += kernel[m] * (w[m] + w[-m - 1]);
+    return sum;
+}
+
+void fl_at_lag(const FixedLag *f, double q[], double qd[], double qdd[], double u[],
+               double terms[])
 {
     const int c = f->chosen, half = f->half[c];
     const double *k0 = f->k0[c], *k1 = f->k1[c], *k2 = f->k2[c];
@@ -170,16 +191,9 @@ void fl_at_lag(const FixedLag *f, double q[], double qd[], double qdd[], double 
         qd[i] = velocity;
         qdd[i] = acceleration;
     }
-    for (int s = f->coordinates; s < f->signals; ++s) {
-        if (!f->inputs_held) {
-            u[s - f->coordinates] = even(f, half, k0, s);
-            continue;
-        }
-        const double *w = centre(f, half, s), *held = f->held[c];
-        double sum = 0.0;
-        for (int m = 0; m <= half; ++m) sum += held[m] * (w[m] + w[-m - 1]);
-        u[s - f->coordinates] = sum;
-    }
+    for (int s = f->coordinates; s < f->signals; ++s)
+        u[s - f->coordinates] = as_input(f, s, f->inputs_held);
+    for (int k = 0; k < f->terms; ++k) terms[k] = as_input(f, f->signals + k, f->term_held[k]);
 }
 
 double fl_cutoff(const FixedLag *f)
