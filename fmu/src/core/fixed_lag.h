@@ -5,12 +5,13 @@
  * while a causal derivative's own lag biases every regressor on a coarse or fast
  * log (a resonance near fs/9 is not tracked by any causal observer at that rate).
  * The window smooths the samples with a low-pass kernel K (a Blackman-windowed
- * sinc of cut-off f_c, half-length FL_CYCLES / f_c samples) and differentiates
- * the smooth curve it defines, q^(t) = sum_i y_i K(t - t_i): its velocity and
- * acceleration are exact derivatives of one function, and the inputs pass the
- * same K, so that a linear equation holds between the smoothed signals as it
- * does between the measured ones.  The coefficients are normalized so that
- * constants, ramps and parabolas come out exact.  An input held over each sample
+ * sinc of cut-off f_c, half-length FL_CYCLES / f_c samples, sampled: k0) and
+ * differentiates the smoothed signal with kernels of the same length whose
+ * responses are i w and -w^2 times k0's over its band (fixed_lag_kernels.h,
+ * exact on constants, ramps and parabolas), and the inputs pass the same k0, so
+ * that a linear equation holds between the smoothed signals as it does between
+ * the measured ones.  A nonlinear term of the samples (fl_add_term) passes as an
+ * input does.  An input held over each sample
  * (a zero-order hold) is the staircase it draws: sample u_i acts from t_i to
  * t_i + h, so its weight is K at the middle of that interval.
  *
