@@ -45,13 +45,15 @@ int mp_init(ModelPipeline *p, const TermProgram *program, const double alpha1[],
      * as functions of the samples, as the equations' own terms do; one of positions and
      * held inputs is neither a sample's function nor a staircase's: at the smoothed
      * sample, as the entries with derivatives */
+    p->terms_unwindowed = 0;
     for (int i = 0; i < n; ++i)
         for (int k = 0; k <= program->p; ++k) {
             const int kind = tp_entry_kind(program, i, k);
             const int positions = (kind & TP_READS_POSITIONS) != 0;
             const int held = program->inputs_held && (kind & TP_READS_INPUTS);
-            if ((kind & TP_NONLINEAR) && !(kind & TP_READS_DERIVATIVES) && !(positions && held))
-                fl_add_term(&p->window, held, i * (TP_MAX_PARAMETERS + 1) + k);
+            if ((kind & TP_NONLINEAR) && !(kind & TP_READS_DERIVATIVES) && !(positions && held)
+                && fl_add_term(&p->window, held, i * (TP_MAX_PARAMETERS + 1) + k) < 0)
+                ++p->terms_unwindowed;
         }
     if (!(p->tau_identifier >= 0.0) || !isfinite(p->tau_identifier) ||
         !(p->statistics_interval >= 0.0) || !isfinite(p->statistics_interval))
