@@ -1,4 +1,5 @@
 #include "fixed_lag.h"
+#include "fixed_lag_kernels.h"
 
 #include <math.h>
 #include <string.h>
@@ -6,64 +7,44 @@
 #define PI 3.14159265358979323846
 
 /* The kernel K(t) = sin(a t) / (pi t) w(t) with a Blackman window w of half-width
- * T, and its first two derivatives, at t (in samples). */
-static void kernel(double a, double T, double t, double out[3])
+ * T, at t (in samples). */
+static double kernel(double a, double T, double t)
 {
-    double s, s1, s2;
-    if (fabs(t) < 1e-12) {
-        s = a / PI;
-        s1 = 0.0;
-        s2 = -a * a * a / (3.0 * PI);
-    } else {
-        const double sn = sin(a * t), cs = cos(a * t);
-        s = sn / (PI * t);
-        s1 = (a * t * cs - sn) / (PI * t * t);
-        s2 = (-a * a * t * t * sn - 2.0 * a * t * cs + 2.0 * sn) / (PI * t * t * t);
-    }
-    const double b = PI / T;
-    const double w = 0.42 + 0.5 * cos(b * t) + 0.08 * cos(2.0 * b * t);
-    const double w1 = -0.5 * b * sin(b * t) - 0.16 * b * sin(2.0 * b * t);
-    const double w2 = -0.5 * b * b * cos(b * t) - 0.32 * b * b * cos(2.0 * b * t);
-    out[0] = s * w;
-    out[1] = s1 * w + s * w1;
-    out[2] = s2 * w + 2.0 * s1 * w1 + s * w2;
+    const double s = fabs(t) < 1e-12 ? a / PI : sin(a * t) / (PI * t), b = PI / T;
+    return s * (0.42 + 0.5 * cos(b * t) + 0.08 * cos(2.0 * b * t));
 }
 
 /* A smoothing kernel k0 of cut-off `fraction` (of the sample rate) over j = -half ..
- * half, and its derivatives k1, k2 (model_pipeline.h), normalized on constants, ramps
- * and parabolas; returns the acceleration's variance per unit white noise variance. */
-static double coefficients(double fraction, int half, double h, double k0[], double k1[],
-                           double k2[])
+ * half: K at the integers, normalized to sum 1. */
+static void smoothing(double fraction, int half, double k0[])
 {
-    double sum0 = 0.0, sum2 = 0.0;
+    double sum = 0.0;
     for (int j = 0; j <= half; ++j) {
-        double K[3];
-        kernel(2.0 * PI * fraction, half + 1.0, (double)j, K);
-        k0[j] = K[0];
-        k1[j] = -K[1]; /* q^'(centre) = sum y_j K'(-j) and K' is odd */
-        k2[j] = K[2];
-        const double twice = j ? 2.0 : 1.0; /* j and -j */
-        sum0 += twice * k0[j];
-        sum2 += twice * k2[j];
+        k0[j] = kernel(2.0 * PI * fraction, half + 1.0, (double)j);
+        sum += (j ? 2.0 : 1.0) * k0[j];
     }
+    for (int j = 0; j <= half; ++j) k0[j] /= sum;
+}
+
+/* Candidate c's velocity and acceleration kernels at step h (fixed_lag_kernels.h:
+ * their responses are i w and -w^2 times k0's over its band, exact on constants, ramps
+ * and parabolas); returns the acceleration's variance per unit white noise variance. */
+static double derivatives(int c, int half, double h, double k1[], double k2[])
+{
+    const double *v = FL_KERNEL_VELOCITY + FL_KERNEL_OFFSET[c],
+                 *a = FL_KERNEL_ACCELERATION + FL_KERNEL_OFFSET[c];
+    double noise = 0.0;
     for (int j = 0; j <= half; ++j) {
-        k0[j] /= sum0;
-        k2[j] -= sum2 * k0[j]; /* no response to a constant */
-    }
-    double ramp = 0.0, parabola = 0.0, noise = 0.0;
-    for (int j = 1; j <= half; ++j) {
-        ramp += 2.0 * k1[j] * j;
-        parabola += k2[j] * (double)j * j; /* 2 k2[j] j^2 / 2 */
-    }
-    for (int j = 0; j <= half; ++j) {
-        k1[j] /= ramp * h;
-        k2[j] /= parabola * h * h;
+        k1[j] = v[j] / h;
+        k2[j] = a[j] / (h * h);
         noise += (j ? 2.0 : 1.0) * k2[j] * k2[j];
     }
     return noise;
 }
 
 _Static_assert(FL_CANDIDATES >= 1 && FL_CANDIDATES <= 8, "candidates halve the band");
+_Static_assert(FL_KERNEL_CANDIDATES == FL_CANDIDATES, "fixed_lag_kernels.h is of these "
+               "candidates: python -m tools.fixed_lag_kernels");
 
 /* The held input's kernel of cut-off `fraction`: K at m + 1/2, normalized to sum 1
  * over the 2 (half + 1) samples it weighs. */
@@ -71,10 +52,8 @@ static void held_kernel(double fraction, int half, double held[])
 {
     double sum = 0.0;
     for (int m = 0; m <= half; ++m) {
-        double K[3];
-        kernel(2.0 * PI * fraction, half + 1.0, m + 0.5, K);
-        held[m] = K[0];
-        sum += 2.0 * K[0];
+        held[m] = kernel(2.0 * PI * fraction, half + 1.0, m + 0.5);
+        sum += 2.0 * held[m];
     }
     for (int m = 0; m <= half; ++m) held[m] /= sum;
 }
@@ -93,11 +72,11 @@ int fl_init(FixedLag *f, int coordinates, int inputs, int inputs_held, double h)
     double fraction = FL_HIGHEST_FRACTION;
     for (int c = 0; c < FL_CANDIDATES; ++c, fraction *= 0.5) {
         f->half[c] = (int)fmin(ceil(FL_CYCLES / fraction - 1e-9), FL_MAX_HALF);
-        f->noise_gain[c] = coefficients(fraction, f->half[c], h, f->k0[c], f->k1[c], f->k2[c]);
+        smoothing(fraction, f->half[c], f->k0[c]);
+        f->noise_gain[c] = derivatives(c, f->half[c], h, f->k1[c], f->k2[c]);
         held_kernel(fraction, f->half[c], f->held[c]);
     }
-    double d1[FL_PROBE_HALF + 1], d2[FL_PROBE_HALF + 1];
-    coefficients(FL_PROBE_FRACTION, FL_PROBE_HALF, h, f->probe, d1, d2);
+    smoothing(FL_PROBE_FRACTION, FL_PROBE_HALF, f->probe);
     f->probe_gain = (1.0 - f->probe[0]) * (1.0 - f->probe[0]); /* sum (delta_j - k0_j)^2 */
     for (int j = 1; j <= FL_PROBE_HALF; ++j) f->probe_gain += 2.0 * f->probe[j] * f->probe[j];
     return 0;
@@ -119,12 +98,21 @@ static double even(const FixedLag *f, int half, const double k[], int s)
     return sum;
 }
 
-void fl_push(FixedLag *f, const double y[], const double u[])
+int fl_add_term(FixedLag *f, int held, int tag)
+{
+    if (f->terms >= FL_MAX_TERMS) return -1;
+    f->term_held[f->terms] = held != 0;
+    f->term_tag[f->terms] = tag;
+    return f->terms++;
+}
+
+void fl_push(FixedLag *f, const double y[], const double u[], const double terms[])
 {
     f->newest = f->newest + 1 < FL_RING ? f->newest + 1 : 0;
-    for (int s = 0; s < f->signals; ++s)
+    for (int s = 0; s < f->signals + f->terms; ++s)
         f->ring[s][f->newest] = f->ring[s][f->newest + FL_RING] =
-            s < f->coordinates ? y[s] : u[s - f->coordinates];
+            s < f->coordinates ? y[s] : s < f->signals ? u[s - f->coordinates]
+                                                       : terms[s - f->signals];
     if (f->filled < FL_RING) ++f->filled;
     if (f->chosen >= 0) return; /* the choice is made: no more statistics needed */
     if (f->filled >= 2 * FL_PROBE_HALF + 1) {
@@ -174,7 +162,19 @@ int fl_ready(const FixedLag *f)
     return f->chosen >= 0 && f->filled >= 2 * f->half[f->chosen] + 1 + f->inputs_held;
 }
 
-void fl_at_lag(const FixedLag *f, double q[], double qd[], double qdd[], double u[])
+/* Signal s smoothed as an input: sampled (k0) or held over each sample. */
+static double as_input(const FixedLag *f, int s, int held)
+{
+    const int c = f->chosen, half = f->half[c];
+    if (!held) return even(f, half, f->k0[c], s);
+    const double *w = centre(f, half, s), *kernel = f->held[c];
+    double sum = 0.0;
+    for (int m = 0; m <= half; ++m) sum += kernel[m] * (w[m] + w[-m - 1]);
+    return sum;
+}
+
+void fl_at_lag(const FixedLag *f, double q[], double qd[], double qdd[], double u[],
+               double terms[])
 {
     const int c = f->chosen, half = f->half[c];
     const double *k0 = f->k0[c], *k1 = f->k1[c], *k2 = f->k2[c];
@@ -191,16 +191,9 @@ void fl_at_lag(const FixedLag *f, double q[], double qd[], double qdd[], double 
         qd[i] = velocity;
         qdd[i] = acceleration;
     }
-    for (int s = f->coordinates; s < f->signals; ++s) {
-        if (!f->inputs_held) {
-            u[s - f->coordinates] = even(f, half, k0, s);
-            continue;
-        }
-        const double *w = centre(f, half, s), *held = f->held[c];
-        double sum = 0.0;
-        for (int m = 0; m <= half; ++m) sum += held[m] * (w[m] + w[-m - 1]);
-        u[s - f->coordinates] = sum;
-    }
+    for (int s = f->coordinates; s < f->signals; ++s)
+        u[s - f->coordinates] = as_input(f, s, f->inputs_held);
+    for (int k = 0; k < f->terms; ++k) terms[k] = as_input(f, f->signals + k, f->term_held[k]);
 }
 
 double fl_cutoff(const FixedLag *f)

@@ -5,12 +5,13 @@
  * while a causal derivative's own lag biases every regressor on a coarse or fast
  * log (a resonance near fs/9 is not tracked by any causal observer at that rate).
  * The window smooths the samples with a low-pass kernel K (a Blackman-windowed
- * sinc of cut-off f_c, half-length FL_CYCLES / f_c samples) and differentiates
- * the smooth curve it defines, q^(t) = sum_i y_i K(t - t_i): its velocity and
- * acceleration are exact derivatives of one function, and the inputs pass the
- * same K, so that a linear equation holds between the smoothed signals as it
- * does between the measured ones.  The coefficients are normalized so that
- * constants, ramps and parabolas come out exact.  An input held over each sample
+ * sinc of cut-off f_c, half-length FL_CYCLES / f_c samples, sampled: k0) and
+ * differentiates the smoothed signal with kernels of the same length whose
+ * responses are i w and -w^2 times k0's over its band (fixed_lag_kernels.h,
+ * exact on constants, ramps and parabolas), and the inputs pass the same k0, so
+ * that a linear equation holds between the smoothed signals as it does between
+ * the measured ones.  A nonlinear term of the samples (fl_add_term) passes as an
+ * input does.  An input held over each sample
  * (a zero-order hold) is the staircase it draws: sample u_i acts from t_i to
  * t_i + h, so its weight is K at the middle of that interval.
  *
@@ -31,6 +32,7 @@
 #include "tuning.h"
 
 #define FL_MAX_SIGNALS 14 /* positions then inputs */
+#define FL_MAX_TERMS 16   /* functions of the samples, smoothed after them (fl_add_term) */
 #define FL_MAX_HALF 240 /* ceil(FL_CYCLES / FL_HIGHEST_FRACTION) 2^(FL_CANDIDATES - 1) */
 #define FL_RING (2 * FL_MAX_HALF + 2) /* a held input's window reaches one sample further */
 #define FL_PROBE_HALF 15 /* ceil(FL_CYCLES / FL_PROBE_FRACTION) */
@@ -38,6 +40,9 @@
 typedef struct {
     int coordinates, signals; /* positions, then inputs up to signals */
     int inputs_held;          /* the inputs act until the next sample */
+    int terms;                /* functions of the samples, after the signals in the ring */
+    int term_held[FL_MAX_TERMS]; /* a function of held inputs only: a staircase too */
+    int term_tag[FL_MAX_TERMS];  /* the caller's name for each */
     double h;
     int half[FL_CANDIDATES];  /* samples on each side of the centre */
     /* coefficient of the sample j steps after the centre, j = 0 .. half (k1 is odd:
@@ -51,7 +56,7 @@ typedef struct {
     double probe_gain;                /* ... its residual's variance per unit noise variance */
     /* each signal's last FL_RING samples, written twice (at j and j + FL_RING) so that
      * every window is contiguous: the newest at ring[s][newest + FL_RING] */
-    double ring[FL_MAX_SIGNALS][2 * FL_RING];
+    double ring[FL_MAX_SIGNALS + FL_MAX_TERMS][2 * FL_RING];
     int newest, filled;       /* ring index of the newest sample; samples held */
     double square[FL_CANDIDATES][FL_MAX_SIGNALS]; /* sums of each candidate's squared */
     double squares[FL_CANDIDATES];                /* accelerations, and their count */
@@ -65,10 +70,18 @@ typedef struct {
  * that is not positive and finite. */
 int fl_init(FixedLag *f, int coordinates, int inputs, int inputs_held, double h);
 
-/* Takes a sample (the positions y, the inputs u) and, until the choice, accumulates
- * the mean square of every candidate's acceleration whose window is full and the
- * noise probe's. */
-void fl_push(FixedLag *f, const double y[], const double u[]);
+/* Adds a term: a function of one sample's positions and inputs (no derivatives), whose
+ * values fl_push takes beside the samples and fl_at_lag smooths by K as an input is
+ * (by the held input's kernel where held is set: a function of held inputs only), so
+ * that a nonlinear term of the equations passes the window as the equations' own
+ * samples do, where the same function of the smoothed samples would not.  Before
+ * the first fl_push.  Returns the term's index, or -1 when FL_MAX_TERMS are taken. */
+int fl_add_term(FixedLag *f, int held, int tag);
+
+/* Takes a sample (the positions y, the inputs u, the terms' values at them; terms
+ * may be NULL without terms) and, until the choice, accumulates the mean square of
+ * every candidate's acceleration whose window is full and the noise probe's. */
+void fl_push(FixedLag *f, const double y[], const double u[], const double terms[]);
 
 /* Chooses the cut-off from the statistics so far. Returns the candidate. */
 int fl_choose(FixedLag *f);
@@ -79,9 +92,10 @@ double fl_noise_std(const FixedLag *f, int i);
 /* The chosen candidate's window is full: fl_at_lag has a sample. */
 int fl_ready(const FixedLag *f);
 
-/* The smoothed positions, velocities, accelerations and inputs at the chosen
- * candidate's centre, half[chosen] samples behind the newest. */
-void fl_at_lag(const FixedLag *f, double q[], double qd[], double qdd[], double u[]);
+/* The smoothed positions, velocities, accelerations, inputs and terms (NULL without
+ * terms) at the chosen candidate's centre, half[chosen] samples behind the newest. */
+void fl_at_lag(const FixedLag *f, double q[], double qd[], double qdd[], double u[],
+               double terms[]);
 
 /* The chosen candidate's cut-off [Hz] (0 before fl_choose). */
 double fl_cutoff(const FixedLag *f);

@@ -41,6 +41,20 @@ int mp_init(ModelPipeline *p, const TermProgram *program, const double alpha1[],
                       "(a fixed-lag window)", p->regression);
     if (fl_init(&p->window, n, program->m, program->inputs_held, p->h))
         return refuse(error, error_size, "the fixed-lag window refused h = %g", p->h);
+    /* the nonlinear entries of the positions and inputs (no derivatives) pass the window
+     * as functions of the samples, as the equations' own terms do; one of positions and
+     * held inputs is neither a sample's function nor a staircase's: at the smoothed
+     * sample, as the entries with derivatives */
+    p->terms_unwindowed = 0;
+    for (int i = 0; i < n; ++i)
+        for (int k = 0; k <= program->p; ++k) {
+            const int kind = tp_entry_kind(program, i, k);
+            const int positions = (kind & TP_READS_POSITIONS) != 0;
+            const int held = program->inputs_held && (kind & TP_READS_INPUTS);
+            if ((kind & TP_NONLINEAR) && !(kind & TP_READS_DERIVATIVES) && !(positions && held)
+                && fl_add_term(&p->window, held, i * (TP_MAX_PARAMETERS + 1) + k) < 0)
+                ++p->terms_unwindowed;
+        }
     if (!(p->tau_identifier >= 0.0) || !isfinite(p->tau_identifier) ||
         !(p->statistics_interval >= 0.0) || !isfinite(p->statistics_interval))
         return refuse(error, error_size, "tau_identifier = %g and statistics_interval = %g must "
@@ -214,11 +228,20 @@ static void window_step(ModelPipeline *p, const TermProgram *program, double t)
 {
     TpSample s;
     memset(&s, 0, sizeof s);
-    fl_at_lag(&p->window, s.q, s.qd, s.qdd, s.u);
+    double terms[FL_MAX_TERMS];
+    fl_at_lag(&p->window, s.q, s.qd, s.qdd, s.u, terms);
+    int term[MAX_N][TP_MAX_PARAMETERS + 1]; /* each entry's term, or -1 */
+    memset(term, -1, sizeof term);
+    for (int m = 0; m < p->window.terms; ++m) {
+        const int tag = p->window.term_tag[m];
+        term[tag / (TP_MAX_PARAMETERS + 1)][tag % (TP_MAX_PARAMETERS + 1)] = m;
+    }
     const double g = p->started ? p->gain : 1.0;
     for (int i = 0; i < program->n; ++i)
-        for (int k = 0; k <= program->p; ++k)
-            p->Y0[i][k] += g * (tp_entry(program, &s, i, k) - p->Y0[i][k]);
+        for (int k = 0; k <= program->p; ++k) {
+            const double v = term[i][k] >= 0 ? terms[term[i][k]] : tp_entry(program, &s, i, k);
+            p->Y0[i][k] += g * (v - p->Y0[i][k]);
+        }
     feed_identifier(p, program, p->Y0, t);
 }
 
@@ -268,7 +291,15 @@ void mp_run(ModelPipeline *p, const TermProgram *program, const double y[], cons
         current = 0;
         const double t = start_time + (double)k * p->h;
         const int window = p->identifier && p->regression == MP_REGRESSION_WINDOW;
-        if (window) fl_push(&p->window, y, u);
+        if (window) {
+            double terms[FL_MAX_TERMS]; /* the terms at this sample (s: y and u) */
+            for (int m = 0; m < p->window.terms; ++m) {
+                const int tag = p->window.term_tag[m];
+                terms[m] = tp_entry(program, &s, tag / (TP_MAX_PARAMETERS + 1),
+                                    tag % (TP_MAX_PARAMETERS + 1));
+            }
+            fl_push(&p->window, y, u, terms);
+        }
         for (int i = 0; i < n; ++i)
             if (!isfinite(p->velocity[i])) flag_nonfinite(p, MP_NONFINITE_VELOCITY, i, 0, t);
         if (!p->identifier) continue;

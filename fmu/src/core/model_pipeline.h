@@ -72,6 +72,8 @@ typedef struct {
     double velocity_filtered[MP_MAX_COORDINATES];          /* entries; G of the velocity
                                                             * (window: G of every entry) */
     FixedLag window;            /* the positions and inputs, for MP_REGRESSION_WINDOW */
+    int terms_unwindowed;       /* entries of the samples alone left at the smoothed sample:
+                                 * beyond FL_MAX_TERMS (mp_init; the model warns) */
     RbRegressor Y;              /* the filtered equations (SI parameters) ... */
     double z[MP_MAX_COORDINATES]; /* ... and their residual at the nominal parameters */
     RegressorIdentifier id;

@@ -312,3 +312,39 @@ void tp_evaluate(const TermProgram *p, const TpSample *s, double Y[][TP_MAX_PARA
         r[i] = tp_entry(p, s, i, p->p);
     }
 }
+
+int tp_entry_kind(const TermProgram *p, int i, int k)
+{
+    enum { CONSTANT, AFFINE, NONLINEAR }; /* each stack value's form */
+    int stack[TP_MAX_STACK], top = -1, reads = 0;
+    const int start = p->start[i][k], end = start + p->length[i][k];
+    for (int t = start; t < end; ++t) {
+        switch ((TpOp)p->op[t]) {
+        case TP_CONSTANT: stack[++top] = CONSTANT; break;
+        case TP_POSITION: stack[++top] = AFFINE; reads |= TP_READS_POSITIONS; break;
+        case TP_VELOCITY: case TP_ACCELERATION:
+            stack[++top] = AFFINE;
+            reads |= TP_READS_DERIVATIVES;
+            break;
+        case TP_INPUT: stack[++top] = AFFINE; reads |= TP_READS_INPUTS; break;
+        case TP_ADD:
+            --top;
+            stack[top] = stack[top] > stack[top + 1] ? stack[top] : stack[top + 1];
+            break;
+        case TP_MULTIPLY:
+            --top;
+            stack[top] = stack[top] == CONSTANT ? stack[top + 1]
+                         : stack[top + 1] == CONSTANT ? stack[top] : NONLINEAR;
+            break;
+        case TP_POWER:
+            --top;
+            stack[top] = stack[top] == CONSTANT && stack[top + 1] == CONSTANT ? CONSTANT
+                                                                              : NONLINEAR;
+            break;
+        case TP_NEGATE: break;
+        case TP_OP_COUNT: break;
+        default: stack[top] = stack[top] == CONSTANT ? CONSTANT : NONLINEAR; break;
+        }
+    }
+    return reads | (top == 0 && stack[0] == NONLINEAR ? TP_NONLINEAR : 0);
+}

