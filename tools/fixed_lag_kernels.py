@@ -17,7 +17,9 @@ same length is the least squares fit of its response to i w H0 or -w^2 H0 on a f
 grid, with weight 1 on the band 0 .. a + 3 pi / T (T = half + 1: the Blackman main
 lobe's half-width, past which H0 is below 1e-4) and STOP outside it (there H0 is
 about 0 and the fit keeps the noise gain of K'' sampled), subject to exact constants,
-ramps and parabolas.  --check only compares with the header in the tree.
+ramps and parabolas.  --check only compares with the header in the tree: the same
+definitions, and kernel values within CHECK_TOLERANCE of the largest (the solve's last
+bits follow the machine's BLAS), the comment's error figures aside.
 """
 from __future__ import annotations
 
@@ -138,6 +140,26 @@ def text() -> str:
     return "\n".join(lines)
 
 
+#: --check: a kernel value may differ from the tree's by this much of the largest value
+CHECK_TOLERANCE = 1e-9
+_NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
+
+
+def same_table(old: str, new: str) -> bool:
+    """The two headers' code (comments aside) is the same but for the real numbers, which
+    agree within CHECK_TOLERANCE of the largest (integers: sizes, offsets, exactly)."""
+    def code(text: str) -> tuple[str, np.ndarray]:
+        body = text[text.index("*/") + 2:] if "*/" in text else text
+        reals = [x for x in _NUMBER.findall(body) if not x.lstrip("+-").isdigit()]
+        return (_NUMBER.sub(lambda m: m.group() if m.group().lstrip("+-").isdigit() else "#",
+                            body), np.array([float(x) for x in reals]))
+    (shape_old, numbers_old), (shape_new, numbers_new) = code(old), code(new)
+    if shape_old != shape_new or numbers_old.shape != numbers_new.shape:
+        return False
+    scale = float(np.abs(numbers_new).max(initial=0.0))
+    return bool(np.all(np.abs(numbers_old - numbers_new) <= CHECK_TOLERANCE * scale))
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--check", action="store_true",
@@ -145,7 +167,7 @@ def main() -> int:
     args = parser.parse_args()
     new = text()
     if args.check:
-        same = HEADER.exists() and HEADER.read_text() == new
+        same = HEADER.exists() and same_table(HEADER.read_text(), new)
         print(f"{HEADER}: {'up to date' if same else 'differs: run python -m tools.fixed_lag_kernels'}")
         return 0 if same else 1
     HEADER.write_text(new)

@@ -19,9 +19,11 @@ def test_case_keys_and_twins():
     for key, robot, joints in (("e", "ur5", 6), ("f", "panda", 7)):
         case, twin = by_key[key], by_key[key + "2"]
         assert case.drive and case.robot == robot and len(case.gains or ()) == joints
-        assert twin.logs_from == key and twin.joint_terms == "auto"
+        # the case names the URDF's joint model, its twin takes identify's default
+        assert case.joint_terms == "none" and twin.joint_terms is None
+        assert twin.logs_from == key
         # the twin reuses the logs: every property that makes them is the same
-        assert dataclasses.replace(twin, key=key, describe=case.describe, joint_terms=None,
+        assert dataclasses.replace(twin, key=key, describe=case.describe, joint_terms="none",
                                    logs_from=None) == case
         assert keys.index(key) < keys.index(key + "2")
 
