@@ -12,6 +12,7 @@ from ..messages import note
 from ..names import plain
 from ..units import ANGLE_UNITS, LENGTH_UNITS, TIME_UNITS
 from ..values import argparse_type, real
+from .mass_bounds import mass_bounds, parse_mass_range
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -40,6 +41,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                             "relative (0.3: within +-30 %%, the default): the prior that "
                             "picks the physically consistent parameters the data leave open; "
                             "it never moves them out of the estimate's confidence region")
+    group.add_argument("--mass-range", action="append", type=parse_mass_range, default=[],
+                       metavar="LINK=LOW:HIGH",
+                       help="a link's mass known to lie in [LOW, HIGH] kg: the physically "
+                            "consistent model is held to it; LINK is a body the chain's "
+                            "joints carry (summary.json's masses); repeatable")
+    group.add_argument("--total-mass", type=_positive("--total-mass"), default=None,
+                       metavar="KG",
+                       help="the chain's moving bodies weigh KG together (the fixed base "
+                            "left out): the physically consistent model is held to it")
     group.add_argument("--joint-terms", default=None, metavar="TERM,...",
                        help="extra terms of every joint, identified with the rest: offset "
                             "(a constant torque), armature (reflected rotor inertia, x q''), "
@@ -264,10 +274,11 @@ def identify_command(args) -> int:
             speed = {} if args.min_speed is None else {"min_speed": args.min_speed}
             if args.urdf_tolerance is not None:
                 speed["urdf_tolerance"] = args.urdf_tolerance
+            bounds = mass_bounds(robot, args.mass_range, args.total_mass)
             choose = ("required" if named == "auto" else "default") if auto else None
             result = identify_robot(robot, log, unknown=args.unknown, method=args.velocity,
                                     window=args.window, terms=terms, choose_terms=choose,
-                                    **speed)
+                                    mass_bounds=bounds, **speed)
             # the name goes into identified.urdf's comment: one line of printable text
             written = write_results(outputs.staging, robot, log, result,
                                     plain(Path(args.data).name))

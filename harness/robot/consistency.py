@@ -64,6 +64,7 @@ from .base_parameters import BaseParameters
 from .consistent_errors import consistent_covariance
 from .joint_terms import JointTerms
 from .layout import ParameterLayout
+from .mass_bounds import MassBounds
 from .urdf import Robot, UrdfError, body_inertial, check_inertia, inertia_matrix, parse_urdf
 
 # the default relative tolerance of the URDF's values (--urdf-tolerance):
@@ -231,7 +232,8 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
                           covariance: np.ndarray, data_scale: np.ndarray | None = None,
                           tolerance: float = DEFAULT_URDF_TOLERANCE,
                           score: Callable[[np.ndarray], float] | None = None,
-                          terms: JointTerms | None = None) -> Projection:
+                          terms: JointTerms | None = None,
+                          bounds: MassBounds | None = None) -> Projection:
     """Standard parameters pi (12 n, then terms.count(n) joint terms) that are physically
     consistent and minimize the estimate's Mahalanobis distance (beta: the base
     estimate, covariance (r, r) its covariance) plus the URDF's prior at the relative
@@ -243,7 +245,9 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
 
     terms (harness.robot.joint_terms): the extra joint terms after the 12 n standard
     parameters: the offsets free, the armature and the Coulomb levels >= 0, their prior 0
-    (the URDF has none) at the data's scale.
+    (the URDF has none) at the data's scale.  bounds (harness.robot.mass_bounds): link
+    mass ranges and the chain's total mass, as linear constraints; a range on a link the
+    log does not identify must hold its URDF mass.
 
     ProjectionError if the solver does not report an optimal solution."""
     if not (np.isfinite(tolerance) and tolerance > 0):
@@ -292,8 +296,9 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
     terms_prior = weight * cp.sum_squares(u)
     lower = -nominal[joint[nonnegative]] / scale[nonnegative]  # pi_k >= 0
     constraints = [u[np.flatnonzero(nonnegative)] >= lower] if np.any(nonnegative) else []
+    constraints += _mass_constraints(robot, bounds, fixed, A, z)
     problem = cp.Problem(cp.Minimize(data + links_prior + terms_prior), constraints)
-    solution, settings = _solve(problem, z)
+    solution, settings = _solve(problem, z, bounds is not None and bounds.any)
     pi = fixed + A @ z.value
     # the joint terms held at their bounds do not move with the estimate
     held = np.zeros(len(joint), dtype=bool)
@@ -316,10 +321,33 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
         time.perf_counter() - started, float(score(projector @ pi)) if score is not None else 0.0)
 
 
-def _solve(problem: cp.Problem, z: cp.Expression):
+def _mass_constraints(robot: Robot, bounds: MassBounds | None, fixed: np.ndarray,
+                      A: np.ndarray, z: cp.Expression) -> list:
+    """The mass bounds as constraints on z (each link's mass is fixed + A z at its mass
+    index: linear); ProjectionError for a range that a link the log does not identify
+    (its mass fixed at the URDF's) cannot meet."""
+    if bounds is None or not bounds.any:
+        return []
+    layout = ParameterLayout(robot.n)
+    mass = [fixed[layout.mass(i)] + A[layout.mass(i)] @ z for i in range(robot.n)]
+    constraints = []
+    for i, (low, high) in bounds.ranges.items():
+        if not A[layout.mass(i)].any() and not low <= fixed[layout.mass(i)] <= high:
+            raise ProjectionError(
+                f"--mass-range {robot.joints[i].child_link}={low:g}:{high:g}: the log does "
+                f"not identify this link (--unknown), so its mass stays the URDF's "
+                f"{fixed[layout.mass(i)]:g} kg, outside the range")
+        constraints += [mass[i] >= low, mass[i] <= high]
+    if bounds.total is not None:
+        constraints.append(cp.sum(cp.hstack(mass)) == bounds.total)
+    return constraints
+
+
+def _solve(problem: cp.Problem, z: cp.Expression, bounded: bool = False):
     """Clarabel's own solution of the problem (it reports the dual objective), its values
     unpacked into the variables, with the first of SOLVER_ATTEMPTS that ends optimal;
-    ProjectionError if none does."""
+    ProjectionError if none does (``bounded``: the program holds mass bounds, which may
+    leave no solution)."""
     conic, chain, inverse = problem.get_problem_data(cp.CLARABEL, solver_opts={})
     ended = []
     for settings in SOLVER_ATTEMPTS:
@@ -334,10 +362,14 @@ def _solve(problem: cp.Problem, z: cp.Expression):
         if problem.status == cp.OPTIMAL and z.value is not None:
             return solution, settings
         ended.append(f"status {problem.status!r}")
+    why = ("the estimate's covariance or the URDF's values may span too many orders of "
+           "magnitude")
+    if bounded:
+        why = ("no physically consistent model may meet the mass bounds (--mass-range, "
+               "--total-mass) together, or " + why)
     raise ProjectionError(
         f"the consistent parameters: the solver Clarabel ended {', '.join(ended)} with its "
-        f"{len(SOLVER_ATTEMPTS)} settings, never optimal (the estimate's covariance or the "
-        f"URDF's values may span too many orders of magnitude): no model is written")
+        f"{len(SOLVER_ATTEMPTS)} settings, never optimal ({why}): no model is written")
 
 
 def _gap(solution) -> float:

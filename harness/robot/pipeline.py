@@ -49,6 +49,7 @@ from .joint_terms import (
     check_directions,
 )
 from .layout import ParameterLayout
+from .mass_bounds import MassBounds
 from .model_class import TermsChoice, choose_joint_terms
 from .native import core_defaults
 from .smoothing import (
@@ -81,6 +82,7 @@ class Identification:
     terms: JointTerms = field(default_factory=JointTerms)  # the extra joint terms
     terms_choice: TermsChoice | None = None  # how they were chosen (choose_terms)
     unmeasured: list[str] = field(default_factory=list)  # joints whose torque the log lacks
+    mass_bounds: MassBounds | None = None  # the bounds the consistent model was held to
 
     @property
     def warnings(self) -> list[str]:
@@ -140,8 +142,8 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
                    window: float | None = None, tau: float = 0.02, max_samples: int = 20000,
                    skip: float = 0.5, min_speed: float | None = None,
                    urdf_tolerance: float = DEFAULT_URDF_TOLERANCE,
-                   terms: JointTerms | None = None, choose_terms: str | None = None
-                   ) -> Identification:
+                   terms: JointTerms | None = None, choose_terms: str | None = None,
+                   mass_bounds: MassBounds | None = None) -> Identification:
     """Identify the unknown parameters ("all" or "payload") from the log.
 
     window: the regression's Savitzky-Golay window [s] (None: "sg" takes the joints'
@@ -159,7 +161,8 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
     (harness.robot.joint_terms; None: the core's model alone), identified with the rest;
     choose_terms: the terms chosen from the log instead (harness.robot.model_class):
     "required" (LogSignalsError if no class can be compared) or "default" (then the
-    core's model alone, said in the choice's note);
+    core's model alone, said in the choice's note); mass_bounds: the links' mass ranges
+    and total mass the consistent model must meet (harness.robot.mass_bounds);
     the URDF's prediction is the core's model with the URDF's values."""
     if log.q.shape[1] != robot.n:
         raise LogError(f"the log has {log.q.shape[1]} joints, the robot {robot.n}")
@@ -205,12 +208,12 @@ def identify_robot(robot: Robot, log: JointLog, unknown: str = "all", method: st
         raise LogError(one_way)
     base = base_for(terms)
     Y = rows.extend(terms)
-    result = _identified(robot, rows, base, Y, terms, urdf_tolerance)
+    result = _identified(robot, rows, base, Y, terms, urdf_tolerance, mass_bounds)
     passive = [name for i, name in enumerate(robot.joint_names)
                if not np.any(log.u[:, i]) and i not in log.unmeasured]
     return Identification(result[0], result[1], result[2], velocity, used, velocity_window,
                           window, result[3], result[4], passive, terms, choice,
-                          [robot.joint_names[i] for i in log.unmeasured])
+                          [robot.joint_names[i] for i in log.unmeasured], mass_bounds)
 
 
 def regression_rows(robot: Robot, body, log: JointLog, method: str, window: float,
@@ -263,7 +266,7 @@ def known_columns(n: int, base: BaseParameters) -> np.ndarray:
 
 
 def _identified(robot: Robot, rows: Rows, base: BaseParameters, Y: np.ndarray,
-                terms: JointTerms, urdf_tolerance: float):
+                terms: JointTerms, urdf_tolerance: float, mass_bounds: MassBounds | None):
     """The least squares of the base parameters, the consistent parameters near the URDF
     and the choice of what identified.urdf holds."""
     names, torque, mask = robot.joint_names, rows.torque, rows.mask
@@ -296,7 +299,7 @@ def _identified(robot: Robot, rows: Rows, base: BaseParameters, Y: np.ndarray,
         """The pooled training-log error of base parameters beta (prediction_error)."""
         return float(np.linalg.norm(left - Yb @ beta)) / total if total > 0 else 0.0
     projection = consistent_parameters(robot, base, fit.theta, fit.covariance, data_scale,
-                                       urdf_tolerance, score, terms)
+                                       urdf_tolerance, score, terms, mass_bounds)
     predictions = {
         "urdf": prediction_error(rows.core @ nominal, torque, mask, names),
         # the left-out equations' predictions do not count: Yb is 0 there

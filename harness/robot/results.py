@@ -130,6 +130,8 @@ def write_results(out: Path, robot: Robot, log: JointLog, result: Identification
         "regression_window_s": result.window,
         "resampled": log.resampled,
         "locked_joints": robot.locked_at,
+        "mass_bounds": (None if result.mass_bounds is None or not result.mass_bounds.any
+                        else result.mass_bounds.as_json(robot)),
         "held_joints": locked_record(robot, log),
         **_assessment_json(result),
         **_terms_json(result, names),
