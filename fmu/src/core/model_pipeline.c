@@ -46,14 +46,17 @@ int mp_init(ModelPipeline *p, const TermProgram *program, const double alpha1[],
      * held inputs is neither a sample's function nor a staircase's: at the smoothed
      * sample, as the entries with derivatives */
     p->terms_unwindowed = 0;
+    memset(p->window_term, -1, sizeof p->window_term);
     for (int i = 0; i < n; ++i)
         for (int k = 0; k <= program->p; ++k) {
             const int kind = tp_entry_kind(program, i, k);
             const int positions = (kind & TP_READS_POSITIONS) != 0;
             const int held = program->inputs_held && (kind & TP_READS_INPUTS);
-            if ((kind & TP_NONLINEAR) && !(kind & TP_READS_DERIVATIVES) && !(positions && held)
-                && fl_add_term(&p->window, held, i * (TP_MAX_PARAMETERS + 1) + k) < 0)
-                ++p->terms_unwindowed;
+            if (!(kind & TP_NONLINEAR) || (kind & TP_READS_DERIVATIVES) || (positions && held))
+                continue;
+            const int term = fl_add_term(&p->window, held, i * (TP_MAX_PARAMETERS + 1) + k);
+            if (term < 0) ++p->terms_unwindowed;
+            else p->window_term[i][k] = term;
         }
     if (!(p->tau_identifier >= 0.0) || !isfinite(p->tau_identifier) ||
         !(p->statistics_interval >= 0.0) || !isfinite(p->statistics_interval))
@@ -230,16 +233,11 @@ static void window_step(ModelPipeline *p, const TermProgram *program, double t)
     memset(&s, 0, sizeof s);
     double terms[FL_MAX_TERMS];
     fl_at_lag(&p->window, s.q, s.qd, s.qdd, s.u, terms);
-    int term[MAX_N][TP_MAX_PARAMETERS + 1]; /* each entry's term, or -1 */
-    memset(term, -1, sizeof term);
-    for (int m = 0; m < p->window.terms; ++m) {
-        const int tag = p->window.term_tag[m];
-        term[tag / (TP_MAX_PARAMETERS + 1)][tag % (TP_MAX_PARAMETERS + 1)] = m;
-    }
     const double g = p->started ? p->gain : 1.0;
     for (int i = 0; i < program->n; ++i)
         for (int k = 0; k <= program->p; ++k) {
-            const double v = term[i][k] >= 0 ? terms[term[i][k]] : tp_entry(program, &s, i, k);
+            const int term = p->window_term[i][k];
+            const double v = term >= 0 ? terms[term] : tp_entry(program, &s, i, k);
             p->Y0[i][k] += g * (v - p->Y0[i][k]);
         }
     feed_identifier(p, program, p->Y0, t);

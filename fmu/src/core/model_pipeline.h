@@ -74,6 +74,8 @@ typedef struct {
     FixedLag window;            /* the positions and inputs, for MP_REGRESSION_WINDOW */
     int terms_unwindowed;       /* entries of the samples alone left at the smoothed sample:
                                  * beyond FL_MAX_TERMS (mp_init; the model warns) */
+    int window_term[MP_MAX_COORDINATES][TP_MAX_PARAMETERS + 1]; /* each entry's
+                                 * window term, or -1 (mp_init) */
     RbRegressor Y;              /* the filtered equations (SI parameters) ... */
     double z[MP_MAX_COORDINATES]; /* ... and their residual at the nominal parameters */
     RegressorIdentifier id;

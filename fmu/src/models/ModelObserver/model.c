@@ -473,6 +473,7 @@ static const StateField STATE_FIELDS[] = {
     I(coarse_logged, 0, 1), I(held_logged, 0, MAX_P), I(held_seen, 0, MAX_P),
     I(held, -1, 1), I(weak_logged, 0, MAX_P), I(weak_seen, 0, MAX_P),
     I(damping_logged, 0, 1), I(energy_seen, 0, 1), D(pipe.gain), D(pipe.warm_up),
+    D(pipe.terms_unwindowed), D(pipe.window_term),
     I(pipe.identifying, 0, 1), I(pipe.started, 0, 1), I(pipe.warm_samples, 0, 1000000000),
     R(pipe.singular_steps, 0.0, NAN), I(pipe.nonfinite, MP_FINITE, MP_NONFINITE_IDENTIFIER),
     I(pipe.nonfinite_equation, 0, MAX_N - 1), I(pipe.nonfinite_entry, -1, MAX_P - 1),
