@@ -44,13 +44,20 @@ static inline int stats_eigen_converged(double norm, double previous)
     return previous > 0.0 && !(fabs(norm - previous) > STATS_EIGEN_TOLERANCE * norm);
 }
 
+/* [s] The time the information remembers: active_time for least squares, less
+ * with forgetting (lambda per sample of h). */
+static inline double stats_memory(double lambda, double h, double active_time)
+{
+    const double rate = lambda < 1.0 ? -log(lambda) / h : 0.0;
+    return rate > 0.0 ? -expm1(-rate * active_time) / rate : active_time;
+}
+
 /* The excitation from the inverse iteration's norm: the smallest eigenvalue of
  * the information beyond rho, per unit of remembered time (0 if none). */
 static inline double stats_excitation(double norm, double rho, double lambda, double h,
                                       double active_time)
 {
-    const double rate = lambda < 1.0 ? -log(lambda) / h : 0.0;
-    const double memory = rate > 0.0 ? -expm1(-rate * active_time) / rate : active_time;
+    const double memory = stats_memory(lambda, h, active_time);
     const double excitation = memory > 0.0 ? (1.0 / norm - rho) / memory : 0.0;
     return excitation > 0.0 ? excitation : 0.0;
 }

@@ -92,6 +92,8 @@ void ri_reset(RegressorIdentifier *id)
     memset(id->score, 0, sizeof id->score);
     memset(id->score_power, 0, sizeof id->score_power);
     memset(id->std_error, 0, sizeof id->std_error);
+    id->batch_residual = id->batches = id->batches_kept = 0.0;
+    memset(id->anchor_kept, 0, sizeof id->anchor_kept);
     for (int k = 0; k < id->p; ++k) {
         id->P[k][k] = id->reference[k] = id->rho;
         id->reference_inverse[k] = 1.0 / id->rho;
@@ -195,6 +197,49 @@ static int leave_out_rule(RegressorIdentifier *id, const RbRegressor *Y)
     return use;
 }
 
+/* The residual power per unit time that the move d of the anchor makes:
+ * d^T P d over the time P remembers. */
+static double move_power(const RegressorIdentifier *id, const double d[])
+{
+    double quadratic = 0.0;
+    for (int j = 0; j < id->p; ++j) {
+        quadratic += id->P[j][j] * d[j] * d[j];
+        for (int k = j + 1; k < id->p; ++k) quadratic += 2.0 * id->P[j][k] * d[j] * d[k];
+    }
+    const double memory = stats_memory(id->lambda, id->h, id->active_time);
+    return memory > 0.0 ? quadratic / memory : 0.0;
+}
+
+/* The batch's scores enter the sum of outer products, which restarts first when the
+ * anchor has moved so far since the kept batches began that their scores are more
+ * the anchor's error than the residuals'. */
+static void close_batch(RegressorIdentifier *id)
+{
+    const int p = id->p;
+    const double lambda = id->batch_lambda;
+    double d[RRI_MAX_PARAMETERS];
+    for (int k = 0; k < p; ++k) d[k] = id->anchor[k] - id->anchor_kept[k];
+    const double residual_power = id->batch_residual / (id->batch_samples * id->h);
+    if (id->batches_kept > 0.0 && move_power(id, d) > RRI_SCORE_RESTART * residual_power) {
+        memset(id->score_power, 0, sizeof id->score_power);
+        id->batches_kept = 0.0;
+        memcpy(id->anchor_kept, id->anchor, (size_t)p * sizeof id->anchor[0]);
+    }
+    for (int j = 0; j < p; ++j)
+        for (int k = j; k < p; ++k)
+            id->score_power[j][k] = lambda * id->score_power[j][k] + id->score[j] * id->score[k];
+    id->batches = lambda * id->batches + 1.0;
+    id->batches_kept = lambda * id->batches_kept + 1.0;
+    memset(id->score, 0, sizeof id->score);
+    id->batch_residual = 0.0;
+    id->batch_age = 0;
+}
+
+double ri_score_scale(const RegressorIdentifier *id)
+{
+    return id->batches_kept > 0.0 ? id->batches / id->batches_kept : 1.0;
+}
+
 void ri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
 {
     const int p = id->p;
@@ -226,6 +271,7 @@ void ri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
                 y[k] = row[id->columns[k]];
                 residual -= y[k] * id->anchor[k];
             }
+        id->batch_residual += c * residual * residual;
         for (int r = 0; r < runs; ++r)
             for (int j = start[r]; j < end[r]; ++j) {
                 const double a = c * y[j];
@@ -237,14 +283,7 @@ void ri_step(RegressorIdentifier *id, const double z[], const RbRegressor *Y)
                     for (int k = start[s]; k < end[s]; ++k) P[k] += a * y[k];
             }
     }
-    if (++id->batch_age >= id->batch_samples) {
-        for (int j = 0; j < p; ++j)
-            for (int k = j; k < p; ++k)
-                id->score_power[j][k] =
-                    id->batch_lambda * id->score_power[j][k] + id->score[j] * id->score[k];
-        memset(id->score, 0, sizeof id->score);
-        id->batch_age = 0;
-    }
+    if (++id->batch_age >= id->batch_samples) close_batch(id);
     ++id->anchor_age;
     anchor_slice(id);
 }
@@ -281,7 +320,8 @@ void ri_statistics(RegressorIdentifier *id)
         g[k] = 1.0;
         solve(id, g);
         trace += g[k];
-        const double variance = stats_sandwich(&id->score_power[0][0], p, RRI_MAX_PARAMETERS, g);
+        const double variance = ri_score_scale(id) *
+                                stats_sandwich(&id->score_power[0][0], p, RRI_MAX_PARAMETERS, g);
         id->std_error[k] = sqrt(variance > 0.0 ? variance : 0.0);
     }
     id->gamma_trace = trace;

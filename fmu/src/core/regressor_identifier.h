@@ -22,7 +22,16 @@
  * - standard errors by the sandwich formula P^-1 S P^-1, S the (forgotten) sum
  *   of the outer products of the scores h Y^T W (z - Y Delta_anchor) summed over
  *   batches of RRI_BATCH_TIME seconds, so that residuals correlated over less
- *   than a batch (filtered signals) are accounted for;
+ *   than a batch (filtered signals) are accounted for.  The scores are at the
+ *   anchor of their time, and an anchor still far from the estimate (the first
+ *   batches, from nominal parameters that may be 0) adds its own error times
+ *   Y^T W Y, power that is not in the final estimate's error and that least
+ *   squares would keep for ever (the oscillator's standard errors were 36 to 160
+ *   times the spread over seeds): so when the anchor has moved, since the kept
+ *   batches began, by d with d^T P d / memory (the residual power that move
+ *   makes) above RRI_SCORE_RESTART of the batch's residual power, the sum
+ *   restarts; S is the kept batches' sum scaled to the count of all
+ *   (ri_score_scale);
  * - trust outputs: trace(Gamma) and the excitation (smallest eigenvalue of the
  *   information per unit time);
  * - uninformative samples left out (MFF), the rule of leave_out.h, a sample's
@@ -75,11 +84,15 @@ typedef struct {
     double anchor_solution[RRI_MAX_PARAMETERS];
     int anchor_unit, anchor_failed;
     double anchor_work;
-    /* scores over the current batch, and the sum of their outer products */
+    /* scores over the current batch, and the sum of their outer products over the
+     * batches kept (see ri_score_scale) */
     double score[RRI_MAX_PARAMETERS];
     double score_power[RRI_MAX_PARAMETERS][RRI_MAX_PARAMETERS]; /* upper triangle */
     int batch_samples, batch_age;
     double batch_lambda;         /* lambda over one batch */
+    double batch_residual;       /* h w e^2 over the current batch */
+    double batches, batches_kept; /* (forgotten) counts of all batches and of those kept */
+    double anchor_kept[RRI_MAX_PARAMETERS]; /* the anchor when the kept batches began */
     double std_error[RRI_MAX_PARAMETERS];   /* from the last solve */
     double gamma_trace, excitation;
     double factor[RRI_MAX_PARAMETERS][RRI_MAX_PARAMETERS]; /* Cholesky workspace */
@@ -105,6 +118,10 @@ int ri_init_dense(RegressorIdentifier *id, IdentifierKind kind, int rows, int p,
 
 /* Back to the nominal parameters and P = rho I. */
 void ri_reset(RegressorIdentifier *id);
+
+/* What score_power is multiplied by for the sum over all batches: their count over
+ * the count of those kept (1 before any). */
+double ri_score_scale(const RegressorIdentifier *id);
 
 /* One internal step: z the torque residual (rows), Y the full regressor in the
  * layout of rb_regressor, whose structural zeros are not read (joint i's row

@@ -40,9 +40,10 @@ void sj_reset(StatisticsJob *job)
 void sj_start(StatisticsJob *job, const RegressorIdentifier *id)
 {
     const int p = job->p;
+    const double scale = ri_score_scale(id); /* the kept batches' sum, to all batches' */
     for (int j = 0; j < p; ++j) { /* the upper triangles, row by row */
         memcpy(&job->factor[j][j], &id->P[j][j], (size_t)(p - j) * sizeof(double));
-        memcpy(&job->score_power[j][j], &id->score_power[j][j], (size_t)(p - j) * sizeof(double));
+        for (int k = j; k < p; ++k) job->score_power[j][k] = scale * id->score_power[j][k];
         job->diagonal[j] = id->P[j][j];
     }
     memcpy(job->work_delta, id->b, (size_t)p * sizeof(double));

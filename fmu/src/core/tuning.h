@@ -74,6 +74,9 @@
 #define RO_REVERSAL_MARGIN 0.02    /* [s] default of its reversal_margin */
 #define RO_STATISTICS_INTERVAL 0.1 /* [s] default of the FMU's statistics_interval */
 #define RRI_BATCH_TIME 0.5         /* [s] of scores summed into one batch */
+#define RRI_SCORE_RESTART 0.1      /* the residual power of the anchor's move since the kept
+                                    * batches began, over the batch's: above, the scores'
+                                    * sum restarts (regressor_identifier.h) */
 #define RRI_ANCHOR_INTERVAL 32     /* samples between snapshots of the anchor's solve */
 
 /* ---- model files (model_pipeline.h) ------------------------------------------------ */
@@ -83,7 +86,7 @@
                                      * nominal inertia is singular, F = 0 */
 #define MP_WARM_UP 10.0             /* time constants of G before its rows enter (e^-10) */
 #define MP_TAU_IDENTIFIER 0.02      /* [s] default of the regression's filter G */
-#define MP_RHO 1e-9                 /* default regularization, SI parameters */
+#define MP_RHO 1e-12                /* default regularization, SI parameters */
 
 /* ---- the identifier's fixed-lag derivatives (fixed_lag.h) --------------------------- */
 #define FL_HIGHEST_FRACTION 0.2     /* the widest candidate's cut-off [sample rate] ... */
