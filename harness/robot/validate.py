@@ -120,13 +120,17 @@ def write_validation(out: Path, urdf: str, data: str, window: float, t: np.ndarr
                      measured: np.ndarray, predicted: np.ndarray,
                      per_joint: dict[str, float | None],
                      pooled: float, joint_terms: str | None = None,
-                     unmeasured: tuple[str, ...] = ()) -> None:
+                     unmeasured: tuple[str, ...] = (),
+                     held_joints: dict[str, dict] | None = None) -> None:
     """validation.json and validation.png (measured and predicted torques per joint);
-    joint_terms: the joint_terms.csv whose terms the prediction includes (None: none)."""
+    joint_terms: the joint_terms.csv whose terms the prediction includes (None: none);
+    held_joints: each held joint's position and its source, as summary.json's
+    (harness.robot.held_joints.locked_record)."""
     write_json(out / "validation.json", {
         "urdf": urdf, "joint_terms": joint_terms, "log": data,
         "relative_error": {"per_joint": per_joint, "pooled": pooled},
         "unmeasured_joints": list(unmeasured),
+        "held_joints": held_joints or {},
         "definition": "RMS of (predicted - measured torque) over RMS of the measured torque, "
                       "per joint and pooled over the joints; zero-phase Savitzky-Golay "
                       "derivatives of q and the same filter on the measured torque and on "
@@ -180,7 +184,7 @@ def validate_command(args) -> int:
 
     from ..outputs import Outputs, shown
     from .cli import column_mapping, robot_and_log
-    from .held_joints import logged_lines
+    from .held_joints import locked_record, logged_lines
     from .log_units import UnitError
     from .urdf import UrdfError
 
@@ -206,7 +210,8 @@ def validate_command(args) -> int:
             unmeasured = tuple(robot.joint_names[i] for i in log.unmeasured)
             write_validation(outputs.staging, args.robot, args.data, window, t,
                              measured, predicted, per_joint, pooled,
-                             None if sidecar is None else str(terms_file), unmeasured)
+                             None if sidecar is None else str(terms_file), unmeasured,
+                             locked_record(robot, log))
     except (UrdfError, LogError, UnitError, JointTermsError) as error:
         print(f"harness validate: {error}", file=sys.stderr)
         return 2

@@ -39,7 +39,7 @@ def _validate(tmp_path, urdf, data, *options: str) -> tuple[int, str, dict | Non
 def test_a_logged_position_is_the_position_given(mobile, tmp_path):
     """A log with a finger_joint column: validate scores the chain with the finger at its
     median, exactly as --lock finger_joint=MEDIAN on the log without the column does, and
-    says so; a bare --lock finger_joint takes the log too, --lock finger_joint=0 does not."""
+    says so (and validation.json where each position comes from); a bare --lock finger_joint takes the log too, --lock finger_joint=0 does not."""
     logged = swing_log(tmp_path / "logged.csv", T, {"finger_joint": _finger()})
     plain = swing_log(tmp_path / "plain.csv", T)
     median = float(np.median(_finger()))
@@ -51,6 +51,10 @@ def test_a_logged_position_is_the_position_given(mobile, tmp_path):
                                   "--lock", f"finger_joint={median!r}")
     assert code == 0, text
     assert from_log is not None and from_log["relative_error"] == given["relative_error"]
+    finger = from_log["held_joints"]["finger_joint"]
+    assert finger["source"] == "log" and finger["column"] == "finger_joint"
+    assert finger["position"] == pytest.approx(median)
+    assert given["held_joints"]["finger_joint"] == {"position": median, "source": "given"}
     code, text, bare = _validate(tmp_path, mobile, logged, "--joints", "joint1,joint2",
                                  "--lock", "finger_joint")
     assert code == 0 and bare["relative_error"] == from_log["relative_error"], text
