@@ -278,29 +278,3 @@ def test_reproduce_out_naming_a_file(tmp_path):
     assert target.read_text() == "x"
 
 
-def _log(path, t, seconds: float = 6.0):
-    """A slow two-joint swing with its gravity torques: enough to identify a payload."""
-    q = np.column_stack([0.8 * np.sin(1.3 * (t - t[0])), 0.6 * np.sin(2.1 * (t - t[0]))])
-    u = np.column_stack([5.0 * np.sin(1.3 * (t - t[0])), 2.0 * np.cos(2.1 * (t - t[0]))])
-    np.savetxt(path, np.column_stack([t, q, u]), delimiter=",", header="t,q1,q2,u1,u2",
-               comments="", fmt="%.17g")
-    return path
-
-
-@pytest.mark.parametrize("options", [["--angle-unit", "deg"], ["--length-unit", "mm"],
-                                     ["--torque-gains", "1,2"], ["--lock", "j1"]])
-def test_robot_unit_options_without_robot_are_refused(tmp_path, options):
-    from cli_runner import cli, refused
-    data = _log(tmp_path / "log.csv", np.arange(6000) * 1e-3)
-    code, text = cli(["identify", str(data), "--out", str(tmp_path / "o"), *options])
-    assert code == 2, text
-    refused(code, text, options[0], "--robot")
-    code, text = cli(["identify", str(data), "--model", "m.toml", "--out", str(tmp_path / "o"),
-                      *options])
-    assert code == 2, text
-    refused(code, text, options[0], "--model", "[units]")
-    code, text = cli(["validate", str(data), "--model", "m.toml", "--out", str(tmp_path / "o"),
-                      *options])
-    assert code == 2, text
-    refused(code, text, options[0], "go with --robot", "[units]")
-    assert not (tmp_path / "o").exists()

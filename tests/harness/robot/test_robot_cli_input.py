@@ -132,3 +132,21 @@ def test_identify_robot_exits_1_after_its_warnings(tmp_path, monkeypatch):
                       str(tmp_path / "out"), "--unknown", "payload"])
     assert code == 1, text
     assert "the identified model predicts worse" in text
+
+
+@pytest.mark.parametrize("options", [["--angle-unit", "deg"], ["--length-unit", "mm"],
+                                     ["--torque-gains", "1,2"], ["--lock", "j1"]])
+def test_robot_unit_options_without_robot_are_refused(tmp_path, options):
+    data = swing_log(tmp_path / "log.csv", np.arange(6000) * 1e-3)
+    code, text = cli(["identify", str(data), "--out", str(tmp_path / "o"), *options])
+    assert code == 2, text
+    refused(code, text, options[0], "--robot")
+    code, text = cli(["identify", str(data), "--model", "m.toml", "--out", str(tmp_path / "o"),
+                      *options])
+    assert code == 2, text
+    refused(code, text, options[0], "--model", "[units]")
+    code, text = cli(["validate", str(data), "--model", "m.toml", "--out", str(tmp_path / "o"),
+                      *options])
+    assert code == 2, text
+    refused(code, text, options[0], "go with --robot", "[units]")
+    assert not (tmp_path / "o").exists()
