@@ -5,7 +5,9 @@
 set(STO_NATIVE_MAX_JOINTS 12 CACHE STRING "Joints of a serial robot at most, offline")
 add_library(sto_core_offline STATIC ${core_paths})
 target_include_directories(sto_core_offline PUBLIC "${SRC}/core")
-target_compile_definitions(sto_core_offline PUBLIC RB_MAX_JOINTS=${STO_NATIVE_MAX_JOINTS})
+math(EXPR STO_NATIVE_MAX_SIGNALS "2 * ${STO_NATIVE_MAX_JOINTS}")
+target_compile_definitions(sto_core_offline PUBLIC RB_MAX_JOINTS=${STO_NATIVE_MAX_JOINTS}
+                           FL_MAX_SIGNALS=${STO_NATIVE_MAX_SIGNALS})
 target_link_libraries(sto_core_offline PUBLIC ${STO_LIBM})
 add_library(sto_native SHARED ${STO_NATIVE_SOURCES})
 target_link_libraries(sto_native PRIVATE sto_core_offline)

@@ -9,7 +9,8 @@ set(STO_CORE_OBSERVER
     core/information_identifier.c core/block_scores.c core/input_cadence.c core/gains.c
     core/tuning.c)
 set(STO_CORE_ROBOT
-    core/robot_pipeline.c core/robot_observer.c core/rigid_body.c core/regressor_identifier.c
+    core/robot_pipeline.c core/robot_observer.c core/fixed_lag.c core/rigid_body.c
+    core/regressor_identifier.c
     core/statistics_job.c core/input_cadence.c core/gains.c core/tuning.c)
 # A model file's regressor as data (harness/model/program.py writes it).
 set(STO_CORE_MODEL core/model_pipeline.c core/fixed_lag.c core/term_program.c core/small_solve.c

@@ -202,7 +202,9 @@ void rn_default_settings(int n, RobotSettings *settings) { *settings = rp_defaul
  * 0 computed from f_plus by Theorem 3.1, as the FMU does).  Outputs per sample:
  * velocity (the estimate at the sample) and prediction (for the end of the interval
  * that starts there, an FMU's output at the next communication point).  With an
- * identifier the identifier runs from sample `start` on and delta, std_error,
+ * identifier the identifier runs from sample `start` on (its regression by
+ * settings->regression: at the observer's estimates, or a fixed-lag window behind) and
+ * delta, std_error,
  * stats = (trace of Gamma, excitation) are solved at the end, and `published`
  * (3 p + 2) holds what the FMU publishes after the last sample under the same
  * schedule (statistics_job.h: a snapshot every statistics_interval seconds, its work
@@ -210,8 +212,10 @@ void rn_default_settings(int n, RobotSettings *settings) { *settings = rp_defaul
  * solution and the last completed solve), the standard errors, trace of Gamma, the
  * excitation and each parameter's column excitation of the last completed solve
  * (before any: 0, p / rho, 0 and 0).  weight
- * (count x n): the weight of each sample's joint equations, acceleration (count x n):
- * the observer's q'' at each sample (the last sample's of both: NaN, not known yet).
+ * (count x n): the weight of each sample's joint equations in the regression (NaN for
+ * the samples no row was taken at: before the identifier, the last, the window's
+ * last lag), acceleration (count x n): the observer's q'' at each sample (the last
+ * sample's: NaN, not known yet).
  * Returns the number of samples at which M was not positive definite, -1 for bad
  * identifier settings, -2 for gains that cannot be computed, -3 if the identifier's
  * information is not positive definite at the end (the observer diverged), -4 for a
@@ -236,6 +240,7 @@ long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, const RobotSet
     case RP_BAD_IDENTIFIER:
         return -1;
     }
+    for (long k = 0; k < count * n; ++k) weight[k] = acceleration[k] = NAN;
     for (long k = 0; k < count; ++k) {
         const int identifying = kind && k >= start;
         rp_run(&pipeline, model, y + k * n, u + k * n, 0, 1,
@@ -245,11 +250,10 @@ long rn_robot_observe(const RigidBodyModel *model, RobotRun *run, const RobotSet
         for (int i = 0; i < n; ++i) {
             velocity[k * n + i] = ro_velocity(&run->observer, i);
             prediction[k * n + i] = run->observer.x2_hat[i];
-            if (k > 0) {
-                weight[(k - 1) * n + i] = ro_regression_weight(&run->regression, i);
-                acceleration[(k - 1) * n + i] = run->observer.previous_acceleration[i];
-            }
-            if (k == count - 1) weight[k * n + i] = acceleration[k * n + i] = NAN;
+            const long row = k - ro_regression_lag(&run->regression);
+            if (run->regression.entered && row >= 0)
+                weight[row * n + i] = ro_regression_weight(&run->regression, i);
+            if (k > 0) acceleration[(k - 1) * n + i] = run->observer.previous_acceleration[i];
         }
     }
     if (kind) {

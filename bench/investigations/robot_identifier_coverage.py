@@ -3,14 +3,15 @@
 over noise seeds:
 
     .venv/bin/python -m bench.investigations.robot_identifier_coverage [--seeds 50]
-        [--noise 1e-5,1e-4] [--seconds 20]
+        [--noise 1e-5,1e-4] [--seconds 20] [--regressions window,observer]
 
 The double pendulum of harness/robot/examples with viscous and Coulomb friction (0.05, 0.2;
 0.04, 0.1), moved along an analytic multi-sine (bench/reports/robot_trajectories.multisine,
 seed 3) at 1 kHz, torques by inverse dynamics; the positions measured with white noise of
 each std (one seed per run). The observer has the URDF's inertials and no friction (f+ =
-1000, the identifier LSM over the four friction columns from 0.2 s, rho 1e-6). Per noise and
-parameter: the mean error relative to the truth, the mean error over the spread of the
+1000, the identifier LSM over the four friction columns from 0.2 s, rho 1e-6), regressing
+through the fixed-lag window (the FMU's default) or on the observer's causal estimates, on
+the same logs. Per regression, noise and parameter: the mean error relative to the truth, the mean error over the spread of the
 estimates across the seeds (a bias the standard errors cannot see), the mean reported
 standard error over that spread (1 when they mean what they say), and the share of seeds
 whose truth lies within 2 standard errors. Prints a Markdown table (not a test).
@@ -45,7 +46,7 @@ def trajectory(seconds: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return q, qd, qdd
 
 
-def report(seeds: int, noises: list[float], seconds: float) -> None:
+def report(seeds: int, noises: list[float], seconds: float, regressions: list[str]) -> None:
     path, _ = example_urdf("double_pendulum")
     robot = read_urdf(path)
     truth = robot.rigid_body(friction=FRICTION)
@@ -55,17 +56,17 @@ def report(seeds: int, noises: list[float], seconds: float) -> None:
     exact = FRICTION.ravel()
     print(f"## The robot identifier's standard errors over {seeds} noise seeds ({seconds:g} s "
           f"at {RATE:g} Hz)\n")
-    print("| noise [rad] | parameter | mean error | bias / spread | mean std / spread | "
-          "within 2 std |")
-    print("|---|---|---|---|---|---|")
-    for noise in noises:
+    print("| regression | noise [rad] | parameter | mean error | bias / spread | "
+          "mean std / spread | within 2 std |")
+    print("|---|---|---|---|---|---|---|")
+    for regression, noise in ((r, n) for r in regressions for n in noises):
         started = time.perf_counter()
         estimates, errors = [], []
         for seed in range(seeds):
             measured = q + noise * np.random.default_rng(seed).standard_normal(q.shape)
             result = model.observe(measured, tau, 1.0 / RATE, F_PLUS,
                                    identify={"columns": COLUMNS, "kind": "lsm", "rho": 1e-6,
-                                             "start": START})
+                                             "start": START, "regression": regression})
             estimates.append(result["delta"])
             errors.append(result["std_error"])
         theta, std = np.array(estimates), np.array(errors)
@@ -73,10 +74,10 @@ def report(seeds: int, noises: list[float], seconds: float) -> None:
         for k, name in enumerate(NAMES):
             bias = theta[:, k].mean() - exact[k]
             inside = np.mean(np.abs(theta[:, k] - exact[k]) <= 2 * std[:, k])
-            print(f"| {noise:g} | {name} | {100 * bias / exact[k]:+.2f} % | "
+            print(f"| {regression} | {noise:g} | {name} | {100 * bias / exact[k]:+.2f} % | "
                   f"{bias / spread[k]:+.2f} | {std[:, k].mean() / spread[k]:.2f} | "
                   f"{100 * inside:.0f} % |")
-        print(f"<!-- noise {noise:g}: {time.perf_counter() - started:.1f} s -->")
+        print(f"<!-- {regression}, noise {noise:g}: {time.perf_counter() - started:.1f} s -->")
 
 
 def cli() -> None:
@@ -84,8 +85,11 @@ def cli() -> None:
     parser.add_argument("--seeds", type=int, default=50)
     parser.add_argument("--noise", default="1e-5,1e-4", help="comma-separated stds [rad]")
     parser.add_argument("--seconds", type=float, default=20.0)
+    parser.add_argument("--regressions", default="window,observer",
+                        help="comma-separated: window (the default), observer")
     args = parser.parse_args()
-    report(args.seeds, [float(x) for x in args.noise.split(",")], args.seconds)
+    report(args.seeds, [float(x) for x in args.noise.split(",")], args.seconds,
+           args.regressions.split(","))
 
 
 if __name__ == "__main__":

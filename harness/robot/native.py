@@ -71,12 +71,17 @@ _JOINTS = 12
 _PARAMETERS = 12 * _JOINTS  # RRI_MAX_PARAMETERS
 
 
+#: RobotSettings.regression by name (fmu/src/core/robot_observer.h's RoRegression)
+REGRESSIONS = {"observer": 0, "window": 1}
+
+
 class RobotSettings(ctypes.Structure):
     """fmu/src/core/robot_pipeline.h's RobotSettings, field for field: how the robot
     pipeline is set up (the RobotObserver FMU's parameters)."""
 
     _fields_ = [
-        ("n", ctypes.c_int), ("identifier", ctypes.c_int), ("p", ctypes.c_int),
+        ("n", ctypes.c_int), ("identifier", ctypes.c_int), ("regression", ctypes.c_int),
+        ("p", ctypes.c_int),
         ("columns", ctypes.c_int * _PARAMETERS),
         ("h", ctypes.c_double), ("tau", ctypes.c_double),
         ("convergence_window", ctypes.c_double), ("gain_exponent", ctypes.c_double),
@@ -256,10 +261,12 @@ class RigidBody:
         Returns {"velocity": the estimate at each sample, "prediction": for the end of
         the interval starting at each sample, "model_failures": samples at which M was
         not positive definite, "weight": the weight (0 or 1) of each sample's joint
-        equations in the regression, "acceleration": the observer's q'' at each sample
-        (the last sample's of both NaN)}.  With identify =
-        {"columns", "kind" ("lsm"/"mff"), "rho", "R", "torque_scale", "start" (sample
-        index), "min_speed", "reversal_margin"} (defaults the FMU's) the online identifier
+        equations in the regression (NaN where none was taken), "acceleration": the
+        observer's q'' at each sample (the last sample's NaN)}.  With identify =
+        {"columns", "kind" ("lsm"/"mff"), "regression" ("window", the FMU's default: a
+        zero-phase window's derivatives a fixed lag behind; "observer": the observer's
+        estimates), "rho", "R", "torque_scale", "start" (sample index), "min_speed",
+        "reversal_margin"} (defaults the FMU's) the online identifier
         runs too, adding "delta" (base parameters minus the nominal ones), "std_error",
         "gamma_trace" and "excitation" at the end, and "published": what the FMU
         publishes after the last sample (identify's "statistics_interval", default
@@ -268,7 +275,8 @@ class RigidBody:
         fmu/src/core/statistics_job.h) as {"delta", "std_error", "gamma_trace",
         "excitation"}.  Joint i's equation weighs 0 where |q_i'| < min_speed
         (rad/s or m/s, default core_defaults()), where q_i' reverses, and for reversal_margin
-        seconds after (default core_defaults()); both 0: every equation is used."""
+        seconds after (default core_defaults(); through the window also for 1.5 periods of
+        its cut-off on both sides); both 0: every equation is used."""
         dll = load()
         q, u = _samples(q, self.n), _samples(u, self.n)
         n = self.n
@@ -284,6 +292,8 @@ class RigidBody:
         for name in ("min_speed", "reversal_margin", "statistics_interval", "rho", "R"):
             if name in options:
                 setattr(settings, name, float(options[name]))
+        if "regression" in options:
+            settings.regression = REGRESSIONS[options["regression"]]
         columns = np.ascontiguousarray(options.get("columns", [0]), dtype=np.int32)
         if len(columns) > _PARAMETERS:
             raise ValueError(f"{len(columns)} base columns: the identifier takes at most "

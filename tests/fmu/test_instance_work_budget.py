@@ -183,7 +183,8 @@ def test_the_budget_and_the_estimate_are_declared_alike_in_every_fmu():
 
 def test_the_estimate_follows_the_configuration():
     """The robot's estimate grows with joints and identified parameters (the
-    7-joint arm with all 84 columns costs about 7 times the 2-joint default)."""
+    7-joint arm with all 84 columns costs about 5 times the 2-joint default), and with
+    the identifier's fixed-lag window (5 FL_MAX_HALF = 1200 units per joint)."""
     def work(model, parameters):
         f = Raw(model)
         assert f.initialize(parameters) <= 1, f.messages()
@@ -191,8 +192,10 @@ def test_the_estimate_follows_the_configuration():
         f.free()
         return value
     def run():
-        assert work(ROBOT, {}) == pytest.approx(400 * 2 + 1000 + 2 * 4 * 7 / 6)
-        assert work(ROBOT, robot(7, 1, 84)) == pytest.approx(400 * 7 + 1000 + 7 * 84 * 87 / 6)
+        assert work(ROBOT, {}) == pytest.approx(400 * 2 + 1000 + 2 * 4 * 7 / 6 + 1200 * 2)
+        assert work(ROBOT, {"regression": 0}) == pytest.approx(400 * 2 + 1000 + 2 * 4 * 7 / 6)
+        assert work(ROBOT, robot(7, 1, 84)) == pytest.approx(400 * 7 + 1000 + 7 * 84 * 87 / 6
+                                                             + 1200 * 7)
         assert work(ROBOT, robot(7, 0, 0)) == 2800
         assert work(OBS, {}) == 650 and work(OBS, {"scheme": 1}) == 10
         assert work(OBS, {"identifier": 1}) > work(OBS, {})

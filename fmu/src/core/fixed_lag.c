@@ -72,6 +72,7 @@ int fl_init(FixedLag *f, int coordinates, int inputs, int inputs_held, double h)
     double fraction = FL_HIGHEST_FRACTION;
     for (int c = 0; c < FL_CANDIDATES; ++c, fraction *= 0.5) {
         f->half[c] = (int)fmin(ceil(FL_CYCLES / fraction - 1e-9), FL_MAX_HALF);
+        f->lead[c] = (int)fmin(ceil(FL_REVERSAL_PERIODS / fraction - 1e-9), FL_MAX_LEAD);
         smoothing(fraction, f->half[c], f->k0[c]);
         f->noise_gain[c] = derivatives(c, f->half[c], h, f->k1[c], f->k2[c]);
         held_kernel(fraction, f->half[c], f->held[c]);
@@ -82,20 +83,24 @@ int fl_init(FixedLag *f, int coordinates, int inputs, int inputs_held, double h)
     return 0;
 }
 
-/* Signal s's window of `half` on each side, centred `half` samples behind the
- * newest: w[-half .. half]. */
-static const double *centre(const FixedLag *f, int half, int s)
+/* Signal s's sample `lag` samples behind the newest; its neighbours are at +-j. */
+static const double *behind(const FixedLag *f, int lag, int s)
 {
-    return &f->ring[s][f->newest + FL_RING - half];
+    return &f->ring[s][f->newest + FL_RING - lag];
 }
 
-/* Signal s through the even kernel k (k0, k2) of `half` on each side. */
-static double even(const FixedLag *f, int half, const double k[], int s)
+/* The window w[-half .. half] through the even kernel k (k0, k2). */
+static double even(const double *w, int half, const double k[])
 {
-    const double *w = centre(f, half, s);
     double sum = k[0] * w[0];
     for (int j = 1; j <= half; ++j) sum += k[j] * (w[j] + w[-j]);
     return sum;
+}
+
+/* The chosen candidate's centre: half samples behind the newest, and the lead further. */
+static int lag(const FixedLag *f)
+{
+    return f->half[f->chosen] + (f->leads ? f->lead[f->chosen] : 0);
 }
 
 int fl_add_term(FixedLag *f, int held, int tag)
@@ -105,6 +110,8 @@ int fl_add_term(FixedLag *f, int held, int tag)
     f->term_tag[f->terms] = tag;
     return f->terms++;
 }
+
+void fl_lead(FixedLag *f) { f->leads = 1; }
 
 void fl_push(FixedLag *f, const double y[], const double u[], const double terms[])
 {
@@ -117,7 +124,8 @@ void fl_push(FixedLag *f, const double y[], const double u[], const double terms
     if (f->chosen >= 0) return; /* the choice is made: no more statistics needed */
     if (f->filled >= 2 * FL_PROBE_HALF + 1) {
         for (int i = 0; i < f->coordinates; ++i) {
-            const double r = centre(f, FL_PROBE_HALF, i)[0] - even(f, FL_PROBE_HALF, f->probe, i);
+            const double *w = behind(f, FL_PROBE_HALF, i);
+            const double r = w[0] - even(w, FL_PROBE_HALF, f->probe);
             f->noise_square[i] += r * r;
         }
         f->noise_squares += 1.0;
@@ -125,7 +133,7 @@ void fl_push(FixedLag *f, const double y[], const double u[], const double terms
     for (int c = 0; c < FL_CANDIDATES; ++c) {
         if (f->filled < 2 * f->half[c] + 1) break; /* the next ones are longer */
         for (int i = 0; i < f->coordinates; ++i) {
-            const double a = even(f, f->half[c], f->k2[c], i);
+            const double a = even(behind(f, f->half[c], i), f->half[c], f->k2[c]);
             f->square[c][i] += a * a;
         }
         f->squares[c] += 1.0;
@@ -159,15 +167,15 @@ int fl_choose(FixedLag *f)
 
 int fl_ready(const FixedLag *f)
 {
-    return f->chosen >= 0 && f->filled >= 2 * f->half[f->chosen] + 1 + f->inputs_held;
+    return f->chosen >= 0 && f->filled >= f->half[f->chosen] + lag(f) + 1 + f->inputs_held;
 }
 
 /* Signal s smoothed as an input: sampled (k0) or held over each sample. */
 static double as_input(const FixedLag *f, int s, int held)
 {
     const int c = f->chosen, half = f->half[c];
-    if (!held) return even(f, half, f->k0[c], s);
-    const double *w = centre(f, half, s), *kernel = f->held[c];
+    const double *w = behind(f, lag(f), s), *kernel = f->held[c];
+    if (!held) return even(w, half, f->k0[c]);
     double sum = 0.0;
     for (int m = 0; m <= half; ++m) sum += kernel[m] * (w[m] + w[-m - 1]);
     return sum;
@@ -179,7 +187,7 @@ void fl_at_lag(const FixedLag *f, double q[], double qd[], double qdd[], double 
     const int c = f->chosen, half = f->half[c];
     const double *k0 = f->k0[c], *k1 = f->k1[c], *k2 = f->k2[c];
     for (int i = 0; i < f->coordinates; ++i) { /* the three kernels in one pass */
-        const double *w = centre(f, half, i);
+        const double *w = behind(f, lag(f), i);
         double value = k0[0] * w[0], velocity = 0.0, acceleration = k2[0] * w[0];
         for (int j = 1; j <= half; ++j) {
             const double sum = w[j] + w[-j];
@@ -194,6 +202,20 @@ void fl_at_lag(const FixedLag *f, double q[], double qd[], double qdd[], double 
     for (int s = f->coordinates; s < f->signals; ++s)
         u[s - f->coordinates] = as_input(f, s, f->inputs_held);
     for (int k = 0; k < f->terms; ++k) terms[k] = as_input(f, f->signals + k, f->term_held[k]);
+}
+
+double fl_lead_velocity(const FixedLag *f, int i)
+{
+    const int c = f->chosen, half = f->half[c];
+    const double *w = behind(f, half, i), *k1 = f->k1[c];
+    double velocity = 0.0;
+    for (int j = 1; j <= half; ++j) velocity += k1[j] * (w[j] - w[-j]);
+    return velocity;
+}
+
+int fl_lead_samples(const FixedLag *f)
+{
+    return f->chosen >= 0 && f->leads ? f->lead[f->chosen] : 0;
 }
 
 double fl_cutoff(const FixedLag *f)

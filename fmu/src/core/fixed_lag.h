@@ -25,16 +25,24 @@
  * noise, white, is at most FL_NOISE_SHARE of the acceleration's mean square
  * (the errors-in-variables bias of an acceleration's coefficient is about that
  * share), else the narrowest.
+ * The velocities may also be wanted ahead of the centre (fl_lead): a sign(q') in the
+ * equations holds only away from q''s reversals, and whether one lies within
+ * FL_REVERSAL_PERIODS of the cut-off on either side of the centre is known once the
+ * window's velocity has passed that far beyond it.
  * Plain C, no allocation, no FMI types. */
 #ifndef FIXED_LAG_H
 #define FIXED_LAG_H
 
 #include "tuning.h"
 
-#define FL_MAX_SIGNALS 14 /* positions then inputs */
+#ifndef FL_MAX_SIGNALS /* positions then inputs: a model's 7 and 7, a robot's joints and torques */
+#define FL_MAX_SIGNALS 14 /* (the native library's offline robots have more: cmake/native.cmake) */
+#endif
 #define FL_MAX_TERMS 16   /* functions of the samples, smoothed after them (fl_add_term) */
 #define FL_MAX_HALF 240 /* ceil(FL_CYCLES / FL_HIGHEST_FRACTION) 2^(FL_CANDIDATES - 1) */
-#define FL_RING (2 * FL_MAX_HALF + 2) /* a held input's window reaches one sample further */
+#define FL_MAX_LEAD 60 /* ceil(FL_REVERSAL_PERIODS / FL_HIGHEST_FRACTION) 2^(FL_CANDIDATES - 1) */
+/* a held input's window reaches one sample further, a lead FL_MAX_LEAD further still */
+#define FL_RING (2 * FL_MAX_HALF + 2 + FL_MAX_LEAD)
 #define FL_PROBE_HALF 15 /* ceil(FL_CYCLES / FL_PROBE_FRACTION) */
 
 typedef struct {
@@ -45,6 +53,8 @@ typedef struct {
     int term_tag[FL_MAX_TERMS];  /* the caller's name for each */
     double h;
     int half[FL_CANDIDATES];  /* samples on each side of the centre */
+    int leads;                /* fl_lead: the centre lies lead[] samples further back */
+    int lead[FL_CANDIDATES];  /* FL_REVERSAL_PERIODS of each candidate's cut-off */
     /* coefficient of the sample j steps after the centre, j = 0 .. half (k1 is odd:
      * -k1[j] before the centre; k0 and k2 even), in units of h^-derivative */
     double k0[FL_CANDIDATES][FL_MAX_HALF + 1], k1[FL_CANDIDATES][FL_MAX_HALF + 1],
@@ -78,6 +88,10 @@ int fl_init(FixedLag *f, int coordinates, int inputs, int inputs_held, double h)
  * the first fl_push.  Returns the term's index, or -1 when FL_MAX_TERMS are taken. */
 int fl_add_term(FixedLag *f, int held, int tag);
 
+/* Moves the centre lead[] samples further back, so that fl_lead_velocity sees that far
+ * beyond it.  Before the first fl_push. */
+void fl_lead(FixedLag *f);
+
 /* Takes a sample (the positions y, the inputs u, the terms' values at them; terms
  * may be NULL without terms) and, until the choice, accumulates the mean square of
  * every candidate's acceleration whose window is full and the noise probe's. */
@@ -93,9 +107,17 @@ double fl_noise_std(const FixedLag *f, int i);
 int fl_ready(const FixedLag *f);
 
 /* The smoothed positions, velocities, accelerations, inputs and terms (NULL without
- * terms) at the chosen candidate's centre, half[chosen] samples behind the newest. */
+ * terms) at the chosen candidate's centre, half[chosen] samples behind the newest
+ * (and lead[chosen] more after fl_lead). */
 void fl_at_lag(const FixedLag *f, double q[], double qd[], double qdd[], double u[],
                double terms[]);
+
+/* Coordinate i's smoothed velocity half[chosen] samples behind the newest: after
+ * fl_lead, lead[chosen] samples after the centre (before it, the centre's). */
+double fl_lead_velocity(const FixedLag *f, int i);
+
+/* The centre's lead in samples (0 without fl_lead or before fl_choose). */
+int fl_lead_samples(const FixedLag *f);
 
 /* The chosen candidate's cut-off [Hz] (0 before fl_choose). */
 double fl_cutoff(const FixedLag *f);

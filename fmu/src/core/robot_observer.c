@@ -130,23 +130,40 @@ int ro_converged(const RobotObserver *o)
     return 1;
 }
 
-int ro_regression_init(RobotRegression *r, const RigidBodyModel *model, double h, double tau,
-                       double min_speed, double reversal_margin)
+int ro_regression_init(RobotRegression *r, const RigidBodyModel *model, int kind, double h,
+                       double tau, double min_speed, double reversal_margin)
 {
     memset(r, 0, sizeof *r);
-    if (!(min_speed >= 0.0) || !isfinite(min_speed) || !(reversal_margin >= 0.0) ||
+    if ((kind != RO_REGRESSION_OBSERVER && kind != RO_REGRESSION_WINDOW) ||
+        !(min_speed >= 0.0) || !isfinite(min_speed) || !(reversal_margin >= 0.0) ||
         !isfinite(reversal_margin))
         return -1;
+    r->kind = kind;
     r->gain = tau > 0.0 ? -expm1(-h / tau) : 1.0;
     r->min_speed = min_speed;
     /* an int: a margin of more than 1e9 samples is as good as forever */
     r->margin_samples = (int)fmin(round(reversal_margin / h), 1e9);
     r->reversals = min_speed > 0.0 || reversal_margin > 0.0;
     rb_get_parameters(model, r->pi_nominal);
+    if (kind == RO_REGRESSION_WINDOW) {
+        if (fl_init(&r->window, model->n, model->n, 0, h) != 0) return -1;
+        if (r->reversals) fl_lead(&r->window); /* to see the events ahead of the centre */
+    }
     return 0;
 }
 
-void ro_regression_restart(RobotRegression *r) { r->started = 0; }
+void ro_regression_restart(RobotRegression *r)
+{
+    r->started = 0;
+    r->window.chosen = -1; /* chosen again when the identifier joins */
+}
+
+int ro_regression_lag(const RobotRegression *r)
+{
+    if (r->kind == RO_REGRESSION_OBSERVER) return 1;
+    const FixedLag *w = &r->window;
+    return w->chosen >= 0 ? w->half[w->chosen] + fl_lead_samples(w) : 0;
+}
 
 /* Sample k-1's weight of joint i's equation: 0 while the joint is slow or
  * reverses, and for margin_samples samples after. */
@@ -162,26 +179,72 @@ static void update_weights(RobotRegression *r, int n)
     }
 }
 
+/* The window centre's weight of joint i's equation: 0 from the lead before to the lead
+ * and margin_samples after a sample at which the window's velocity was slow or
+ * reversed (judged at the lead, which sees that far ahead of the centre). */
+static void window_weights(RobotRegression *r, int n)
+{
+    const int lead = fl_lead_samples(&r->window), span = 2 * lead + r->margin_samples;
+    for (int i = 0; i < n; ++i) {
+        if (!r->reversals) {
+            r->weight[i] = 1.0;
+            continue;
+        }
+        const double v = fl_lead_velocity(&r->window, i);
+        const int reversed = r->started && signbit(v) != signbit(r->lead_velocity[i]);
+        r->lead_velocity[i] = v;
+        if (!r->started || fabs(v) < r->min_speed || reversed) r->settled[i] = 0;
+        else if (r->settled[i] <= span) ++r->settled[i];
+        r->weight[i] = r->settled[i] > span ? 1.0 : 0.0;
+    }
+}
+
+/* One row of the joint equations at (q, q', q'', u), weighted, through the filter
+ * (Y and z alike) into the identifier. */
+static void enter_row(RobotRegression *r, const RigidBodyModel *model, int n, const double q[],
+                      const double qd[], const double qdd[], const double u[],
+                      RegressorIdentifier *id)
+{
+    RbRegressor Y;
+    double nominal[RO_MAX_JOINTS];
+    const double gain = r->started ? r->gain : 1.0; /* the first: no transient */
+    rb_regressor(model, q, qd, qdd, &Y);
+    rb_regressor_torque(model, &Y, r->pi_nominal, nominal);
+    for (int i = 0; i < n; ++i) r->z[i] += gain * (r->weight[i] * (u[i] - nominal[i]) - r->z[i]);
+    ri_filter_regressor(id, &Y, r->weight, gain, &r->Y);
+    r->started = r->entered = 1;
+    ri_step(id, r->z, &r->Y);
+}
+
+/* The window's regression: the sample into the window; while identifying, the row
+ * at its centre once the window is full (its cut-off chosen as the identifier joins). */
+static void window_step(RobotRegression *r, const RigidBodyModel *model, int n, const double y[],
+                        const double u[], RegressorIdentifier *id)
+{
+    fl_push(&r->window, y, u, NULL);
+    if (!id) return;
+    if (r->window.chosen < 0) fl_choose(&r->window);
+    if (!fl_ready(&r->window)) return;
+    double q[RO_MAX_JOINTS], qd[RO_MAX_JOINTS], qdd[RO_MAX_JOINTS], torque[RO_MAX_JOINTS];
+    fl_at_lag(&r->window, q, qd, qdd, torque, NULL);
+    window_weights(r, n);
+    enter_row(r, model, n, q, qd, qdd, torque, id);
+}
+
 void ro_regression_step(RobotRegression *r, const RigidBodyModel *model, const RobotObserver *o,
                         const double y[], const double u[], RegressorIdentifier *id)
 {
     const int n = o->n;
+    r->entered = 0;
+    if (r->kind == RO_REGRESSION_WINDOW) {
+        window_step(r, model, n, y, u, id);
+        return;
+    }
     if (r->have_previous) {
         update_weights(r, n);
-        if (id) {
-            /* sample k-1's equation, weighted, through the filter: Y and z alike */
-            RbRegressor Y;
-            double nominal[RO_MAX_JOINTS];
-            const double gain = r->started ? r->gain : 1.0; /* the first: no transient */
-            rb_regressor(model, r->previous_y, r->previous_velocity, o->previous_acceleration,
-                         &Y);
-            rb_regressor_torque(model, &Y, r->pi_nominal, nominal);
-            for (int i = 0; i < n; ++i)
-                r->z[i] += gain * (r->weight[i] * (r->previous_u[i] - nominal[i]) - r->z[i]);
-            ri_filter_regressor(id, &Y, r->weight, gain, &r->Y);
-            r->started = 1;
-            ri_step(id, r->z, &r->Y);
-        }
+        /* sample k-1's equation */
+        if (id) enter_row(r, model, n, r->previous_y, r->previous_velocity,
+                          o->previous_acceleration, r->previous_u, id);
     }
     for (int i = 0; i < n; ++i) {
         r->older_velocity[i] = r->previous_velocity[i];

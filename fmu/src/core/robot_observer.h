@@ -32,17 +32,36 @@
  * and the observer is still catching up with the reversal.  Weighting before
  * the filter keeps every filtered equation exact.  The rule starts as after
  * such a sample; min_speed and reversal_margin both 0 use every equation.
+ *
+ * With RO_REGRESSION_WINDOW (the default), the regression takes instead the
+ * positions' derivatives and the torques of a zero-phase window a fixed lag behind
+ * the newest sample (fixed_lag.h, as a model file's FMU does; its cut-off chosen
+ * from the measurement noise when identification starts): the observer's causal
+ * velocities lag and carry its noise, which biased the friction (52 % low at
+ * 1e-4 rad of noise on the bench's double pendulum).  Slow or reversing is then
+ * judged on the window's velocity FL_REVERSAL_PERIODS of the cut-off ahead of
+ * the centre, so that an equation is left out on both sides of the event, where
+ * sign() of the smoothed velocity is not the smoothed sign() (and reversal_margin
+ * seconds longer after it).  The observer's outputs stay causal; only the
+ * parameters lag, by half the window and that lead.
  */
 #ifndef ROBOT_OBSERVER_H
 #define ROBOT_OBSERVER_H
 
 #include "tuning.h"
 
+#include "fixed_lag.h"
 #include "implicit_twisting.h"
 #include "regressor_identifier.h"
 #include "rigid_body.h"
 
 #define RO_MAX_JOINTS RB_MAX_JOINTS
+_Static_assert(2 * RO_MAX_JOINTS <= FL_MAX_SIGNALS, "the window holds the joints and torques");
+
+typedef enum {
+    RO_REGRESSION_OBSERVER = 0, /* at the observer's causal estimates (the paper's) */
+    RO_REGRESSION_WINDOW = 1    /* at a zero-phase window's derivatives, a fixed lag behind */
+} RoRegression;
 
 /* One joint's implicit observer between samples (implicit_twisting.h's
  * leapfrog): corrected position, mid-interval velocity, the nominal
@@ -90,6 +109,7 @@ static inline double ro_velocity(const RobotObserver *o, int i) { return o->dof[
 int ro_converged(const RobotObserver *o);
 
 typedef struct {
+    int kind;                      /* RoRegression */
     double gain;                   /* 1 - exp(-h/tau) of the regression filter */
     double min_speed;              /* joint equations below it weigh 0 ... */
     int margin_samples;            /* ... and this many samples after (reversal_margin / h) */
@@ -98,18 +118,22 @@ typedef struct {
     double previous_y[RO_MAX_JOINTS], previous_u[RO_MAX_JOINTS],
         previous_velocity[RO_MAX_JOINTS], older_velocity[RO_MAX_JOINTS];
     int settled[RO_MAX_JOINTS];    /* samples since joint i was slow or reversed */
-    double weight[RO_MAX_JOINTS];  /* sample k-1's weight of joint i's equation, 0 or 1 */
+    double weight[RO_MAX_JOINTS];  /* the last row's weight of joint i's equation, 0 or 1 */
+    int entered;                   /* a row entered the identifier at the last sample */
+    FixedLag window;               /* RO_REGRESSION_WINDOW: the positions and torques */
+    double lead_velocity[RO_MAX_JOINTS]; /* the window's, ahead of its centre */
     RbRegressor Y;                 /* the weighted regressor through the filter (the */
     double z[RO_MAX_JOINTS];       /* identifier's entries only), the torque residual */
     double pi_nominal[RB_MAX_PARAMETERS];
 } RobotRegression;
 
-/* The regression's filter (tau > 0; 0: no filter), the nominal parameters (the
- * model's) and the rule of the joint equations left out: min_speed >= 0
- * [rad/s or m/s], reversal_margin >= 0 [s] (both 0: every equation is used).
- * Returns 0, or -1 for a negative or non-finite min_speed or reversal_margin. */
-int ro_regression_init(RobotRegression *r, const RigidBodyModel *model, double h, double tau,
-                       double min_speed, double reversal_margin);
+/* The regression (kind: RoRegression), its filter (tau > 0; 0: no filter), the
+ * nominal parameters (the model's) and the rule of the joint equations left out:
+ * min_speed >= 0 [rad/s or m/s], reversal_margin >= 0 [s] (both 0: every equation
+ * is used).  Returns 0, or -1 for an unknown kind, a negative or non-finite
+ * min_speed or reversal_margin, or a step h the window refuses. */
+int ro_regression_init(RobotRegression *r, const RigidBodyModel *model, int kind, double h,
+                       double tau, double min_speed, double reversal_margin);
 
 /* The filters start again at the next sample (with its values: no transient). */
 void ro_regression_restart(RobotRegression *r);
@@ -120,11 +144,16 @@ void ro_regression_restart(RobotRegression *r);
 void ro_regression_step(RobotRegression *r, const RigidBodyModel *model, const RobotObserver *o,
                         const double y[], const double u[], RegressorIdentifier *id);
 
-/* The weight (0 or 1) with which joint i's equation of the sample before the
- * last enters the regression (after ro_regression_step). */
+/* The weight (0 or 1) with which joint i's equation of the sample ro_regression_lag
+ * samples before the last entered the regression (after ro_regression_step; when
+ * r->entered). */
 static inline double ro_regression_weight(const RobotRegression *r, int i)
 {
     return r->weight[i];
 }
+
+/* Samples from the newest to the one whose equations the last row holds: 1 at the
+ * observer's estimates, the window's centre's lag (once chosen) through it. */
+int ro_regression_lag(const RobotRegression *r);
 
 #endif

@@ -11,6 +11,7 @@ RobotSettings rp_default_settings(int n)
     RobotSettings s;
     memset(&s, 0, sizeof s);
     s.n = n;
+    s.regression = RO_REGRESSION_WINDOW;
     s.h = RO_STEP;
     s.tau = RO_TAU;
     s.convergence_window = RO_CONVERGENCE_WINDOW;
@@ -41,8 +42,8 @@ RpProblem rp_init(const RobotPipeline *p, const RigidBodyModel *model, const Rob
         }
     }
     ro_init(p->observer, s->n, s->h, alpha1, alpha2, s->tau, s->convergence_window, y0, zero);
-    if (p->regression && ro_regression_init(p->regression, model, s->h, s->tau, s->min_speed,
-                                            s->reversal_margin) != 0)
+    if (p->regression && ro_regression_init(p->regression, model, s->regression, s->h, s->tau,
+                                            s->min_speed, s->reversal_margin) != 0)
         return RP_BAD_REGRESSION;
     memset(p->identifier, 0, sizeof *p->identifier);
     if (s->identifier && ri_init(p->identifier, (IdentifierKind)s->identifier, s->n, s->p,

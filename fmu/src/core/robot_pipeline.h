@@ -28,6 +28,7 @@ typedef struct {
 typedef struct {
     int n;          /* joints */
     int identifier; /* 0 off, IDENTIFIER_LSM, IDENTIFIER_MFF */
+    int regression; /* RoRegression: the observer's estimates or the fixed-lag window */
     int p;          /* base parameters identified: columns' length */
     int columns[RRI_MAX_PARAMETERS]; /* their columns of the full regressor */
     double h;                  /* internal step [s] */

@@ -96,6 +96,10 @@
                                      * most, in the band chosen */
 #define FL_PROBE_FRACTION 0.4       /* [sample rate] the noise is what a kernel of this
                                      * cut-off leaves of the positions */
+#define FL_REVERSAL_PERIODS 1.5     /* periods of the cut-off: a robot's joint equation is
+                                     * left out this near (before and after) a reversal of
+                                     * the window's velocity (identify's friction rows use
+                                     * the same margin) */
 #define OP_MODEL_STEPS 32           /* internal steps between the updates of the observer's
                                      * identified model (information form: the factor,
                                      * the excitation's iteration, the fed-back estimate),

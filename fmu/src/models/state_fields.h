@@ -47,8 +47,9 @@
     DERIVED_FIELD(T, f.coordinates), DERIVED_FIELD(T, f.signals), DERIVED_FIELD(T, f.h),         \
     DERIVED_FIELD(T, f.inputs_held), DERIVED_FIELD(T, f.held), DERIVED_FIELD(T, f.terms),       \
     DERIVED_FIELD(T, f.term_held), DERIVED_FIELD(T, f.term_tag),                                 \
-    DERIVED_FIELD(T, f.half), DERIVED_FIELD(T, f.k0), DERIVED_FIELD(T, f.k1),                    \
-    DERIVED_FIELD(T, f.k2), DERIVED_FIELD(T, f.noise_gain), DERIVED_FIELD(T, f.probe),            \
+    DERIVED_FIELD(T, f.half), DERIVED_FIELD(T, f.leads), DERIVED_FIELD(T, f.lead),               \
+    DERIVED_FIELD(T, f.k0), DERIVED_FIELD(T, f.k1), DERIVED_FIELD(T, f.k2),                      \
+    DERIVED_FIELD(T, f.noise_gain), DERIVED_FIELD(T, f.probe),                                   \
     DERIVED_FIELD(T, f.probe_gain), STATE_FIELD(T, f.noise_square, FIELD_REAL, 0.0, NAN),         \
     STATE_FIELD(T, f.noise_squares, FIELD_REAL, 0.0, NAN),                                       \
     STATE_FIELD(T, f.newest, FIELD_INT, 0, FL_RING - 1),                                         \

@@ -52,41 +52,73 @@ def _identify_friction(model, q, tau, **rule):
                                                       **rule})
 
 
-def test_online_identification_from_the_observer_finds_the_friction(arm):
-    """The URDF's inertials plus the payload, friction unknown (nominal 0): the identifier
-    fed by the observer finds the viscous and Coulomb coefficients within 0.1 % (measured:
-    0.006, 0.002, 0.024, 0.007 %; 5.3, 3.2, 5.6, 3.8 % when the regression filtered q, q',
-    q'', u (5 ms) instead of the regressor).  On this light arm (M^-1 up to 1400) the
-    missing friction is an acceleration error of up to 600 rad/s^2, hence f+ = 1000.
-
-    Noise-free, what is left is the observer's error at the reversals, a bias: the standard
-    errors (from the residuals' scores, without the early anchor's error since that stopped
-    counting) are of its size, 1.1 to 6.9 times smaller (measured), not a bound on it."""
+def test_online_identification_finds_the_friction(arm):
+    """The URDF's inertials plus the payload, friction unknown (nominal 0): the identifier,
+    regressing through the fixed-lag window (the default), finds the viscous and Coulomb
+    coefficients within 1e-4 (measured: -0.0058, 0.0037, -0.0007, 0.0006 %), and its
+    standard errors cover what is left (the error 0.26 to 1.06 of them, measured) while
+    saying that it is small (2e-5 to 6e-5 of each coefficient)."""
     _, robot, truth, (t, q, _, _, tau) = arm
-    link = payload_link(robot.arrays()["link"])
-    model = robot.rigid_body(link=link, friction=np.zeros((2, 2)))
+    model = robot.rigid_body(link=payload_link(robot.arrays()["link"]), friction=np.zeros((2, 2)))
     result = _identify_friction(model, q, tau)
-    assert result["delta"] == pytest.approx(FRICTION.ravel(), rel=1e-3)
+    assert result["delta"] == pytest.approx(FRICTION.ravel(), rel=1e-4)
     error = np.abs(result["delta"] - FRICTION.ravel())
-    assert np.all(result["std_error"] > error / 10) and np.all(result["std_error"] < 3 * error)
+    assert np.all(error < 3 * result["std_error"])
+    assert np.all(result["std_error"] < 2e-4 * FRICTION.ravel())
     assert result["excitation"] > 0
 
 
-def test_slow_joint_equations_are_left_out_online(arm):
+def test_online_identification_from_the_observer_finds_the_friction(arm):
+    """The same through the observer's estimates (regression "observer"): within 0.1 %
+    (measured: 0.006, 0.002, 0.024, 0.007 %; 5.3, 3.2, 5.6, 3.8 % when the regression
+    filtered q, q', q'', u (5 ms) instead of the regressor).  On this light arm (M^-1 up
+    to 1400) the missing friction is an acceleration error of up to 600 rad/s^2, hence
+    f+ = 1000.
+
+    Noise-free, what is left is the observer's error at the reversals, a bias: the standard
+    errors (from the residuals' scores) are of its size, 1.1 to 6.9 times smaller
+    (measured), not a bound on it."""
+    _, robot, truth, (t, q, _, _, tau) = arm
+    model = robot.rigid_body(link=payload_link(robot.arrays()["link"]), friction=np.zeros((2, 2)))
+    result = _identify_friction(model, q, tau, regression="observer")
+    assert result["delta"] == pytest.approx(FRICTION.ravel(), rel=1e-3)
+    error = np.abs(result["delta"] - FRICTION.ravel())
+    assert np.all(result["std_error"] > error / 10) and np.all(result["std_error"] < 3 * error)
+
+
+def test_the_window_keeps_the_friction_on_noisy_positions(arm):
+    """Positions with 1e-4 rad of white noise: through the window the friction comes out
+    within 1 % and within 3 of its standard errors (measured, seed 0: 0.52, -0.31, -0.10,
+    0.11 %, 0.24 to 1.38 standard errors; seeds 0-5 within 0.6 %), where the observer's
+    causal estimates are off by 2 to 59 % (seeds 0-5: up to 391 %)."""
+    _, robot, truth, (t, q, _, _, tau) = arm
+    model = robot.rigid_body(link=payload_link(robot.arrays()["link"]), friction=np.zeros((2, 2)))
+    noisy = q + 1e-4 * np.random.default_rng(0).standard_normal(q.shape)
+    window = _identify_friction(model, noisy, tau)
+    assert window["delta"] == pytest.approx(FRICTION.ravel(), rel=1e-2)
+    assert np.all(np.abs(window["delta"] - FRICTION.ravel()) < 3 * window["std_error"])
+    observer = _identify_friction(model, noisy, tau, regression="observer")
+    assert np.max(np.abs(observer["delta"] / FRICTION.ravel() - 1)) > 0.2
+
+
+@pytest.mark.parametrize("regression", ["window", "observer"])
+def test_slow_joint_equations_are_left_out_online(arm, regression):
     """The truth's Coulomb friction is f_c sat(q'/0.05), the model's f_c sign(q'): with the
     default rule (min_speed 0.05 rad/s, reversal_margin 0.02 s) the friction comes out
-    within 0.1 % (measured 0.006, 0.002, 0.024, 0.007 %), with every equation used 0.2-0.5 %
-    off (regression filter tau 10 ms, the default)."""
+    within 0.1 % (measured, observer: 0.006, 0.002, 0.024, 0.007 %), with every equation
+    used 0.2-0.5 % off (regression filter tau 10 ms, the default)."""
     _, robot, _, _ = arm
     link = payload_link(robot.arrays()["link"])
     truth = robot.rigid_body(link=link, friction=FRICTION, coulomb_velocity=0.05)
     _, q, _, _, tau = multisine_log(truth, 3.0, H)
     model = robot.rigid_body(link=link, friction=np.zeros((2, 2)))
-    assert _identify_friction(model, q, tau)["delta"] == pytest.approx(FRICTION.ravel(),
-                                                                      rel=1e-3)
-    every = _identify_friction(model, q, tau, min_speed=0.0, reversal_margin=0.0)
+    assert _identify_friction(model, q, tau, regression=regression)["delta"] == pytest.approx(
+        FRICTION.ravel(), rel=1e-3)
+    every = _identify_friction(model, q, tau, min_speed=0.0, reversal_margin=0.0,
+                               regression=regression)
     assert np.max(np.abs(every["delta"] / FRICTION.ravel() - 1)) > 3e-3
-    assert np.all(every["weight"][:-1] == 1.0)
+    taken = every["weight"][~np.isnan(every["weight"])]
+    assert taken.size > 0.8 * every["weight"].size and np.all(taken == 1.0)
 
 
 def _rule(velocity: np.ndarray, h: float, min_speed: float, margin: float) -> np.ndarray:
@@ -104,11 +136,30 @@ def _rule(velocity: np.ndarray, h: float, min_speed: float, margin: float) -> np
 @pytest.mark.parametrize("min_speed, margin", [(0.05, 0.02), (0.3, 0.05), (0.0, 0.01)])
 def test_the_online_weights_follow_the_rule(arm, min_speed, margin):
     _, _, truth, (t, q, _, _, tau) = arm
-    result = _identify_friction(truth, q, tau, min_speed=min_speed, reversal_margin=margin)
+    result = _identify_friction(truth, q, tau, min_speed=min_speed, reversal_margin=margin,
+                                regression="observer")
     expected = _rule(result["velocity"], H, min_speed, margin)
-    assert np.array_equal(result["weight"][:-1], expected[:-1])
-    assert np.all(np.isnan(result["weight"][-1]))
+    taken = ~np.isnan(result["weight"])  # the rows from the identifier's start on
+    assert np.array_equal(taken[:-1, 0], np.arange(len(q) - 1) >= 199)
+    assert taken[-2].all() and not taken[-1].any()
+    assert np.array_equal(result["weight"][taken], expected[taken])
     assert 0.5 < expected.mean() < 1.0  # the rule leaves some equations out, not all
+
+
+def test_the_window_leaves_out_both_sides_of_a_reversal(arm):
+    """Through the window, a joint's equation is left out on both sides of each reversal
+    of its velocity (FL_REVERSAL_PERIODS of the cut-off, at least 8 samples here), and
+    after it for reversal_margin more; most equations stay."""
+    _, _, truth, (t, q, qd, _, tau) = arm
+    weight = _identify_friction(truth, q, tau)["weight"]
+    for i in range(2):
+        flips = np.flatnonzero(np.signbit(qd[1:, i]) != np.signbit(qd[:-1, i])) + 1
+        flips = flips[(flips > 300) & (flips < len(q) - 300)]
+        assert flips.size > 2
+        for k in flips:
+            near = weight[k - 8:k + 8 + 20, i]
+            assert np.all(near[~np.isnan(near)] == 0.0)
+        assert 0.5 < np.nanmean(weight[:, i]) < 1.0
 
 
 @pytest.mark.parametrize("rule", [{"min_speed": -0.1}, {"reversal_margin": float("nan")}])

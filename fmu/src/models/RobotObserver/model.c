@@ -35,7 +35,7 @@
 typedef struct {
     /* parameters */
     double h;
-    int n, identifier, base_count;
+    int n, identifier, base_count, regression_kind;
     double tau, convergence_window, rho, R, t_id, statistics_interval, coulomb_velocity, p;
     double min_speed, reversal_margin;
     double gravity[3];
@@ -56,7 +56,7 @@ typedef struct {
     /* outputs */
     double q_hat[MAX_N], qd_hat[MAX_N], qd_sample[MAX_N], base_estimate[MAX_P], base_std[MAX_P],
         base_excitation[MAX_P];
-    double gamma_trace, excitation, input_hold;
+    double gamma_trace, excitation, input_hold, identifier_cutoff;
     int identifier_active, converged, coarse_inputs;
     /* state */
     RigidBodyModel model;
@@ -135,11 +135,19 @@ static const ModelVariable VARIABLES[] = {
     {.name = "gravity", .vr = 14, .rows = 3, .type = TYPE_REAL,
      PARAM(.offset = OFF(gravity), .starts = GRAVITY_START, UNBOUNDED, .unit = "m/s2",
      .description = "Gravity in the base frame")},
+    {.name = "regression", .vr = 19, .type = TYPE_INTEGER,
+     PARAM(.offset = OFF(regression_kind), .start = RO_REGRESSION_WINDOW, .min = 0, .max = 1,
+     .description = "What the identifier regresses on: 1 the positions and torques smoothed "
+                    "by a zero-phase window a fixed lag behind the newest sample, its cut-off "
+                    "chosen from the measurement noise (identifier_cutoff); 0 the observer's "
+                    "causal estimates (the paper's scheme)")},
     {.name = "min_speed", .vr = 17, .type = TYPE_REAL, PARAM(.offset = OFF(min_speed),
      .start = RO_MIN_SPEED, .min = 0.0, .max = NAN, .unit = "rad/s",
      .description = "The identifier leaves out joint i's equation where |q_i'| is below this "
                     "speed (rad/s, or m/s for a prismatic joint) or q_i' reverses, and for "
-                    "reversal_margin after: there Coulomb friction is not f_c sign(q')")},
+                    "reversal_margin after (with regression = 1 also for 1.5 periods of "
+                    "identifier_cutoff on both sides): there Coulomb friction is not "
+                    "f_c sign(q')")},
     {.name = "reversal_margin", .vr = 18, .type = TYPE_REAL,
      PARAM(.offset = OFF(reversal_margin), .start = RO_REVERSAL_MARGIN, .min = 0.0, .max = NAN,
      .unit = "s",
@@ -237,6 +245,12 @@ static const ModelVariable VARIABLES[] = {
      .offset = OFF(converged),
      .description = "Every joint's observer is in its sliding mode by the switching-rate test"},
     INPUT_CADENCE_VARIABLES(1004, OFF(input_hold), OFF(coarse_inputs), OFF(input_period)),
+    {.name = "identifier_cutoff", .vr = 1010, .type = TYPE_REAL,
+     OUTPUT(.offset = OFF(identifier_cutoff), .unit = "Hz",
+     .description = "Cut-off of the fixed-lag window the identifier regresses through "
+                    "(regression = 1), chosen when identification starts: the widest band "
+                    "in which the measurement noise is at most 1 % of the accelerations' "
+                    "mean square; the estimates lag by 7.5 periods of it. 0 before")},
 };
 
 /* Mass >= 0 and, with mass, a positive definite inertia about the centre of
@@ -328,6 +342,7 @@ static RobotSettings settings_of(const RobotData *d)
 {
     RobotSettings s = rp_default_settings(d->n);
     s.identifier = d->identifier;
+    s.regression = d->regression_kind;
     s.p = d->base_count;
     memcpy(s.columns, d->base_columns, sizeof d->base_columns);
     s.h = d->h;
@@ -363,7 +378,7 @@ static ModelStatus init_pipeline(RobotData *d, const ModelLogger *log)
         return MODEL_ERROR;
     case RP_BAD_REGRESSION:
         log->log(log->context, MODEL_ERROR, "min_speed = %g and reversal_margin = %g must be "
-                 "finite and >= 0", d->min_speed, d->reversal_margin);
+                 "finite and >= 0, and h = %g positive", d->min_speed, d->reversal_margin, d->h);
         return MODEL_ERROR;
     case RP_BAD_IDENTIFIER:
         log->log(log->context, MODEL_ERROR, "the identifier refused its settings (h = %g, rho = "
@@ -397,6 +412,8 @@ static void publish_estimates(RobotData *d)
         d->qd_sample[i] = d->obs.primed ? ro_velocity(&d->obs, i) : d->obs.x2_hat[i];
     }
     d->converged = d->obs.steps > 0.0 && ro_converged(&d->obs);
+    d->identifier_cutoff = d->identifier && d->regression_kind == RO_REGRESSION_WINDOW
+                               ? fl_cutoff(&d->regression.window) : 0.0;
     d->input_hold = ic_shortest(&d->cadence) * d->h;
     d->coarse_inputs = ic_coarse(&d->cadence);
 }
@@ -413,11 +430,13 @@ static int measured(const RobotData *d, double values[])
  * of the time measured for 1-7 joints and 2n-12n parameters (docs/robots.md):
  * the corrector and the forward dynamics per joint, then the identifier's rank-n
  * update of its p-parameter sums (structural zeros skipped) and the statistics
- * job's fixed slice. */
+ * job's fixed slice; through the window, its kernels over each joint's position
+ * (three, and the velocity ahead) and torque at the longest window. */
 static double step_work(const RobotData *d)
 {
     const double n = d->n, p = d->base_count;
-    return 400.0 * n + (d->identifier ? 1000.0 + n * p * (p + 3.0) / 6.0 : 0.0);
+    const double window = d->regression_kind == RO_REGRESSION_WINDOW ? 5.0 * n * FL_MAX_HALF : 0.0;
+    return 400.0 * n + (d->identifier ? 1000.0 + n * p * (p + 3.0) / 6.0 + window : 0.0);
 }
 
 static ModelStatus initialize(void *data, double start_time, const ModelLogger *log)
@@ -528,6 +547,7 @@ static const StateField STATE_FIELDS[] = {
     D(regression.reversals), D(regression.pi_nominal), I(regression.have_previous, 0, 1),
     I(regression.have_older, 0, 1), I(regression.started, 0, 1),
     I(regression.settled, 0, 2147483647), R(regression.weight, 0.0, 1.0),
+    D(regression.kind), I(regression.entered, 0, 1), FL_STATE_FIELDS(RobotData, regression.window),
     RRI_STATE_FIELDS(RobotData, id), SJ_STATE_FIELDS(RobotData, statistics),
     /* the doubles, named by their struct */
     REAL_FIELDS(RobotData, obs), REAL_FIELDS(RobotData, regression), REAL_FIELDS(RobotData, id),
