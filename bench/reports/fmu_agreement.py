@@ -1,7 +1,8 @@
 """The model file's FMU online against identify offline, and whether the FMU's standard
 errors cover the truth, on simulated logs of two cases. Prints markdown tables (not a test).
 
-    .venv/bin/python -m bench.reports.fmu_agreement [--cases emps,oscillator] [--seeds 50]
+    .venv/bin/python -m bench.reports.fmu_agreement [--cases emps,oscillator,two_link]
+        [--seeds 50]
         [--identify-seeds 10] [--seconds S]
 
 emps: the EMPS drive's model (examples/emps/emps.toml) at the published IDIM-LS values,
@@ -14,6 +15,12 @@ with white noise of 2 um (other seeds: other noise and other reference phases); 
 oscillator: the lightly damped cubic oscillator of bench/cases/oscillator.py (resonance
 near fs/9 at 610 Hz, broadband multisine, 0.5 % output noise; other seeds: other phases
 and noise), 65,000 samples (or --seconds).
+
+two_link: the two-link arm of bench/cases/two_link.py and its model file (joint 2 passive,
+joint 1 under PD control along a multi-sine), at a uniform 200 Hz: one run simulated
+(Pinocchio), its positions read by an encoder of 0.01 rad steps whose zero lies at a
+random point of the step (other seeds: other zeros, hence other quantization errors of
+the same motion); 20 s (or --seconds).
 
 Per seed: the FMU fed sample by sample through fmpy (communication step = h = the sample
 period), its final estimates, standard errors, the cut-off its identifier chose and
@@ -29,17 +36,21 @@ whether the published model creates energy; identify (defaults) on the first
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import fmpy
 import numpy as np
 
-from bench.cases import oscillator
+from bench.cases import oscillator, two_link
+from bench.reports.robot_real_logs import joint_log
+from bench.reports.robots import pinocchio_truth
 from harness.cli import main
 
 REPO = Path(__file__).resolve().parents[2]
@@ -121,6 +132,34 @@ def _oscillator_log(seed: int, seconds: float
     return log.t, {"y": log.y, "u": log.u}, {"t": log.t, "y": log.y, "u": log.u}
 
 
+def _two_link_model(folder: Path) -> Path:
+    path = folder / "two_link.toml"
+    path.write_text(two_link.model_toml(), encoding="utf-8")
+    return path
+
+
+@lru_cache(maxsize=2)
+def _two_link_run(seconds: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """t, the true positions and the torques of one uniform 200 Hz run."""
+    arm, path = two_link.robot()
+    link, friction = two_link.truth()
+    forward = pinocchio_truth(path, (), link, friction)
+    uniform = dataclasses.replace(two_link.CASE, jitter=None, resolution=None, bits=None)
+    (t, q, u), _ = joint_log(uniform, arm, forward, seconds, two_link.TRAIN_SEED)
+    return t, q, u
+
+
+def _two_link_log(seed: int, seconds: float
+                  ) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
+    t, q, u = _two_link_run(seconds)
+    step = two_link.CASE.resolution
+    assert step is not None  # case b reads an encoder of 0.01 rad steps
+    zero = np.random.default_rng(seed).uniform(-0.5 * step, 0.5 * step, q.shape[1])
+    q = np.round((q + zero) / step) * step - zero
+    signals = {"q1": q[:, 0], "q2": q[:, 1], "u1": u[:, 0], "u2": u[:, 1]}
+    return t, signals, {"t": t, **signals}
+
+
 CASES = {
     "emps": Case(f"simulated EMPS-like logs ({RATE:g} Hz, {NOISE * 1e6:g} um noise, closed "
                  "loop, input held)", NAMES, TRUTH, lambda folder: MODEL, _emps_log, 20.0),
@@ -128,6 +167,10 @@ CASES = {
                        f"{100 * oscillator.NOISE:g} % noise)", oscillator.NAMES,
                        oscillator.TRUTH, _oscillator_model, _oscillator_log,
                        65_000 / oscillator.RATE),
+    "two_link": Case("two-link arm logs (200 Hz, 0.01 rad encoder, joint 2 passive)",
+                     two_link.NAMES, dict(zip(two_link.NAMES,
+                                              two_link.base_values(*two_link.truth()))),
+                     _two_link_model, _two_link_log, 20.0),
 }
 
 
@@ -223,8 +266,8 @@ def cli() -> None:
     parser.add_argument("--seeds", type=int, default=50)
     parser.add_argument("--identify-seeds", type=int, default=10)
     parser.add_argument("--seconds", type=float, default=None,
-                        help="length of each log (default: 20 s for emps, the oscillator's "
-                             "65,000 samples)")
+                        help="length of each log (default: 20 s for emps and two_link, the "
+                             "oscillator's 65,000 samples)")
     args = parser.parse_args()
     keys = args.cases.split(",")
     unknown = [k for k in keys if k not in CASES]

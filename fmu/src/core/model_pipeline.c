@@ -58,6 +58,13 @@ int mp_init(ModelPipeline *p, const TermProgram *program, const double alpha1[],
             if (term < 0) ++p->terms_unwindowed;
             else p->window_term[i][k] = term;
         }
+    int coulomb = 0;
+    for (int i = 0; i < n; ++i) coulomb |= p->sign_velocities[i] = tp_sign_velocities(program, i);
+    if (coulomb) fl_lead(&p->window); /* to see reversals ahead of the centre */
+    memset(p->lead_velocity, 0, sizeof p->lead_velocity);
+    memset(p->since_reversal, 0, sizeof p->since_reversal);
+    memset(p->speed_square, 0, sizeof p->speed_square);
+    p->speed_samples = 0.0;
     if (!(p->tau_identifier >= 0.0) || !isfinite(p->tau_identifier) ||
         !(p->statistics_interval >= 0.0) || !isfinite(p->statistics_interval))
         return refuse(error, error_size, "tau_identifier = %g and statistics_interval = %g must "
@@ -223,10 +230,40 @@ static void regression_step(ModelPipeline *p, const TermProgram *program, const 
     feed_identifier(p, program, entry, t);
 }
 
+/* The equations (bits 1 << i) whose Coulomb terms hold at the window's centre (the
+ * rule of identify's friction rows): every coordinate in their sign() moves there,
+ * faster than MP_SLOW_FRACTION of its RMS velocity since the regression began (at
+ * rest the friction is stiction, not f_c sign(q')), and has not reversed within the
+ * lead on either side of it (judged ahead of the centre, at the lead). */
+static int coulomb_holds(ModelPipeline *p, int n, const double centre_velocity[])
+{
+    const int lead = fl_lead_samples(&p->window);
+    int coulomb = 0, moving = 0, equations = 0;
+    for (int i = 0; i < n; ++i) coulomb |= p->sign_velocities[i];
+    if (!p->started) p->speed_samples = 0.0;
+    p->speed_samples += 1.0;
+    for (int j = 0; j < n; ++j) {
+        if (!(coulomb >> j & 1)) continue;
+        const double v = fl_lead_velocity(&p->window, j), c = centre_velocity[j];
+        if (!p->started) p->speed_square[j] = 0.0;
+        p->speed_square[j] += c * c;
+        if (!p->started || signbit(v) != signbit(p->lead_velocity[j])) p->since_reversal[j] = 0;
+        else if (p->since_reversal[j] <= 2 * lead) ++p->since_reversal[j];
+        p->lead_velocity[j] = v;
+        const double slow = MP_SLOW_FRACTION * MP_SLOW_FRACTION * p->speed_square[j] /
+                            p->speed_samples;
+        if (p->since_reversal[j] > 2 * lead && c * c >= slow) moving |= 1 << j;
+    }
+    for (int i = 0; i < n; ++i)
+        if (!(p->sign_velocities[i] & ~moving)) equations |= 1 << i;
+    return equations;
+}
+
 /* One sample of the window's regression: every entry of the equations at the
  * window's smoothed sample, a fixed lag behind (model_pipeline.h), through G into
- * Y0.  G starts at the first row, which satisfies the equations as every later one
- * does: no warm-up. */
+ * Y0 (an equation whose Coulomb terms do not hold there left out, as zeros).  G
+ * starts at the first row, which satisfies the equations as every later one does: no
+ * warm-up. */
 static void window_step(ModelPipeline *p, const TermProgram *program, double t)
 {
     TpSample s;
@@ -234,12 +271,15 @@ static void window_step(ModelPipeline *p, const TermProgram *program, double t)
     double terms[FL_MAX_TERMS];
     fl_at_lag(&p->window, s.q, s.qd, s.qdd, s.u, terms);
     const double g = p->started ? p->gain : 1.0;
-    for (int i = 0; i < program->n; ++i)
+    const int holding = coulomb_holds(p, program->n, s.qd);
+    for (int i = 0; i < program->n; ++i) {
+        const double weight = holding >> i & 1 ? 1.0 : 0.0;
         for (int k = 0; k <= program->p; ++k) {
             const int term = p->window_term[i][k];
             const double v = term >= 0 ? terms[term] : tp_entry(program, &s, i, k);
-            p->Y0[i][k] += g * (v - p->Y0[i][k]);
+            p->Y0[i][k] += g * (weight * v - p->Y0[i][k]);
         }
+    }
     feed_identifier(p, program, p->Y0, t);
 }
 

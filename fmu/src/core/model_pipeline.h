@@ -17,6 +17,10 @@
  * through the same window, every entry through one first-order low-pass
  * filter G (time constant tau_identifier) into the regressor identifier.
  * The observer's states stay causal; only the parameters lag.
+ * An equation with sign(q') (Coulomb friction) holds between the smoothed signals
+ * only where q' moves and away from its reversals: its other rows are left out, as
+ * identify's friction rows are (the window's centre then lags FL_REVERSAL_PERIODS
+ * more, to see the reversals ahead of it).
  * With regression = MP_REGRESSION_OBSERVER: the equations at the observer's
  * causal velocity estimates, every entry through G into the regressor identifier (regressor_identifier.h: LSM or MFF in information form,
  * standard errors by the sandwich over batches), with the statistics' solve
@@ -76,6 +80,16 @@ typedef struct {
                                  * beyond FL_MAX_TERMS (mp_init; the model warns) */
     int window_term[MP_MAX_COORDINATES][TP_MAX_PARAMETERS + 1]; /* each entry's
                                  * window term, or -1 (mp_init) */
+    /* Coulomb friction through the window: equation i reads coordinate j's velocity
+     * inside sign() (bit j of sign_velocities[i], mp_init); its rows are left out
+     * where j is slow or reverses within FL_REVERSAL_PERIODS of the cut-off of the
+     * window's centre: there the friction is stiction, or sign() of the smoothed
+     * velocity is not the smoothing of sign() that the smoothed equation holds with */
+    int sign_velocities[MP_MAX_COORDINATES];
+    double lead_velocity[MP_MAX_COORDINATES]; /* the window's velocity ahead of the centre */
+    int since_reversal[MP_MAX_COORDINATES];   /* its samples since it changed sign, capped */
+    double speed_square[MP_MAX_COORDINATES];  /* sums of the centre's squared velocities */
+    double speed_samples;                     /* and their count, since the regression began */
     RbRegressor Y;              /* the filtered equations (SI parameters) ... */
     double z[MP_MAX_COORDINATES]; /* ... and their residual at the nominal parameters */
     RegressorIdentifier id;

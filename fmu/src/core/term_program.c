@@ -348,3 +348,27 @@ int tp_entry_kind(const TermProgram *p, int i, int k)
     }
     return reads | (top == 0 && stack[0] == NONLINEAR ? TP_NONLINEAR : 0);
 }
+
+int tp_sign_velocities(const TermProgram *p, int i)
+{
+    int inside = 0;
+    for (int k = 0; k <= p->p; ++k) {
+        int stack[TP_MAX_STACK], top = -1; /* the velocities each stack value reads */
+        const int start = p->start[i][k], end = start + p->length[i][k];
+        for (int t = start; t < end; ++t) {
+            switch ((TpOp)p->op[t]) {
+            case TP_CONSTANT: case TP_POSITION: case TP_ACCELERATION: case TP_INPUT:
+                stack[++top] = 0;
+                break;
+            case TP_VELOCITY: stack[++top] = 1 << p->arg[t]; break;
+            case TP_ADD: case TP_MULTIPLY: case TP_POWER:
+                --top;
+                stack[top] |= stack[top + 1];
+                break;
+            case TP_SIGN: inside |= stack[top]; break;
+            default: break; /* functions of one value read what it reads */
+            }
+        }
+    }
+    return inside;
+}

@@ -96,4 +96,8 @@ double tp_entry(const TermProgram *program, const TpSample *sample, int i, int k
 enum { TP_READS_POSITIONS = 1, TP_READS_INPUTS = 2, TP_READS_DERIVATIVES = 4, TP_NONLINEAR = 8 };
 int tp_entry_kind(const TermProgram *program, int i, int k);
 
+/* The coordinates whose velocity equation i reads inside sign() (Coulomb friction), as
+ * bits 1 << j: the equation holds as written only where they move. */
+int tp_sign_velocities(const TermProgram *program, int i);
+
 #endif

