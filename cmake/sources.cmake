@@ -30,7 +30,8 @@ set(STO_INSTANCE_SOURCES instance/instance.c instance/instance_log.c instance/in
     instance/instance_states.c)
 # Headers every FMU ships beside its sources (fmpy compile rebuilds from them).
 set(STO_SHIPPED_HEADERS instance/instance.h instance/instance_internal.h instance/model_interface.h
-    instance/state_format.h models/state_fields.h models/input_cadence_outputs.h)
+    instance/state_format.h models/state_fields.h models/input_cadence_outputs.h
+    models/fixed_lag_outputs.h)
 
 # The FMUs: model identifier, its model file, its core group, the folder of its
 # committed modelDescription.xml (FMI 2; FMI 3 in <folder>/fmi3/) and the files of

@@ -15,6 +15,7 @@
 #include "../../core/model_pipeline.h"
 #include "../../core/term_program.h"
 #include "../../instance/model_interface.h"
+#include "../fixed_lag_outputs.h"
 #include "../input_cadence_outputs.h"
 #include "../state_fields.h"
 
@@ -179,12 +180,7 @@ static const ModelVariable VARIABLES[] = {
      .description = "Parameters whose theta_excitation is below 0.001 while the identifier "
                     "runs: the log so far does not tell them from the others (their estimates "
                     "and theta_std mean little). 0 before the first solve"},
-    {.name = "identifier_cutoff", .vr = 369, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(identifier_cutoff), .unit = "Hz",
-     .description = "Cut-off of the fixed-lag window the identifier regresses through "
-                    "(regression = 1), chosen when identification starts: the widest band "
-                    "in which the measurement noise is at most 1 % of the accelerations' "
-                    "mean square; its lag is 6 periods of it. 0 before")},
+    IDENTIFIER_CUTOFF_VARIABLE(369, OFF(identifier_cutoff)),
     {.name = "negative_damping", .vr = 368, .type = TYPE_BOOLEAN,
      .causality = CAUSALITY_OUTPUT, .variability = VARIABILITY_DISCRETE, UNBOUNDED,
      .offset = OFF(negative_damping),

@@ -26,6 +26,7 @@
 #include "../../core/robot_pipeline.h"
 #include "../../core/statistics_job.h"
 #include "../../instance/model_interface.h"
+#include "../fixed_lag_outputs.h"
 #include "../input_cadence_outputs.h"
 #include "../state_fields.h"
 
@@ -245,12 +246,7 @@ static const ModelVariable VARIABLES[] = {
      .offset = OFF(converged),
      .description = "Every joint's observer is in its sliding mode by the switching-rate test"},
     INPUT_CADENCE_VARIABLES(1004, OFF(input_hold), OFF(coarse_inputs), OFF(input_period)),
-    {.name = "identifier_cutoff", .vr = 1010, .type = TYPE_REAL,
-     OUTPUT(.offset = OFF(identifier_cutoff), .unit = "Hz",
-     .description = "Cut-off of the fixed-lag window the identifier regresses through "
-                    "(regression = 1), chosen when identification starts: the widest band "
-                    "in which the measurement noise is at most 1 % of the accelerations' "
-                    "mean square; the estimates lag by 7.5 periods of it. 0 before")},
+    IDENTIFIER_CUTOFF_VARIABLE(1010, OFF(identifier_cutoff)),
 };
 
 /* Mass >= 0 and, with mass, a positive definite inertia about the centre of
