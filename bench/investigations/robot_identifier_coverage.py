@@ -11,10 +11,11 @@ seed 3) at 1 kHz, torques by inverse dynamics; the positions measured with white
 each std (one seed per run). The observer has the URDF's inertials and no friction (f+ =
 1000, the identifier LSM over the four friction columns from 0.2 s, rho 1e-6), regressing
 through the fixed-lag window (the FMU's default) or on the observer's causal estimates, on
-the same logs. Per regression, noise and parameter: the mean error relative to the truth, the mean error over the spread of the
-estimates across the seeds (a bias the standard errors cannot see), the mean reported
-standard error over that spread (1 when they mean what they say), and the share of seeds
-whose truth lies within 2 standard errors. Prints a Markdown table (not a test).
+the same logs. Per regression, noise and parameter: the mean error relative to the truth,
+the mean error over the spread of the estimates across the seeds (a bias the standard
+errors cannot see), the mean reported standard error over that spread (1 when they mean
+what they say), and the share of seeds whose truth lies within 2 standard errors. Prints a
+Markdown table (not a test).
 """
 from __future__ import annotations
 

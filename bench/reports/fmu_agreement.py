@@ -1,9 +1,9 @@
 """The model file's FMU online against identify offline, and whether the FMU's standard
-errors cover the truth, on simulated logs of two cases. Prints markdown tables (not a test).
+errors cover the truth, on simulated logs of three cases. Prints markdown tables (not a
+test).
 
     .venv/bin/python -m bench.reports.fmu_agreement [--cases emps,oscillator,two_link]
-        [--seeds 50]
-        [--identify-seeds 10] [--seconds S]
+        [--seeds 50] [--identify-seeds 10] [--seconds S]
 
 emps: the EMPS drive's model (examples/emps/emps.toml) at the published IDIM-LS values,
 M x'' + Fv x' + Fc sign(x') + OF = gtau vir, in closed loop with a PD controller at 1 kHz
