@@ -33,6 +33,8 @@
 #ifndef FIXED_LAG_H
 #define FIXED_LAG_H
 
+#include <math.h>
+
 #include "tuning.h"
 
 #ifndef FL_MAX_SIGNALS /* positions then inputs: a model's 7 and 7, a robot's joints and torques */
@@ -118,6 +120,20 @@ double fl_lead_velocity(const FixedLag *f, int i);
 
 /* The centre's lead in samples (0 without fl_lead or before fl_choose). */
 int fl_lead_samples(const FixedLag *f);
+
+/* The rule of the rows left out near an event, on a velocity v taken at the lead: a
+ * reversal of v since *previous (which takes v), or `event` (the caller's: a start, a
+ * slow sample) restarts *since, which counts up to span + 1.  Returns 1 when no event
+ * lies within span samples, that is (span = 2 lead) within the lead on either side of
+ * the centre. */
+static inline int fl_settled(int *since, double *previous, double v, int event, int span)
+{
+    const int reversed = signbit(v) != signbit(*previous);
+    *previous = v;
+    if (event || reversed) *since = 0;
+    else if (*since <= span) ++*since;
+    return *since > span;
+}
 
 /* The chosen candidate's cut-off [Hz] (0 before fl_choose). */
 double fl_cutoff(const FixedLag *f);

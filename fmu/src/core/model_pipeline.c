@@ -247,12 +247,11 @@ static int coulomb_holds(ModelPipeline *p, int n, const double centre_velocity[]
         const double v = fl_lead_velocity(&p->window, j), c = centre_velocity[j];
         if (!p->started) p->speed_square[j] = 0.0;
         p->speed_square[j] += c * c;
-        if (!p->started || signbit(v) != signbit(p->lead_velocity[j])) p->since_reversal[j] = 0;
-        else if (p->since_reversal[j] <= 2 * lead) ++p->since_reversal[j];
-        p->lead_velocity[j] = v;
         const double slow = MP_SLOW_FRACTION * MP_SLOW_FRACTION * p->speed_square[j] /
                             p->speed_samples;
-        if (p->since_reversal[j] > 2 * lead && c * c >= slow) moving |= 1 << j;
+        if (fl_settled(&p->since_reversal[j], &p->lead_velocity[j], v, !p->started, 2 * lead) &&
+            c * c >= slow)
+            moving |= 1 << j;
     }
     for (int i = 0; i < n; ++i)
         if (!(p->sign_velocities[i] & ~moving)) equations |= 1 << i;

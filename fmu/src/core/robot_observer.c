@@ -191,11 +191,8 @@ static void window_weights(RobotRegression *r, int n)
             continue;
         }
         const double v = fl_lead_velocity(&r->window, i);
-        const int reversed = r->started && signbit(v) != signbit(r->lead_velocity[i]);
-        r->lead_velocity[i] = v;
-        if (!r->started || fabs(v) < r->min_speed || reversed) r->settled[i] = 0;
-        else if (r->settled[i] <= span) ++r->settled[i];
-        r->weight[i] = r->settled[i] > span ? 1.0 : 0.0;
+        r->weight[i] = fl_settled(&r->settled[i], &r->lead_velocity[i], v,
+                                  !r->started || fabs(v) < r->min_speed, span) ? 1.0 : 0.0;
     }
 }
 
