@@ -225,7 +225,7 @@ def choose_pipeline(model: Model, log: ModelLog) -> Choice:
     reference, inputs = _input_scores(model, log, cv, labels)
     combined = combined_scores(runs, inputs)
     scored = [Candidate(settings, scores[label], label,
-                        float(np.mean(inputs[label])) if label in inputs else math.nan,
+                        _mean(inputs[label]) if label in inputs else math.nan,
                         float(np.mean(combined[label]))) for label, settings in tried]
     label = pick(runs, combined)
     if label is None:
@@ -257,17 +257,25 @@ def _input_scores(model: Model, log: ModelLog, cv: CrossValidation, labels: list
 def combined_scores(runs: dict[str, np.ndarray], inputs: dict[str, np.ndarray]
                     ) -> dict[str, np.ndarray]:
     """Per candidate and block, its simulation score times its input score, each over the
-    best candidate's mean (the simulation score's ratio alone without input scores)."""
+    best candidate's mean (the simulation score's ratio alone without input scores, and
+    in a block without one: NaN, the reference keeps no row there)."""
     def ratios(scores: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-        means = [float(np.mean(v)) for v in scores.values()]
+        means = [_mean(v) for v in scores.values()]
         finite = [m for m in means if math.isfinite(m) and m > 0]
         least = min(finite) if finite else math.nan
         return {label: v / least for label, v in scores.items()}
     product = ratios(runs)
     if inputs:
         relative = ratios(inputs)
-        product = {label: v * relative[label] for label, v in product.items()}
+        product = {label: v * np.where(np.isnan(relative[label]), 1.0, relative[label])
+                   for label, v in product.items()}
     return {label: np.where(np.isfinite(v), v, np.inf) for label, v in product.items()}
+
+
+def _mean(scores: np.ndarray) -> float:
+    """The mean of a candidate's block scores over the blocks that have one."""
+    scored = scores[~np.isnan(scores)]
+    return float(np.mean(scored)) if len(scored) else math.nan
 
 
 def pick(runs: dict[str, np.ndarray], combined: dict[str, np.ndarray]) -> str | None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from harness.model import read_model
-from harness.model.held_out_inputs import HeldOutInputs
+from harness.model.held_out_inputs import REFERENCE_ROWS, HeldOutInputs
 from harness.model.log import read_log
 from harness.model.selection import FOLDS, combined_scores, pick
 
@@ -82,3 +82,60 @@ def test_no_finite_candidate_is_no_choice():
     runs = {"a": np.full(FOLDS, np.inf), "b": blocks(1, 1, np.inf, 1, 1)}
     assert pick(runs, combined_scores(runs, {})) is None
     assert combined_scores(runs, {})["b"][2] == np.inf
+
+
+FRICTION = """\
+[model]
+coordinates = ["x"]
+inputs = ["u"]
+equations = ["m*der(x,2) + d*der(x) + c*sign(der(x)) = u"]
+
+[parameters]
+m = { nominal = 1 }
+d = { nominal = 1 }
+c = { nominal = 1 }
+"""
+
+
+def friction_log(tmp_path, frequency: float, name: str):
+    """A mass with Coulomb friction on a sine of ``frequency`` [Hz], 200 Hz, 30 s, its
+    positions with 1 mm of noise (whose floor sets a cut-off of a few hertz)."""
+    t = np.arange(6000) / 200.0
+    w = 2 * np.pi * frequency
+    x, xd, xdd = 2 * np.sin(w * t), 2 * w * np.cos(w * t), -2 * w * w * np.sin(w * t)
+    u = 2.0 * xdd + 0.5 * xd + 0.3 * np.sign(xd)
+    noise = 1e-3 * np.random.default_rng(1).standard_normal(len(t))
+    np.savetxt(tmp_path / name, np.column_stack([t, x + noise, u]), delimiter=",",
+               header="t,x,u", comments="")
+    (tmp_path / "m.toml").write_text(FRICTION)
+    model = read_model(tmp_path / "m.toml")
+    return model, read_log(tmp_path / name, model)
+
+
+def test_the_reference_keeps_its_friction_rows_only_where_they_leave_the_log(tmp_path):
+    """Its friction rows leave out a margin around each reversal that grows as its cut-off
+    falls: with a reversal every 10 s they keep most rows; with one every 0.33 s, none,
+    and the reference goes without them (every block is then scored)."""
+    for frequency, kept in ((0.05, True), (1.5, False)):
+        model, log = friction_log(tmp_path, frequency, f"{frequency}.csv")
+        edges = np.linspace(0, log.samples, FOLDS + 1).round().astype(int)
+        inputs = HeldOutInputs(model, log, edges)
+        assert inputs.settings.friction_rows is kept, (frequency, inputs.settings)
+        assert np.mean(inputs.mask) >= REFERENCE_ROWS
+        scores = inputs.scores(np.tile([2.0, 0.5, 0.3], (FOLDS, 1)))
+        assert np.all(np.isfinite(scores)), scores
+
+
+def test_a_block_the_reference_leaves_out_is_not_scored(tmp_path):
+    """A block in which the reference keeps no row scores NaN (not 0, which would be the
+    best score), and the combination counts the simulation alone there."""
+    model, log = friction_log(tmp_path, 0.05, "slow.csv")
+    edges = np.linspace(0, log.samples, FOLDS + 1).round().astype(int)
+    inputs = HeldOutInputs(model, log, edges)
+    inputs.mask[inputs.owner == 1] = False
+    scores = inputs.scores(np.tile([2.0, 0.5, 0.3], (FOLDS, 1)))
+    assert np.isnan(scores[1]) and np.all(np.isfinite(np.delete(scores, 1)))
+    runs = {"a": blocks(1, 1, 1, 1, 1), "b": blocks(2, 2, 2, 2, 2)}
+    combined = combined_scores(runs, {"a": blocks(1, np.nan, 1, 1, 1),
+                                      "b": blocks(1, np.nan, 1, 1, 1)})
+    assert np.allclose(combined["a"], 1) and np.allclose(combined["b"], 2), combined
