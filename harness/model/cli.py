@@ -246,6 +246,10 @@ def _print_refinement(found: Identification) -> None:
         print(f"  output-error refinement: run error {100 * info['runs_error_start']:.4g} "
               f"% -> {100 * info['runs_error_end']:.4g} % ({info['evaluations']} "
               "evaluations)")
+        if info.get("std_error_from_halves"):
+            print("    standard errors from the halves' refined estimates (half their "
+                  "difference, larger than the sandwich's): "
+                  + ", ".join(info["std_error_from_halves"]))
     else:
         print(f"  output-error refinement not applied: {info.get('reason')}")
 

@@ -140,6 +140,7 @@ def _refined(model: Model, log: ModelLog, rows: Regression, least: Fit, mode: st
     dynamics = Dynamics(model)
     info: dict[str, Any] = {"mode": mode}
     start = least.theta
+    check = None
     try:
         if mode == "auto":
             check = check_on_halves(model, log, rows, least.theta, dynamics, free)
@@ -159,4 +160,12 @@ def _refined(model: Model, log: ModelLog, rows: Regression, least: Fit, mode: st
     info.update({"applied": True, "runs_error_start": result.cost_start,
                  "runs_error_end": result.cost_end, "evaluations": result.evaluations,
                  "solver": result.status})
-    return result.theta, result.std_error, "output error", info
+    std = result.std_error
+    if check is not None:  # the larger of the sandwich's and the halves' spread
+        spread = np.where(free, check.spread(), 0.0)
+        std = np.maximum(std, spread)
+        names = [p.name for p in model.parameters]
+        info["halves_std_error"] = dict(zip(names, spread.tolist()))
+        info["std_error_from_halves"] = [name for name, s, w in
+                                         zip(names, spread, result.std_error) if s > w]
+    return result.theta, std, "output error", info

@@ -58,6 +58,8 @@ def test_the_refinement_lands_within_three_standard_errors_of_the_truth(found):
     assert np.all(np.abs(found.theta - TRUTH) < 3.0 * found.std_error), \
         (found.theta - TRUTH) / found.std_error
     assert np.all(found.std_error < 1e-3 * np.abs(TRUTH))
+    halves = np.array(list(found.refinement["halves_std_error"].values()))
+    assert np.all(found.std_error >= halves) and np.all(halves > 0)
     least = found.least_squares
     assert np.any(np.abs(least.theta - TRUTH) > 5.0 * least.std_error)
 

@@ -36,3 +36,9 @@ def test_the_check_reports_each_half():
     assert record["least_squares"] == 0.025 and record["refined"] == 0.0075
     assert record["ratio"] == pytest.approx(math.sqrt(0.5 / 6))
     assert record["per_half"] == {"least_squares": [0.02, 0.03], "refined": [0.01, 0.005]}
+
+
+def test_the_halves_spread_is_half_their_difference():
+    halves = np.array([[1.0, 2.0, 3.0], [1.2, 2.0, 2.0]])
+    spread = RefinementCheck(np.array([0.1, 0.1]), np.array([0.05, 0.05]), halves).spread()
+    assert spread == pytest.approx([0.1, 0.0, 0.5])
