@@ -261,7 +261,7 @@ class RefinementCheck:
         s / sqrt(2), and their difference's mean square is 2 s^2). One degree of freedom,
         but it sees what the sandwich cannot: a misfit of the model (Coulomb friction
         through a sticking joint, coarse encoder steps) that moves the estimate with the
-        data; on the two-link arm's 0.01 rad logs the halves differed by up to 200 of
+        data; on the two-link arm's 0.01 rad logs the halves differed by up to 2700 of
         the sandwich's errors."""
         return np.abs(self.refined_halves[0] - self.refined_halves[1]) / 2.0
 
