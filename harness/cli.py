@@ -150,6 +150,7 @@ ROBOT_OPTIONS: dict[str, tuple[str, object]] = {
     "angle_unit": ("--angle-unit", None), "length_unit": ("--length-unit", None),
     "torque_gains": ("--torque-gains", None), "joint_terms": ("--joint-terms", None),
     "mass_range": ("--mass-range", []), "total_mass": ("--total-mass", None),
+    "com_in_geometry": ("--com-in-geometry", False),
     "smooth_coulomb": ("--smooth-coulomb", None)}
 # the options of the model-file path (harness.model.cli), refused without --model
 MODEL_OPTIONS = {"refine": ("--refine", "auto")}

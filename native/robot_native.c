@@ -21,13 +21,14 @@ int rn_max_joints(void) { return RB_MAX_JOINTS; }
 /* The parameter vector's layout (rigid_body.h), so that the harness keeps no copy of
  * it: a link's parameter count, a joint's friction count, and the offsets of the mass
  * in a link's parameters and of the viscous and Coulomb levels in a joint's friction. */
-void rn_layout(int out[5])
+void rn_layout(int out[6])
 {
     out[0] = RB_LINK_PARAMETERS;
     out[1] = RB_JOINT_FRICTION;
     out[2] = RB_MASS;
     out[3] = RB_VISCOUS;
     out[4] = RB_COULOMB;
+    out[5] = RB_FIRST_MOMENT;
 }
 
 int rn_load(RigidBodyModel *model, int n, const int type[], const double axis[], const double xyz[],

@@ -50,6 +50,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        metavar="KG",
                        help="the chain's moving bodies weigh KG together (the fixed base "
                             "left out): the physically consistent model is held to it")
+    group.add_argument("--com-in-geometry", action="store_true",
+                       help="hold each body's centre of mass inside the box of its links' "
+                            "shapes (the URDF's <collision>, else <visual>: boxes, "
+                            "cylinders, spheres, meshes); a body without readable shapes "
+                            "is named and left unbounded")
     group.add_argument("--joint-terms", default=None, metavar="TERM,...",
                        help="extra terms of every joint, identified with the rest: offset "
                             "(a constant torque), armature (reflected rotor inertia, x q''), "
@@ -274,7 +279,8 @@ def identify_command(args) -> int:
             speed = {} if args.min_speed is None else {"min_speed": args.min_speed}
             if args.urdf_tolerance is not None:
                 speed["urdf_tolerance"] = args.urdf_tolerance
-            bounds = mass_bounds(robot, args.mass_range, args.total_mass)
+            bounds = mass_bounds(robot, args.mass_range, args.total_mass,
+                                 args.com_in_geometry)
             choose = ("required" if named == "auto" else "default") if auto else None
             result = identify_robot(robot, log, unknown=args.unknown, method=args.velocity,
                                     window=args.window, terms=terms, choose_terms=choose,
@@ -311,7 +317,21 @@ def identify_command(args) -> int:
                 if terms.asymmetric_coulomb else "")
         print(f"  the joint terms: {outputs.final(written[-1])}{mean}")
     _print_assessment(result)
+    if args.com_in_geometry:
+        _print_com_boxes(robot, bounds)
     return 0
+
+
+def _print_com_boxes(robot, bounds) -> None:
+    """--com-in-geometry: which centres of mass the shapes bound, which they cannot."""
+    named = [robot.joints[i].child_link for i in bounds.com_boxes]
+    print(f"  centres of mass held inside their shapes' box: {', '.join(named) or 'none'}")
+    for link, why in bounds.without_box.items():
+        print(f"  {link}: no box for its centre of mass ({why})")
+    outside = bounds.urdf_outside(robot)
+    if outside:
+        print(f"  the URDF's own centre of mass lies outside its shapes' box: "
+              f"{', '.join(outside)} (its <inertial> and its shapes disagree)")
 
 
 def _print_terms_choice(choice) -> None:

@@ -296,10 +296,14 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
     terms_prior = weight * cp.sum_squares(u)
     lower = -nominal[joint[nonnegative]] / scale[nonnegative]  # pi_k >= 0
     constraints = [u[np.flatnonzero(nonnegative)] >= lower] if np.any(nonnegative) else []
-    constraints += _mass_constraints(robot, bounds, fixed, A, z)
+    constraints += _bound_constraints(robot, bounds, fixed, A, z)
     problem = cp.Problem(cp.Minimize(data + links_prior + terms_prior), constraints)
     solution, settings = _solve(problem, z, bounds is not None and bounds.any)
     pi = fixed + A @ z.value
+    # the solver meets its inequalities to its tolerance: a level or mass at its bound 0
+    # can end at -1e-15, which a URDF reader (ours too) refuses as negative
+    pi[joint[nonnegative]] = np.maximum(pi[joint[nonnegative]], 0.0)
+    pi[layout.masses] = np.maximum(pi[layout.masses], 0.0)
     # the joint terms held at their bounds do not move with the estimate
     held = np.zeros(len(joint), dtype=bool)
     values = np.asarray(u.value)
@@ -321,11 +325,13 @@ def consistent_parameters(robot: Robot, base: BaseParameters, beta: np.ndarray,
         time.perf_counter() - started, float(score(projector @ pi)) if score is not None else 0.0)
 
 
-def _mass_constraints(robot: Robot, bounds: MassBounds | None, fixed: np.ndarray,
-                      A: np.ndarray, z: cp.Expression) -> list:
-    """The mass bounds as constraints on z (each link's mass is fixed + A z at its mass
-    index: linear); ProjectionError for a range that a link the log does not identify
-    (its mass fixed at the URDF's) cannot meet."""
+def _bound_constraints(robot: Robot, bounds: MassBounds | None, fixed: np.ndarray,
+                       A: np.ndarray, z: cp.Expression) -> list:
+    """The mass bounds and the centres of mass's boxes as constraints on z (each link's
+    mass and first moment are fixed + A z at their indices: linear; a centre of mass c
+    inside [low, high] is m low <= m c <= m high); ProjectionError for a range that a
+    link the log does not identify (its mass fixed at the URDF's) cannot meet. A box
+    binds only the links the log identifies."""
     if bounds is None or not bounds.any:
         return []
     layout = ParameterLayout(robot.n)
@@ -340,6 +346,11 @@ def _mass_constraints(robot: Robot, bounds: MassBounds | None, fixed: np.ndarray
         constraints += [mass[i] >= low, mass[i] <= high]
     if bounds.total is not None:
         constraints.append(cp.sum(cp.hstack(mass)) == bounds.total)
+    for i, (corner_low, corner_high) in bounds.com_boxes.items():
+        rows = layout.first_moment(i)
+        if A[layout.mass(i)].any() or A[rows].any():
+            moment = fixed[rows] + A[rows] @ z
+            constraints += [moment >= corner_low * mass[i], moment <= corner_high * mass[i]]
     return constraints
 
 
@@ -365,8 +376,8 @@ def _solve(problem: cp.Problem, z: cp.Expression, bounded: bool = False):
     why = ("the estimate's covariance or the URDF's values may span too many orders of "
            "magnitude")
     if bounded:
-        why = ("no physically consistent model may meet the mass bounds (--mass-range, "
-               "--total-mass) together, or " + why)
+        why = ("no physically consistent model may meet the bounds (--mass-range, "
+               "--total-mass, --com-in-geometry) together, or " + why)
     raise ProjectionError(
         f"the consistent parameters: the solver Clarabel ended {', '.join(ended)} with its "
         f"{len(SOLVER_ATTEMPTS)} settings, never optimal ({why}): no model is written")

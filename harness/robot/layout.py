@@ -26,6 +26,7 @@ class CoreLayout:
     mass: int           # RB_MASS: the mass's offset in a link's parameters
     viscous: int        # RB_VISCOUS: the viscous level's offset in a joint's friction
     coulomb: int        # RB_COULOMB: the Coulomb level's offset in a joint's friction
+    first_moment: int   # RB_FIRST_MOMENT: m c's offset in a link's parameters (3 values)
 
 
 @lru_cache(maxsize=1)
@@ -34,7 +35,7 @@ def core_layout() -> CoreLayout:
     dll = load_library()
     dll.rn_layout.argtypes = [ctypes.POINTER(ctypes.c_int)]
     dll.rn_layout.restype = None
-    values = (ctypes.c_int * 5)()
+    values = (ctypes.c_int * 6)()
     dll.rn_layout(values)
     return CoreLayout(*(int(value) for value in values))
 
@@ -99,6 +100,11 @@ class ParameterLayout:
     def mass(self, i: int) -> int:
         """The index of link i's mass."""
         return self.link_size * i + core_layout().mass
+
+    def first_moment(self, i: int) -> slice:
+        """Link i's first moment m c (3 values, in its joint frame)."""
+        start = self.link_size * i + core_layout().first_moment
+        return slice(start, start + 3)
 
     @property
     def masses(self) -> slice:

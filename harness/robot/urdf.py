@@ -55,6 +55,10 @@ class ChainJoint:
     damping: float = 0.0           # URDF <dynamics damping>: viscous
     friction: float = 0.0          # URDF <dynamics friction>: Coulomb
     merged_links: list[str] = field(default_factory=list)  # links fixed to the body
+    #: each of the body's links (its own and the merged ones): its frame (R, p) in the
+    #: joint frame, and whether it has mass (harness.robot.geometry bounds the centre of
+    #: mass by their shapes)
+    frames: dict[str, tuple[np.ndarray, np.ndarray, bool]] = field(default_factory=dict)
 
 
 @dataclass
@@ -487,6 +491,7 @@ class _Chain:
         inertial = _link_inertial(link, self.source)
         if link.get("name") != body.child_link:
             body.merged_links.append(link.get("name"))
+        body.frames[link.get("name")] = (R, p, inertial is not None and inertial[0] > 0)
         if inertial is None:
             return
         mass, com, inertia = inertial

@@ -30,6 +30,9 @@ def test_the_sizes_and_offsets_are_the_c_cores():
                                                         c["RB_JOINT_FRICTION"])
     assert (layout.mass, layout.viscous, layout.coulomb) == (c["RB_MASS"], c["RB_VISCOUS"],
                                                              c["RB_COULOMB"])
+    assert layout.first_moment == c["RB_FIRST_MOMENT"]
+    assert ParameterLayout(3).first_moment(2) == slice(20 + c["RB_FIRST_MOMENT"],
+                                                       23 + c["RB_FIRST_MOMENT"])
 
 
 def test_the_sizes_of_a_robot_with_joint_terms():

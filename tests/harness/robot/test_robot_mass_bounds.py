@@ -49,7 +49,8 @@ def test_a_mass_range_and_the_total_mass_hold_the_consistent_model(arm, tmp_path
     code, held = identify(arm, tmp_path / "range", "--mass-range", f"{links[0]}={low}:{high}")
     assert code in (0, 1)
     assert low * (1 - 1e-6) <= held["masses"][links[0]] <= high * (1 + 1e-6)
-    assert held["mass_bounds"] == {"ranges": {links[0]: [low, high]}, "total_mass": None}
+    assert held["mass_bounds"] == {"ranges": {links[0]: [low, high]}, "total_mass": None,
+                                   "com_boxes": {}, "without_com_box": {}}
     total = 1.1 * sum(free["masses"].values())
     code, summed = identify(arm, tmp_path / "total", "--total-mass", str(total))
     assert code in (0, 1)
@@ -94,8 +95,9 @@ def test_bad_mass_bounds_exit_2_naming_them(arm, tmp_path, capsys, options, mess
     assert message in capsys.readouterr().err
 
 
-def test_mass_bounds_need_robot(tmp_path, capsys):
+@pytest.mark.parametrize("option", [["--total-mass", "3"], ["--com-in-geometry"]])
+def test_mass_bounds_need_robot(tmp_path, capsys, option):
     data = tmp_path / "log.csv"
     data.write_text("t,y,u\n0,0,0\n")
-    assert main(["identify", str(data), "--total-mass", "3", "--out", str(tmp_path / "o")]) == 2
-    assert "--total-mass" in capsys.readouterr().err
+    assert main(["identify", str(data), *option, "--out", str(tmp_path / "o")]) == 2
+    assert option[0] in capsys.readouterr().err
