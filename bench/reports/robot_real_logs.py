@@ -28,8 +28,10 @@ Cases (the robots of bench/reports/robots.py, their truth from `truth_of`: links
      --joint-terms none (the core's model alone, identify's default before the joint terms
      were chosen by cross-validation);
   e2 case e's logs identified with identify's defaults (--joint-terms auto);
-  f, f2  as e, e2 for the Panda (7 joints, fingers locked).
-Cases e to f2 are also judged on their own targets: every link mass of identified.urdf
+  f, f2  as e, e2 for the Panda (7 joints, fingers locked);
+  e3, f3  case e's and f's logs identified with --com-in-geometry (each centre of mass
+     inside the box of its body's collision meshes).
+Cases e to f3 are also judged on their own targets: every link mass of identified.urdf
 within a factor 1.5 of the truth's, identified.urdf's validation error within 2 %
 (relative) of the estimate's and at most the least squares'.  Their truth's armature is
 a fraction 0.1..0.5 of the diagonal of the URDF's inertia matrix at q = 0, its offsets
@@ -87,7 +89,7 @@ UR5_GAINS = (13.2, 13.2, 13.2, 9.8, 9.8, 9.8)  # drive gains [N.m/A] of case a
 TARGET_RELATIVE = 0.05  # identified.urdf within 5 % (relative) of the estimate's error
 PANDA_GAINS = (20.0, 20.0, 20.0, 20.0, 8.0, 8.0, 8.0)  # drive gains [N.m/A] of case f
 ARM_JITTER = (0.008, 0.012)  # clock steps of cases e and f [s]: ~100 Hz
-DRIVE_MASS_FACTOR = 1.5  # cases e to f2: every identified mass within x1.5 of the truth's
+DRIVE_MASS_FACTOR = 1.5  # cases e to f3: every identified mass within x1.5 of the truth's
 DRIVE_RELATIVE = 0.02    # and identified.urdf within 2 % (relative) of the estimate's error
 
 
@@ -109,6 +111,7 @@ class Case:
     joint_terms: str | None = None    # identify's --joint-terms (None: its default, auto)
     drive: bool = False               # armature (drive inertia) and a torque offset
     logs_from: str | None = None      # reuse this case's logs when it ran before in the run
+    com_in_geometry: bool = False     # identify --com-in-geometry
     results: dict = field(default_factory=dict)
 
 
@@ -138,6 +141,11 @@ CASES = (
          gains=PANDA_GAINS, drive=True, joint_terms="none"),
     Case("f2", "panda", 100.0, "case f's logs, identify's defaults (--joint-terms auto)",
          jitter=ARM_JITTER, gains=PANDA_GAINS, drive=True, logs_from="f"),
+    Case("e3", "ur5", 100.0, "case e's logs, identify --com-in-geometry",
+         jitter=ARM_JITTER, gains=UR5_GAINS, drive=True, logs_from="e", com_in_geometry=True),
+    Case("f3", "panda", 100.0, "case f's logs, identify --com-in-geometry",
+         jitter=ARM_JITTER, gains=PANDA_GAINS, drive=True, logs_from="f",
+         com_in_geometry=True),
 )
 
 
@@ -233,7 +241,7 @@ def resample(t: np.ndarray, q: np.ndarray, u: np.ndarray
 
 def run_identify(data: Path, urdf: Path, out: Path, locked: tuple[str, ...],
                  gains: tuple[float, ...] | None, window: float | None = None,
-                 joint_terms: str | None = None) -> dict:
+                 joint_terms: str | None = None, com_in_geometry: bool = False) -> dict:
     """The real CLI in a subprocess: exit status, wall time, stdout and stderr."""
     command = [sys.executable, "-m", "harness", "identify", str(data), "--robot", str(urdf),
                "--out", str(out)]
@@ -245,6 +253,8 @@ def run_identify(data: Path, urdf: Path, out: Path, locked: tuple[str, ...],
         command += ["--window", f"{window:g}"]
     if joint_terms is not None:
         command += ["--joint-terms", joint_terms]
+    if com_in_geometry:
+        command.append("--com-in-geometry")
     started = time.perf_counter()
     done = subprocess.run(command, cwd=REPO, capture_output=True, text=True)
     return {"rc": done.returncode, "seconds": time.perf_counter() - started,
@@ -370,7 +380,8 @@ def run_case(case: Case, train_seconds: float, work: Path, logs: dict | None = N
     ran, out = None, folder / "out"
     if case.jitter is not None:
         raw = run_identify(write_csv(folder / "raw.csv", *train), path, folder / "raw_out",
-                           locked, case.gains, case.window, case.joint_terms)
+                           locked, case.gains, case.window, case.joint_terms,
+                           case.com_in_geometry)
         row["raw_log"] = {"rc": raw["rc"], "stderr": raw["stderr"]}
         train = resample(*train)  # the scorer's and the baseline's even logs
         check = resample(*check)
@@ -378,7 +389,8 @@ def run_case(case: Case, train_seconds: float, work: Path, logs: dict | None = N
             ran, out = raw, folder / "raw_out"
     if ran is None:
         data = write_csv(folder / "train.csv", *train)
-        ran = run_identify(data, path, out, locked, case.gains, case.window, case.joint_terms)
+        ran = run_identify(data, path, out, locked, case.gains, case.window, case.joint_terms,
+                           case.com_in_geometry)
     row.update(identify_rc=ran["rc"], identify_s=ran["seconds"], stderr=ran["stderr"],
                identify_command=ran["command"])
     if ran["rc"] not in (0, 1):
@@ -560,7 +572,7 @@ def document(run: dict) -> str:
 
 
 def _drive_section(rows: list[dict]) -> list[str]:
-    """Cases e to f2: drive inertias and torque offsets in the truth, their targets."""
+    """Cases e to f3: drive inertias and torque offsets in the truth, their targets."""
     lines = ["## Drive inertias and torque offsets (6 and 7 joints, ~100 Hz, currents)", "",
              "The truth holds, beyond the URDF's model class, an armature Ia_i (Ia_i q_i'' "
              "added to joint i's torque) and a constant torque offset per joint; its link "
@@ -602,7 +614,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true",
                         help="8 s training logs instead of 40 s (about 2 minutes, and as much "
-                             "again for cases e to f2)")
+                             "again for cases e to f3)")
     parser.add_argument("--cases", default=",".join(c.key for c in CASES),
                         help="comma-separated cases to run, e.g. a,d (default: all)")
     parser.add_argument("--out", type=Path, default=REPORTS / "robot_real_logs.md",

@@ -1,5 +1,5 @@
 """bench/reports/robot_real_logs.py's arms with drive inertias and torque offsets (cases e
-to f2): their truth adds Ia_i q_i'' and a constant offset to the other cases' robot."""
+to f3): their truth adds Ia_i q_i'' and a constant offset to the other cases' robot."""
 from __future__ import annotations
 
 import dataclasses
@@ -26,6 +26,12 @@ def test_case_keys_and_twins():
         assert dataclasses.replace(twin, key=key, describe=case.describe, joint_terms="none",
                                    logs_from=None) == case
         assert keys.index(key) < keys.index(key + "2")
+        # the third twin: the default model class, the centres of mass in the geometry
+        third = by_key[key + "3"]
+        assert third.com_in_geometry and not twin.com_in_geometry
+        assert dataclasses.replace(third, key=twin.key, describe=twin.describe,
+                                   com_in_geometry=False) == twin
+        assert keys.index(key) < keys.index(key + "3")
 
 
 @pytest.mark.parametrize("key", ["e", "f"])
