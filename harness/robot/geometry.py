@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .urdf import Robot, UrdfError, _floats, _origin, parse_urdf
+from .urdf import Robot, UrdfError, attribute_floats, origin_frame, parse_urdf
 
 Box = tuple[np.ndarray, np.ndarray]   # (low, high) corners in the body's joint frame
 
@@ -66,7 +66,7 @@ def link_points(link, source: Path) -> np.ndarray | None:
         geometry = element.find("geometry")
         if geometry is None or len(geometry) == 0:
             raise UrdfError(f"{where}: no <geometry> shape")
-        R, p = _origin(element, where)
+        R, p = origin_frame(element, where)
         points.append(_shape_points(geometry[0], source, where) @ R.T + p)
     return np.concatenate(points)
 
@@ -76,15 +76,15 @@ def _shape_points(shape, source: Path, where: str) -> np.ndarray:
     corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)],
                        dtype=float)
     if shape.tag == "box":
-        return corners * _floats(shape, "size", 3, "", where) / 2.0
+        return corners * attribute_floats(shape, "size", 3, "", where) / 2.0
     if shape.tag == "sphere":
-        return corners * _floats(shape, "radius", 1, "", where)[0]
+        return corners * attribute_floats(shape, "radius", 1, "", where)[0]
     if shape.tag == "cylinder":  # its axis along z
-        radius = _floats(shape, "radius", 1, "", where)[0]
-        length = _floats(shape, "length", 1, "", where)[0]
+        radius = attribute_floats(shape, "radius", 1, "", where)[0]
+        length = attribute_floats(shape, "length", 1, "", where)[0]
         return corners * np.array([radius, radius, length / 2.0])
     if shape.tag == "mesh":
-        scale = _floats(shape, "scale", 3, "1 1 1", where)
+        scale = attribute_floats(shape, "scale", 3, "1 1 1", where)
         return _mesh_vertices(shape.get("filename", ""), source, where) * scale
     raise UrdfError(f"{where}: unknown shape <{shape.tag}>")
 

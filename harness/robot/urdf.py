@@ -161,7 +161,10 @@ def body_inertial(link: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
 
 # ---- parsing ----------------------------------------------------------------------------
 
-def _floats(element, attribute: str, count: int, default: str, where: str) -> np.ndarray:
+def attribute_floats(element, attribute: str, count: int, default: str,
+                     where: str) -> np.ndarray:
+    """The attribute's `count` numbers (`default` if the element or attribute is absent);
+    UrdfError names anything else: not numbers, not finite, beyond LARGEST, subnormal."""
     text = element.get(attribute, default) if element is not None else default
     try:
         if "_" in text:  # Python's float() reads "1_0" as 10; an XML double has no "_"
@@ -182,11 +185,11 @@ def _floats(element, attribute: str, count: int, default: str, where: str) -> np
     return values
 
 
-def _origin(element, where: str) -> tuple[np.ndarray, np.ndarray]:
+def origin_frame(element, where: str) -> tuple[np.ndarray, np.ndarray]:
     """(R, p) of an <origin> child (identity if absent)."""
     origin = element.find("origin")
-    return (rpy_matrix(_floats(origin, "rpy", 3, "0 0 0", where)),
-            _floats(origin, "xyz", 3, "0 0 0", where))
+    return (rpy_matrix(attribute_floats(origin, "rpy", 3, "0 0 0", where)),
+            attribute_floats(origin, "xyz", 3, "0 0 0", where))
 
 
 def _link_inertial(link, source: Path) -> tuple[float, np.ndarray, np.ndarray] | None:
@@ -196,15 +199,16 @@ def _link_inertial(link, source: Path) -> tuple[float, np.ndarray, np.ndarray] |
         return None
     where = f"{source}: link {link.get('name')!r} <inertial>"
     mass_element = inertial.find("mass")
-    mass = _floats(mass_element, "value", 1, "", where)[0] if mass_element is not None else 0.0
+    mass = (attribute_floats(mass_element, "value", 1, "", where)[0]
+            if mass_element is not None else 0.0)
     if mass < 0:
         raise UrdfError(f"{where}: negative mass {mass}")
     if 0 < mass < SMALLEST_MASS:
         raise UrdfError(f"{where}: mass {mass:g} kg is below {SMALLEST_MASS:g} kg: write 0 "
                         f"for a massless link (or leave out <inertial>)")
-    R, com = _origin(inertial, where)
+    R, com = origin_frame(inertial, where)
     element = inertial.find("inertia")
-    six = [_floats(element, key, 1, "0", where)[0]
+    six = [attribute_floats(element, key, 1, "0", where)[0]
            for key in ("ixx", "ixy", "iyy", "ixz", "iyz", "izz")]
     inertia = inertia_matrix(six)
     check_inertia(inertia, where)
@@ -352,7 +356,7 @@ def _check_lock_position(source: Path, joint, position: float,
     limit = joint.find("limit")
     if kind == "continuous" or limit is None:
         return
-    lower, upper = (_floats(limit, key, 1, "0", where)[0] for key in ("lower", "upper"))
+    lower, upper = (attribute_floats(limit, key, 1, "0", where)[0] for key in ("lower", "upper"))
     if lower < upper and not lower <= position <= upper:
         unit = "m" if kind == "prismatic" else "rad"
         raise UrdfError(f"{where}: locked at {position:g} {unit}{said}, outside its limits "
@@ -440,7 +444,7 @@ class _Chain:
                                 f"--joints, or lock the joints of all but one branch)")
             for joint in self.children.get(name, []):
                 where = f"{self.source}: joint {joint.get('name')!r}"
-                Rj, pj = _origin(joint, where)
+                Rj, pj = origin_frame(joint, where)
                 R_child, p_child = R @ Rj, R @ pj + p
                 child = joint.find("child").get("link")
                 if self.moving(joint):
@@ -457,7 +461,7 @@ class _Chain:
         position = self.locked.get(joint.get("name"), 0.0)
         if position == 0.0:
             return R, p
-        axis = _floats(joint.find("axis"), "xyz", 3, "1 0 0", where)
+        axis = attribute_floats(joint.find("axis"), "xyz", 3, "1 0 0", where)
         if not np.linalg.norm(axis) > 1e-9:
             raise UrdfError(f"{where}: the axis is zero")
         axis = axis / np.linalg.norm(axis)
@@ -469,11 +473,11 @@ class _Chain:
     def _moving_joint(self, joint, child: str, R: np.ndarray, p: np.ndarray,
                       where: str) -> ChainJoint:
         """The chain joint at (R, p) in the previous body's frame, appended to the chain."""
-        axis = _floats(joint.find("axis"), "xyz", 3, "1 0 0", where)
+        axis = attribute_floats(joint.find("axis"), "xyz", 3, "1 0 0", where)
         if not np.linalg.norm(axis) > 1e-9:
             raise UrdfError(f"{where}: the axis is zero")
         dynamics = joint.find("dynamics")
-        damping, friction = (_floats(dynamics, key, 1, "0", where)[0]
+        damping, friction = (attribute_floats(dynamics, key, 1, "0", where)[0]
                              for key in ("damping", "friction"))
         if damping < 0 or friction < 0:
             raise UrdfError(f"{where}: negative damping or friction in <dynamics>")
