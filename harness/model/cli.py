@@ -271,6 +271,11 @@ def _print_scores(scores: dict[str, Any]) -> bool:
         for name, e in simulation["per_coordinate"].items():
             print(f"  free-run simulation error of {name}: {e['rms']:.4g} {e['unit']} RMS, "
                   f"{100 * e['relative']:.3f} % of its motion")
+        if simulation["pooled"] is not None and simulation["pooled"] > 1.0:
+            print("    the free run ends farther from the log than the motion itself: open "
+                  "loop, it cannot follow a machine that ran in closed loop (or one whose "
+                  "friction model differs where it sticks), so this score cannot rank "
+                  "models on this log; the held-out runs and the input reconstruction can")
     else:
         note(f"the model's simulation driven by the measured input diverges after "
              f"{simulation['diverged_at_s']:.4g} s: the model is unstable on this log (or "

@@ -316,3 +316,19 @@ def test_a_model_that_explains_little_is_written_but_not_trusted(tmp_path, capsy
     code = main(["identify", str(ESTIMATION), "--model", str(model), "--out", str(out)])
     assert code == 1 and "explains little" in capsys.readouterr().err
     assert list(_parameters(out)) == ["M", "OF"]
+
+
+@pytest.mark.parametrize("pooled, said", [(10.3, True), (0.08, False), (None, False)])
+def test_a_free_run_farther_than_the_motion_is_said_to_rank_nothing(capsys, pooled, said):
+    """The two-link arm's logs (closed loop, a passive joint that sticks): the free run of
+    the truth's own parameters ends 1032 % of the motion away, a score that cannot rank
+    models; it is said, and the model is not called untrusted for it."""
+    from harness.model.cli import _print_scores
+
+    error = {"rms": 1.0, "unit": "rad", "relative": pooled}
+    scores = {"reconstruction_error": {"pooled": None},
+              "simulation_error": {"diverged_at_s": None, "pooled": pooled,
+                                   "per_coordinate": {"q1": error} if pooled else {}},
+              "creates_energy": None}
+    assert _print_scores(scores)
+    assert ("farther from the log than the motion itself" in capsys.readouterr().out) is said
