@@ -15,8 +15,7 @@ import numpy as np
 
 from ..values import real
 from .geometry import Box, com_boxes
-from .layout import core_layout
-from .urdf import Robot, UrdfError
+from .urdf import Robot, UrdfError, body_inertial
 
 
 @dataclass(frozen=True)
@@ -46,14 +45,11 @@ class MassBounds:
 
     def urdf_outside(self, robot: Robot) -> list[str]:
         """The bodies whose URDF centre of mass lies outside their box."""
-        core, out = core_layout(), []
-        moment = slice(core.first_moment, core.first_moment + 3)
+        out = []
         for i, (low, high) in self.com_boxes.items():
-            link = robot.joints[i].link
-            if link[core.mass] > 0:
-                com = link[moment] / link[core.mass]
-                if np.any(com < low) or np.any(com > high):
-                    out.append(robot.joints[i].child_link)
+            mass, com, _ = body_inertial(robot.joints[i].link)
+            if mass > 0 and (np.any(com < low) or np.any(com > high)):
+                out.append(robot.joints[i].child_link)
         return out
 
 

@@ -13,8 +13,7 @@ from robot_helpers import multisine_log, payload_link
 from harness.cli import main
 from harness.robot.examples import example_urdf
 from harness.robot.geometry import com_boxes
-from harness.robot.layout import core_layout
-from harness.robot.urdf import read_urdf
+from harness.robot.urdf import body_inertial, read_urdf
 
 CHAIN = """<robot name="shapes">
   <link name="base"/>
@@ -113,9 +112,7 @@ def arm(tmp_path_factory):
 
 
 def centre_of_mass_x(urdf) -> float:
-    core = core_layout()
-    link = read_urdf(urdf).joints[1].link
-    return float(link[core.first_moment] / link[core.mass])
+    return float(body_inertial(read_urdf(urdf).joints[1].link)[1][0])
 
 
 @pytest.mark.parametrize("bounded", [False, True])
